@@ -1,0 +1,15 @@
+"""xabsl-studio engine: the platform-independent half of the product.
+
+The pipeline reads top to bottom in the folder names:
+
+* ``engine.lang``     source files -> tokens -> AST -> checked program + diagnostics
+* ``engine.ir``       the checked program as plain typed data (the hub everything else reads)
+* ``engine.emit``     IR -> intermediate code, JSON for the UI, DOT
+* ``engine.codegen``  IR -> Python source, compiled once (the fast path)
+* ``engine.runtime``  the Engine: bindings, tick, activation tree, debug interface
+* ``engine.host``     the contract a simulated world fulfils
+
+Nothing here imports pymunk, the web server or an example world.
+"""
+
+__version__ = "0.1.0"
