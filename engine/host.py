@@ -1,0 +1,307 @@
+"""The platform contract: what a simulated world provides, and the deterministic loop that runs it.
+
+A *world* (the soccer match, the errands robot, a test double) owns physics, rules and the
+perception of its agents. An *agent* is one robot or character whose behavior is an XABSL engine
+(``engine.runtime``), plugged in as its :class:`AgentController`. This module names the hooks
+between the two and fixes their order; it imports nothing above the engine (no pymunk, no web,
+no example world), so every world and the server can share one loop.
+
+One behavior tick (the engine's ``execute()``, xabsl-language.md §2.2) sits inside a frame of
+three phases, always in this order and always for all agents before the next phase starts::
+
+    for each agent: agent.sense(now_ms)                 # world -> the agent's input symbols
+    for each agent: agent.controller.execute(now_ms)    # one engine tick: decisions + outputs
+    for each agent: agent.act(now_ms)                   # output symbols -> actuators
+    repeat physics_hz / behavior_hz times: world.step(1 / physics_hz)
+
+Sensing all agents before any of them thinks means no agent sees the consequences of a teammate's
+decision of the same tick, so agent order cannot leak into the behavior; agents are still visited
+in ``world.agents`` order so that a run is reproducible bit for bit.
+
+Time: the loop owns the behavior clock. ``now_ms`` is an integer (the engine's millisecond
+clock, ``engine.types.Ms``) computed from the tick count, never from the wall clock, so a run is a
+pure function of the world's seed and the controllers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from time import perf_counter
+from typing import Any, Protocol, TypeAlias, runtime_checkable
+
+from engine.types import Ms
+
+#: A scene or status: JSON-able plain data (dicts, lists, str, int, float, bool, None) that
+#: ``orjson.dumps`` accepts without options. Worlds document their own keys.
+Scene: TypeAlias = dict[str, Any]
+
+#: The default physics rate. 120 Hz keeps a kicked ball (at most ~5 m/s) under one ball radius
+#: per step, which is what discrete collision detection needs, and costs half of 240 Hz.
+DEFAULT_PHYSICS_HZ = 120
+
+#: The default behavior rate. 40 Hz (25 ms ticks) is close to the 30 Hz camera / 33 ms cognition
+#: cycle of SPL robots, gives integer millisecond ticks (25 ms, unlike 30 Hz's 33.3 ms) and
+#: divides the physics rate (3 substeps at 120 Hz, 5 at 200 Hz). Faster would cost engine time
+#: without changing what a walking robot can do in one tick.
+DEFAULT_BEHAVIOR_HZ = 40
+
+
+@runtime_checkable
+class AgentController(Protocol):
+    """The brain slot of an agent: an XABSL engine, or a scripted stand-in in tests.
+
+    Hook, called by the loop once per behavior tick, after every agent has sensed. It reads the
+    agent's input symbols (its perception) and writes output symbols (its commands); it must not
+    step the world or touch other agents.
+    """
+
+    def execute(self, now_ms: Ms) -> None:
+        """Run one behavior tick at the engine time ``now_ms``."""
+        ...
+
+
+@runtime_checkable
+class Agent(Protocol):
+    """One acting entity of a world, identified by team and number.
+
+    ``name`` is unique in its world (the studio selects agents by it). ``controller`` is ``None``
+    for an agent that only follows its last commands (for instance, a dummy opponent).
+    """
+
+    name: str
+    team: str
+    number: int
+    controller: AgentController | None
+
+    def sense(self, now_ms: Ms) -> None:
+        """Update this agent's perception from the world state at ``now_ms``.
+
+        Hook, called before any controller of the tick runs. Must not change the world.
+        """
+        ...
+
+    def act(self, now_ms: Ms) -> None:
+        """Turn the commands the controller wrote into actuator settings.
+
+        Hook, called after every controller of the tick ran. May change actuators (motor targets,
+        impulses) but must not advance time; physics happens in ``World.step``.
+        """
+        ...
+
+
+@runtime_checkable
+class World(Protocol):
+    """A simulated world that hosts agents.
+
+    ``seed`` is the only source of randomness: building a world twice with the same seed and
+    running the same controllers gives identical dynamic scenes.
+    """
+
+    seed: int
+
+    @property
+    def agents(self) -> Sequence[Agent]:
+        """The agents, in the fixed order the loop visits them."""
+        ...
+
+    @property
+    def finished(self) -> bool:
+        """True once the world has nothing left to simulate (a match is over)."""
+        ...
+
+    def step(self, dt: float) -> None:
+        """Advance physics and world rules (referee, goals) by ``dt`` seconds."""
+        ...
+
+    def static_scene(self) -> Scene:
+        """Return what never moves (field lines, goals, walls, beacons); the UI gets it once."""
+        ...
+
+    def dynamic_scene(self) -> Scene:
+        """Return what moves (poses, ball, objects), compact; the UI gets it every frame."""
+        ...
+
+    def status(self) -> Scene:
+        """Return score, game state and time; always has ``time_ms`` (int) and ``finished`` (bool)."""
+        ...
+
+
+@dataclass(slots=True)
+class PhaseTimes:
+    """Wall-clock seconds spent per phase of the loop, for benchmarks.
+
+    Measured once per phase per tick (not per agent), so measuring costs a few
+    ``perf_counter`` calls per tick whatever the number of agents.
+    """
+
+    perception: float = 0.0
+    engine: float = 0.0
+    actuation: float = 0.0
+    physics: float = 0.0
+
+    @property
+    def total(self) -> float:
+        return self.perception + self.engine + self.actuation + self.physics
+
+    def shares(self) -> dict[str, float]:
+        """Each phase's fraction of the measured total (0..1); zeros if nothing was measured."""
+        total = self.total
+        if total <= 0.0:
+            return {"perception": 0.0, "engine": 0.0, "actuation": 0.0, "physics": 0.0}
+        return {
+            "perception": self.perception / total,
+            "engine": self.engine / total,
+            "actuation": self.actuation / total,
+            "physics": self.physics / total,
+        }
+
+
+@dataclass(slots=True)
+class RunStats:
+    """What :func:`run_headless` did: ticks, simulated and wall time, time per phase."""
+
+    ticks: int = 0
+    physics_steps: int = 0
+    sim_seconds: float = 0.0
+    wall_seconds: float = 0.0
+    phases: PhaseTimes = field(default_factory=PhaseTimes)
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall second (``inf`` if the wall time was too small to see)."""
+        return self.sim_seconds / self.wall_seconds if self.wall_seconds > 0.0 else float("inf")
+
+
+class BehaviorLoop:
+    """Steps a world tick by tick: sense, think, act, then fixed-rate physics substeps.
+
+    The headless runner drives it as fast as possible; the studio's simulation thread drives the
+    same object at real time times a speed factor, so both see the same sequence of states.
+
+    Args:
+        world: the world to run.
+        physics_hz: physics steps per simulated second (>= 100).
+        behavior_hz: behavior ticks per simulated second (30..50); must divide ``physics_hz``.
+        start_ms: the engine time of the first tick.
+
+    Raises:
+        ValueError: if the rates are out of range or do not divide.
+    """
+
+    __slots__ = ("_period_ms", "_physics_dt", "_substeps", "phases", "physics_steps", "start_ms",
+                 "ticks", "world")
+
+    def __init__(
+        self,
+        world: World,
+        physics_hz: int = DEFAULT_PHYSICS_HZ,
+        behavior_hz: int = DEFAULT_BEHAVIOR_HZ,
+        start_ms: Ms = 0,
+    ) -> None:
+        if physics_hz < 100:
+            raise ValueError(f"physics_hz must be at least 100, got {physics_hz}")
+        if not 30 <= behavior_hz <= 50:
+            raise ValueError(f"behavior_hz must be between 30 and 50, got {behavior_hz}")
+        if physics_hz % behavior_hz:
+            raise ValueError(f"behavior_hz ({behavior_hz}) must divide physics_hz ({physics_hz})")
+        self.world = world
+        self._substeps = physics_hz // behavior_hz
+        self._physics_dt = 1.0 / physics_hz
+        self._period_ms = 1000.0 / behavior_hz
+        self.start_ms = start_ms
+        self.ticks = 0
+        self.physics_steps = 0
+        self.phases = PhaseTimes()
+
+    @property
+    def now_ms(self) -> Ms:
+        """The engine time of the next tick."""
+        # Rounded from the tick count rather than accumulated, so 30 Hz (33.33 ms) never drifts.
+        return self.start_ms + round(self.ticks * self._period_ms)
+
+    @property
+    def sim_seconds(self) -> float:
+        """Simulated seconds covered by the ticks run so far."""
+        return self.physics_steps * self._physics_dt
+
+    def tick(self) -> None:
+        """Run one behavior tick and the physics substeps that follow it."""
+        now = self.now_ms
+        agents = self.world.agents
+        phases = self.phases
+
+        t0 = perf_counter()
+        for agent in agents:
+            agent.sense(now)
+        t1 = perf_counter()
+        for agent in agents:
+            controller = agent.controller
+            if controller is not None:
+                controller.execute(now)
+        t2 = perf_counter()
+        for agent in agents:
+            agent.act(now)
+        t3 = perf_counter()
+        step = self.world.step
+        dt = self._physics_dt
+        for _ in range(self._substeps):
+            step(dt)
+        t4 = perf_counter()
+
+        phases.perception += t1 - t0
+        phases.engine += t2 - t1
+        phases.actuation += t3 - t2
+        phases.physics += t4 - t3
+        self.ticks += 1
+        self.physics_steps += self._substeps
+
+
+def run_headless(
+    world: World,
+    duration_s: float,
+    physics_hz: int = DEFAULT_PHYSICS_HZ,
+    behavior_hz: int = DEFAULT_BEHAVIOR_HZ,
+    on_tick: Callable[[Ms], bool | None] | None = None,
+    stop_when_finished: bool = True,
+) -> RunStats:
+    """Run a world without a UI as fast as the machine allows, deterministically.
+
+    The behavior rate defaults to 40 Hz (see :data:`DEFAULT_BEHAVIOR_HZ`: close to an SPL
+    robot's 30 Hz cognition cycle, integer 25 ms ticks, divides the physics rate) and physics to
+    120 Hz (see :data:`DEFAULT_PHYSICS_HZ`). The result depends only on the world's seed and
+    its controllers, never on the wall clock.
+
+    Args:
+        world: the world to run, agents' controllers already plugged in.
+        duration_s: simulated seconds to run at most (rounded up to whole behavior ticks).
+        physics_hz: physics steps per simulated second (>= 100).
+        behavior_hz: behavior ticks per simulated second (30..50), dividing ``physics_hz``.
+        on_tick: called after each tick with the tick's ``now_ms``; returning True stops the run.
+        stop_when_finished: stop as soon as ``world.finished`` is true.
+
+    Returns:
+        The number of ticks, simulated and wall seconds, and seconds spent per phase.
+
+    Example::
+
+        stats = run_headless(build_world(seed=1), duration_s=600)
+        print(stats.real_time_factor, stats.phases.shares())
+    """
+    loop = BehaviorLoop(world, physics_hz, behavior_hz)
+    ticks = max(0, -(-round(duration_s * behavior_hz * 1000) // 1000))  # ceil, robust to 0.1 + 0.2
+    wall_start = perf_counter()
+    for _ in range(ticks):
+        if stop_when_finished and world.finished:
+            break
+        now = loop.now_ms
+        loop.tick()
+        if on_tick is not None and on_tick(now):
+            break
+    return RunStats(
+        ticks=loop.ticks,
+        physics_steps=loop.physics_steps,
+        sim_seconds=loop.sim_seconds,
+        wall_seconds=perf_counter() - wall_start,
+        phases=loop.phases,
+    )
