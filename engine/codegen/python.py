@@ -1,0 +1,418 @@
+"""Compile the IR to Python source, once per program and storage layout (architecture "Engine").
+
+Per option ``o`` (index ``i``) the generated chunk, compiled with the filename ``<xabsl:o>``, holds:
+
+* ``D{i}_{s}(st, ot, tick)``: the decision of state ``s`` (common decision tree inlined, §2.4).
+  It returns a constant tuple ``(next_state, leaf_id, s)``: CPython keeps constant tuples
+  prebuilt, so deciding allocates nothing, and the engine records the tuple as the tick's
+  leaf (§2.12) with a single store.
+* ``A{i}_{s}(st, ot, now, tick)``: the action list of state ``s`` (§2.2): output assignments written
+  through at once, subsequent options and basic behaviors called in textual order with every
+  parameter re-evaluated in the engine's order and unassigned ones reset (§2.5).
+* ``O{i}(now, tick)``: one execution of the option (§2.2 ``ActionBehavior.execute`` +
+  ``Option.execute``): activation bookkeeping with tick stamps instead of per-tick flag resets,
+  unsigned millisecond times (§2.6), decision before actions, at most one transition.
+
+Expressions are inlined as Python expressions (§2.8): short-circuit ``and``/``or``, exact float
+comparisons, ``/`` with the 1e-7 rule inlined, ``%`` through :mod:`engine.codegen.support`.
+Symbols and parameters are reached through module globals bound by the engine (see
+:class:`engine.codegen.layout.Layout`): flat lists indexed by constants, and host callables.
+Every generated line remembers the option, state and IR span it came from (``origins``), which
+is how faults and the debugger point back at XABSL source.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import CodeType
+
+from engine.codegen.layout import Layout, OptionSlot, default_value, engine_order
+from engine.ir.model import (
+    ActionDone,
+    Argument,
+    Assignment,
+    BehaviorCall,
+    Binary,
+    BooleanLiteral,
+    Conditional,
+    Conflict,
+    Constant,
+    DecisionTree,
+    EnumLiteral,
+    Expression,
+    If,
+    InputRef,
+    Logical,
+    Number,
+    Option,
+    OptionCall,
+    OptionTime,
+    OutputRef,
+    ParameterRef,
+    Program,
+    State,
+    StateTime,
+    Transition,
+    Unary,
+    walk,
+)
+from engine.types import Kind, Span
+
+__all__ = ["GeneratedOption", "GeneratedProgram", "Origin", "expression_source", "generate"]
+
+_MASK = "0xFFFFFFFF"
+_COMPARE = {"<": "<", "<=": "<=", ">": ">", ">=": ">=", "==": "==", "!=": "!=", "enum==": "==", "enum!=": "!="}
+
+
+@dataclass(frozen=True, slots=True)
+class Origin:
+    """Where a generated line comes from: option, state (None for the option prologue), span."""
+
+    option: str
+    state: str | None
+    span: Span | None
+    what: str
+
+
+@dataclass
+class GeneratedOption:
+    """The generated source of one option, its code object and the line -> origin map."""
+
+    name: str
+    filename: str
+    source: str
+    code: CodeType
+    origins: dict[int, Origin] = field(default_factory=dict)
+
+
+@dataclass
+class GeneratedProgram:
+    """All generated options of a program; :meth:`bind` makes them runnable in a globals dict."""
+
+    program: Program
+    options: dict[str, GeneratedOption]
+
+    def bind(self, namespace: dict[str, object]) -> None:
+        """Define every option's functions in ``namespace`` (which holds the engine's storage)."""
+        for generated in self.options.values():
+            exec(generated.code, namespace)
+
+    def origin(self, filename: str, line: int) -> Origin | None:
+        """The origin of ``line`` of the chunk compiled as ``filename`` (None if unknown)."""
+        for generated in self.options.values():
+            if generated.filename == filename:
+                return generated.origins.get(line)
+        return None
+
+
+def _number(value: float) -> str:
+    if math.isnan(value):
+        return "float('nan')"
+    if math.isinf(value):
+        return "_INF" if value > 0 else "(-_INF)"
+    text = repr(float(value))
+    return f"({text})" if text.startswith("-") else text
+
+
+def _literal(value: float | bool | int) -> str:
+    if isinstance(value, bool):
+        return repr(value)
+    if isinstance(value, float):
+        return _number(value)
+    return repr(value)
+
+
+class _ExpressionWriter:
+    """Turns one IR expression into one Python expression in the context of an option/state."""
+
+    def __init__(self, layout: Layout, option: Option, state: State | None) -> None:
+        self.layout = layout
+        self.option = option
+        self.slot: OptionSlot = layout.options[option.name]
+        self.state = state
+        self.temps = 0
+
+    def temp(self) -> str:
+        self.temps += 1
+        return f"_t{self.temps}"
+
+    def __call__(self, e: Expression) -> str:  # noqa: C901 - one dispatch over the node kinds
+        match e:
+            case Number(value=value):
+                return _number(value)
+            case Constant(value=value):
+                return _number(value)
+            case BooleanLiteral(value=value):
+                return "True" if value else "False"
+            case EnumLiteral(element=element):
+                return repr(self.layout.enum_values[element])
+            case ParameterRef(param=param):
+                position = [p[0] for p in self.slot.params].index(param)
+                return f"PP[{self.slot.offset + position}]"
+            case OutputRef(symbol=symbol):
+                out = self.layout.outputs[symbol]
+                return f"OV[{out.index}]" if out.stored else f"OG{out.index}()"
+            case InputRef():
+                return self.input_call(e)
+            case StateTime():
+                return "st"
+            case OptionTime():
+                return "ot"
+            case ActionDone():
+                return self.action_done()
+            case Conflict():
+                if self.state is None:
+                    return "False"
+                return f"CF({self.slot.index}, {self.state.index})"
+            case Unary(op="-", operand=operand):
+                # The compiler emits unary minus as ``0 - x`` (§3.3), so -(0.0) is +0.0.
+                return f"(0.0 - {self(operand)})"
+            case Unary(op="!", operand=operand):
+                return f"(not {self(operand)})"
+            case Binary(op="/", left=left, right=right):
+                t = self.temp()
+                return f"({self(left)} / ({t} if ({t} := {self(right)}) != 0 else 1e-07))"
+            case Binary(op="%", left=left, right=right):
+                return f"_mod({self(left)}, {self(right)})"
+            case Binary(op=op, left=left, right=right) if op in ("+", "-", "*"):
+                return f"({self(left)} {op} {self(right)})"
+            case Binary(op=op, left=left, right=right):
+                return f"({self(left)} {_COMPARE[op]} {self(right)})"
+            case Logical(op=op, operands=operands):
+                word = " and " if op == "&&" else " or "
+                return "(" + word.join(self(o) for o in operands) + ")"
+            case Conditional(condition=c, then=t, otherwise=o):
+                return f"({self(t)} if {self(c)} else {self(o)})"
+        raise TypeError(f"cannot generate code for {e!r}")
+
+    def action_done(self) -> str:
+        if self.state is None:
+            return "False"
+        terms = []
+        for name in self.state.subsequent_options:
+            c = self.layout.options[name].index
+            # wasActive of the child: executed in the previous tick (also when it already ran
+            # earlier in this tick, which only B1 allows), and its active state is a target.
+            was = f"(LT[{c}] == tick - 1 or (LT[{c}] == tick and PV[{c}] == tick - 1))"
+            terms.append(f"({was} and TG{c}[S[{c}]])")
+        if not terms:
+            return "False"
+        return "(" + " or ".join(terms) + ")"
+
+    def input_call(self, ref: InputRef) -> str:
+        slot = self.layout.inputs[ref.symbol]
+        if not slot.params:
+            return f"I{slot.index}()"
+        assigned = {a.param: a for a in ref.args}
+        nested = any(
+            isinstance(node, InputRef) and node.args for a in ref.args for node in walk(a.value)
+        )
+        if not nested:
+            # No host function inside the arguments: evaluation order is unobservable, so the
+            # arguments go straight into the call in registration order.
+            values = [self.arg_or_default(assigned.get(name), kind) for name, kind in slot.params]
+            return f"I{slot.index}({', '.join(values)})"
+        # A host function inside an argument: set the shared parameter storage one parameter at
+        # a time in the engine's order, so a nested call of the same symbol clobbers earlier
+        # arguments exactly as in the original engine (§2.5).
+        parts = [
+            f"FS{slot.index}({i}, {self.arg_or_default(assigned.get(slot.params[i][0]), slot.params[i][1])})"
+            for i in engine_order(slot.params)
+        ]
+        parts.append(f"I{slot.index}(*FP{slot.index})")
+        return f"({', '.join(parts)})[{len(parts) - 1}]"
+
+    def arg_or_default(self, argument: Argument | None, kind: Kind) -> str:
+        if argument is None:
+            return _literal(default_value(kind))
+        return self(argument.value)
+
+
+def expression_source(layout: Layout, option: Option, state: State | None, expression: Expression) -> str:
+    """The Python expression the generator inlines for ``expression`` (used by the debugger).
+
+    Its free names are the engine globals plus ``st``, ``ot`` and ``tick``.
+    """
+    return _ExpressionWriter(layout, option, state)(expression)
+
+
+class _OptionWriter:
+    """Writes the chunk of one option."""
+
+    def __init__(self, program: Program, layout: Layout, option: Option) -> None:
+        self.program = program
+        self.layout = layout
+        self.option = option
+        self.slot = layout.options[option.name]
+        self.lines: list[str] = []
+        self.origins: dict[int, Origin] = {}
+
+    def emit(self, text: str, state: State | None = None, span: Span | None = None, what: str = "") -> None:
+        self.lines.append(text)
+        self.origins[len(self.lines)] = Origin(self.option.name, state.name if state else None, span, what)
+
+    def write(self) -> str:
+        i = self.slot.index
+        for state in self.option.states:
+            self.decide(state)
+            self.act(state)
+        self.emit(f"DEC{i} = ({', '.join(f'D{i}_{s.index}' for s in self.option.states)},)")
+        self.emit(f"ACT{i} = ({', '.join(f'A{i}_{s.index}' for s in self.option.states)},)")
+        self.emit(f"TG{i} = {tuple(self.slot.targets)!r}")
+        self.execute()
+        return "\n".join(self.lines) + "\n"
+
+    # -- decide -----------------------------------------------------------------------------
+
+    def decide(self, state: State) -> None:
+        i = self.slot.index
+        self.emit(f"def D{i}_{state.index}(st, ot, tick):", state, state.span, "decision")
+        writer = _ExpressionWriter(self.layout, self.option, state)
+        self.tree(state, state.decision, writer, "    ")
+        self.emit("")
+
+    def tree(self, state: State, node: DecisionTree, writer: _ExpressionWriter, indent: str) -> None:
+        keyword = "if"
+        while isinstance(node, If):
+            self.emit(f"{indent}{keyword} {writer(node.condition)}:", state, node.span, "condition")
+            self.tree(state, node.then, writer, indent + "    ")
+            node = node.otherwise
+            # ``else if`` chains (the inlined common decision tree) become ``elif``: no
+            # nesting, so long chains never reach Python's indentation limit.
+            keyword = "elif"
+        if keyword == "elif":
+            self.emit(f"{indent}else:", state)
+            indent += "    "
+        target = self.option.state(node.target or state.name).index
+        self.emit(f"{indent}return ({target}, {node.leaf}, {state.index})", state, node.span, "transition")
+
+    # -- act --------------------------------------------------------------------------------
+
+    def act(self, state: State) -> None:
+        i = self.slot.index
+        self.emit(f"def A{i}_{state.index}(st, ot, now, tick):", state, state.span, "actions")
+        writer = _ExpressionWriter(self.layout, self.option, state)
+        body = len(self.lines)
+        for position, action in enumerate(state.actions):
+            if isinstance(action, Assignment):
+                out = self.layout.outputs[action.symbol]
+                site = self.layout.sites[(self.option.name, state.index, position)]
+                self.emit(f"    v = {writer(action.value)}", state, action.span, f"assignment {action.symbol}")
+                self.emit(f"    AV[{site}] = v", state, action.span)
+                if out.stored:
+                    self.emit(f"    OV[{out.index}] = v", state, action.span)
+                else:
+                    self.emit(f"    OS{out.index}(v)", state, action.span)
+            elif isinstance(action, OptionCall):
+                self.option_call(state, action, writer)
+            elif isinstance(action, BehaviorCall):
+                self.behavior_call(state, action, writer)
+        if len(self.lines) == body:
+            self.emit("    pass", state)
+        self.emit("")
+
+    def option_call(self, state: State, call: OptionCall, writer: _ExpressionWriter) -> None:
+        callee = self.layout.options[call.option]
+        assigned = {a.param: a for a in call.args}
+        what = f"call of option {call.option}"
+        for position in engine_order(callee.params):
+            name, kind = callee.params[position]
+            value = writer.arg_or_default(assigned.get(name), kind)
+            self.emit(f"    PP[{callee.offset + position}] = {value}", state, call.span, what)
+        self.emit(f"    O{callee.index}(now, tick)", state, call.span, what)
+
+    def behavior_call(self, state: State, call: BehaviorCall, writer: _ExpressionWriter) -> None:
+        callee = self.layout.behaviors[call.behavior]
+        assigned = {a.param: a for a in call.args}
+        what = f"call of basic behavior {call.behavior}"
+        if callee.hook:
+            self.emit("    changed = False", state, call.span, what)
+        for position in engine_order(callee.params):
+            name, kind = callee.params[position]
+            value = writer.arg_or_default(assigned.get(name), kind)
+            slot = callee.offset + position
+            if callee.hook:
+                self.emit(f"    v = {value}", state, call.span, what)
+                self.emit(f"    if BP[{slot}] != v:", state, call.span, what)
+                self.emit(f"        BP[{slot}] = v", state, call.span, what)
+                self.emit("        changed = True", state, call.span, what)
+            else:
+                self.emit(f"    BP[{slot}] = {value}", state, call.span, what)
+        changed = "changed" if callee.hook else "False"
+        self.emit(f"    RB({callee.index}, now, tick, {changed})", state, call.span, what)
+
+    # -- execute ----------------------------------------------------------------------------
+
+    def execute(self) -> None:
+        i = self.slot.index
+        e = self.emit
+        e(f"def O{i}(now, tick):", None, self.option.span, "option")
+        e(f"    lt = LT[{i}]")
+        e("    if lt != tick:")
+        e(f"        PV[{i}] = lt")
+        e(f"        LT[{i}] = tick")
+        e("        was = lt == tick - 1")
+        e("    else:")
+        e(f"        was = DX({i}, tick)")
+        e("    if was:")
+        e(f"        ot = float((now - TA[{i}]) & {_MASK})")
+        e(f"        s = S[{i}]")
+        e(f"        st = float((now - TS[{i}]) & {_MASK})")
+        e("    else:")
+        # (Re)activation: the initial state, state_time and option_time start at 0 (§2.2).
+        e(f"        TA[{i}] = now")
+        e(f"        s = {self.slot.initial}")
+        e(f"        S[{i}] = s")
+        e(f"        TS[{i}] = now")
+        e("        ot = 0.0")
+        e("        st = 0.0")
+        e(f"    r = DEC{i}[s](st, ot, tick)")
+        e(f"    LF[{i}] = r")
+        e(f"    SD[{i}] = st")
+        e("    n = r[0]")
+        if any(self.slot.coop):
+            e(f"    if n != s and CO{i}[n] and not CC({i}, n, s):")
+            e("        n = s")
+            self.lines.insert(0, f"CO{i} = {tuple(self.slot.coop)!r}")
+            self.origins = {k + 1: v for k, v in self.origins.items()}
+            self.origins[1] = Origin(self.option.name, None, None, "cooperative states")
+        e("    if n != s:")
+        e(f"        S[{i}] = n")
+        e(f"        TS[{i}] = now")
+        e("        st = 0.0")
+        e(f"    ACT{i}[n](st, ot, now, tick)")
+
+
+_CACHE: dict[tuple[int, tuple[object, ...]], GeneratedProgram] = {}
+_CACHE_SIZE = 32
+
+
+def generate(program: Program, layout: Layout) -> GeneratedProgram:
+    """Generate and compile the Python code of ``program`` for ``layout``.
+
+    Compiled once: engines that load the same program with equal layouts (a team of agents)
+    share the code objects and only bind their own storage.
+    """
+    key = (id(program), layout.key())
+    cached = _CACHE.get(key)
+    if cached is not None and cached.program is program:
+        return cached
+    options: dict[str, GeneratedOption] = {}
+    for option in program.options.values():
+        writer = _OptionWriter(program, layout, option)
+        source = writer.write()
+        filename = f"<xabsl:{option.name}>"
+        options[option.name] = GeneratedOption(
+            option.name, filename, source, compile(source, filename, "exec"), writer.origins
+        )
+    generated = GeneratedProgram(program, options)
+    if len(_CACHE) >= _CACHE_SIZE:
+        _CACHE.pop(next(iter(_CACHE)))
+    _CACHE[key] = generated
+    return generated
+
+
+#: Signature of a generated option function.
+OptionFunction = Callable[[int, int], None]

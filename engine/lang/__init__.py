@@ -1,0 +1,124 @@
+"""The XABSL 2 front end: source files -> tokens -> AST -> checked program (IR) + diagnostics.
+
+The one entry point is :func:`compile_file`::
+
+    compilation = compile_file("examples/demo/agents.xabsl")
+    for diagnostic in compilation.diagnostics:
+        print(diagnostic.format())
+    if compilation.ok:
+        program = compilation.program   # engine.ir.Program
+
+Stages, one module each: :mod:`.tokens`, :mod:`.parser` (with :mod:`.ast`), :mod:`.loader`
+(the include closure), :mod:`.symbols` (the global symbol table), :mod:`.check` (names, types,
+IR), :mod:`.lint` (whole-program checks). User mistakes never raise: they are diagnostics.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from engine import ir
+from engine.lang import lint
+from engine.lang.check import OptionChecker, title_fields
+from engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
+from engine.lang.loader import load
+from engine.lang.symbols import Declarations
+
+__all__ = ["Compilation", "Diagnostic", "Severity", "compile_file"]
+
+
+@dataclass
+class Compilation:
+    """The result of compiling one agents file."""
+
+    program: ir.Program | None
+    diagnostics: list[Diagnostic]
+    files: list[str] = field(default_factory=list)
+    #: seconds spent per stage: "parse", "check"
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def errors(self) -> list[Diagnostic]:
+        return [d for d in self.diagnostics if d.is_error]
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        return [d for d in self.diagnostics if not d.is_error]
+
+    @property
+    def ok(self) -> bool:
+        """True when there is a program (no errors)."""
+        return self.program is not None
+
+
+def compile_file(
+    path: str,
+    base: str | None = None,
+    overrides: Mapping[str, str] | None = None,
+) -> Compilation:
+    """Compile the agents file ``path`` and its include closure into a checked program.
+
+    Args:
+        path: the file to compile (normally ``agents.xabsl``).
+        base: folder that diagnostic file names are relative to (default: working directory).
+        overrides: unsaved texts by file path, used instead of the files on disk.
+
+    Returns:
+        a :class:`Compilation`; ``program`` is None when there is any error.
+    """
+    diagnostics = Diagnostics()
+    started = time.perf_counter()
+    loaded = load(path, diagnostics, base, overrides)
+    parsed = time.perf_counter()
+
+    # A file with lexical or syntax errors is incomplete: its option's trees are not checked,
+    # so a lost state does not come back as "missing initial state" or "unknown state".
+    broken = {d.file for d in diagnostics if d.is_error}
+    table = Declarations(loaded.files, diagnostics).run()
+    usage: set[tuple[str, str]] = set()
+    ordered = sorted(
+        (h for h in table.options.values() if h.file.path not in broken),
+        key=lambda h: h.decl.name.text.lower(),
+    )
+    options = {
+        header.decl.name.text: OptionChecker(table, header, diagnostics, usage).build(index)
+        for index, header in enumerate(ordered)
+    }
+
+    agents: list[ir.Agent] = []
+    agent_names: set[str] = set()
+    for decl in table.agents:
+        if decl.name.text in agent_names:
+            diagnostics.add("duplicate-definition", f"agent '{decl.name.text}' is defined more than once", decl.name.span)
+        agent_names.add(decl.name.text)
+        if decl.root.text not in table.options:
+            diagnostics.add("unknown-option", f"agent '{decl.name.text}': no option named '{decl.root.text}'", decl.root.span)
+        agents.append(ir.Agent(decl.name.text, decl.title, decl.root.text, decl.doc, decl.name.span))
+
+    fields = title_fields(loaded.root.title_comment if loaded.root else None)
+    program = ir.Program(
+        title=fields["title"],
+        options=options,
+        agents=tuple(agents),
+        enums=table.enums,
+        inputs=table.inputs,
+        outputs=table.outputs,
+        constants=table.constants,
+        behaviors=table.behaviors,
+        platform=fields["platform"],
+        software_environment=fields["software_environment"],
+        files=tuple(f.path for f in loaded.files),
+    )
+    lint.check_cycles(options, diagnostics)
+    lint.check_reachability(program, diagnostics)
+    lint.check_unused(program, usage, diagnostics)
+    checked = time.perf_counter()
+
+    return Compilation(
+        program=None if diagnostics.errors else program,
+        diagnostics=diagnostics.sorted(),
+        files=[f.path for f in loaded.files],
+        timings={"parse": parsed - started, "check": checked - parsed},
+    )

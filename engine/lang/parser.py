@@ -1,0 +1,609 @@
+"""Recursive-descent parser for XABSL 2 files (§1.3), with error recovery.
+
+The grammar reads as a list of ``_parse_<production>`` methods in the order of §1.3. A token the
+grammar cannot accept raises :class:`_SyntaxError` at that token (so a missing ``;`` is reported
+on the next token, as the original racc parser does); recovery points catch it:
+
+* per state of an option (resume at the next ``[initial] [target] state``),
+* per namespace item (resume after the next ``;``/``}`` at the namespace's brace depth),
+* per agent declaration (resume at the next ``agent``).
+
+One run therefore reports every syntax error of every file. Only the first error of a
+recovery region is reported, so one mistake yields one diagnostic.
+
+Doc comments (``/** */``) are tokens: where the grammar allows them (§1.3 note e) they attach
+to the following node; anywhere else they are a syntax error, exactly like the original.
+"""
+
+from __future__ import annotations
+
+from engine.lang import ast
+from engine.lang.diagnostics import Diagnostics
+from engine.lang.tokens import Token, TokenType, doc_text, tokenize
+from engine.types import Span
+
+#: Binary operators by precedence level, lowest first (§1.3 table; unary binds tightest).
+BINARY_LEVELS: tuple[tuple[str, ...], ...] = (
+    ("||",),
+    ("&&",),
+    ("<", ">", "<=", ">=", "==", "!="),
+    ("+", "-"),
+    ("*", "/", "%"),
+)
+#: Levels whose operators are non-associative (``a < b < c`` is a syntax error).
+NONASSOC_LEVELS = frozenset({2})
+BUILTINS = frozenset({"state_time", "option_time", "action_done", "conflict"})
+TYPE_KEYWORDS = frozenset({"float", "bool", "enum"})
+IO_KEYWORDS = frozenset({"input", "output", "internal"})
+STATE_START = frozenset({"initial", "target", "state"})
+
+
+class _SyntaxError(Exception):
+    def __init__(self, token: Token, message: str, code: str = "syntax-error") -> None:
+        super().__init__(message)
+        self.token = token
+        self.message = message
+        self.code = code
+
+
+def parse_file(path: str, text: str, diagnostics: Diagnostics) -> ast.SourceFile:
+    """Parse one file's text; problems are added to ``diagnostics``, never raised."""
+    tokens = tokenize(text, path, diagnostics)
+    truncated = any(d.code == "unterminated-comment" and d.file == path for d in diagnostics)
+    return _Parser(path, text, tokens, diagnostics, truncated).parse()
+
+
+class _Parser:
+    def __init__(
+        self, path: str, text: str, tokens: list[Token], diagnostics: Diagnostics, truncated: bool
+    ) -> None:
+        self.path = path
+        self.text = text
+        self.tokens = tokens
+        self.diagnostics = diagnostics
+        self.truncated = truncated
+        self.pos = 0
+        # brace depth before each token: recovery resumes at the depth it started from
+        self.depth: list[int] = []
+        depth = 0
+        for token in tokens:
+            self.depth.append(depth)
+            if token.is_op("{"):
+                depth += 1
+            elif token.is_op("}"):
+                depth = max(0, depth - 1)
+
+    # ---------------------------------------------------------------- token helpers
+
+    @property
+    def tok(self) -> Token:
+        return self.tokens[self.pos]
+
+    def peek(self, offset: int = 1) -> Token:
+        return self.tokens[min(self.pos + offset, len(self.tokens) - 1)]
+
+    def advance(self) -> Token:
+        token = self.tokens[self.pos]
+        if token.type is not TokenType.EOF:
+            self.pos += 1
+        return token
+
+    def error(self, expected: str, token: Token | None = None) -> _SyntaxError:
+        token = token or self.tok
+        if token.type is TokenType.EOF:
+            return _SyntaxError(token, f"unexpected end of file; expected {expected}", "unexpected-end-of-file")
+        if token.type is TokenType.DOC_COMMENT:
+            return _SyntaxError(
+                token,
+                "syntax error: a doc comment is not allowed here (only before agent, namespace, "
+                "const, symbol, enum, behavior, parameter, option, if and else)",
+            )
+        if token.type is TokenType.INITIAL_COMMENT:
+            return _SyntaxError(token, "syntax error: a /*** title comment may only open a file")
+        return _SyntaxError(token, f"syntax error: unexpected {token.describe()}; expected {expected}")
+
+    def expect_op(self, text: str) -> Token:
+        if not self.tok.is_op(text):
+            raise self.error(f"'{text}'")
+        return self.advance()
+
+    def expect_kw(self, text: str) -> Token:
+        if not self.tok.is_kw(text):
+            raise self.error(f"'{text}'")
+        return self.advance()
+
+    def expect_ident(self, what: str = "a name") -> ast.Name:
+        token = self.tok
+        if token.type is not TokenType.IDENTIFIER:
+            raise self.error(what)
+        self.advance()
+        return ast.Name(token.text, token.span)
+
+    def expect_string(self, what: str = "a string") -> str:
+        if self.tok.type is not TokenType.STRING:
+            raise self.error(what)
+        return self.advance().text[1:-1]
+
+    def take_doc(self) -> str | None:
+        if self.tok.type is TokenType.DOC_COMMENT:
+            return doc_text(self.advance())
+        return None
+
+    def span_from(self, start: Span) -> Span:
+        last = self.tokens[self.pos - 1] if self.pos > 0 else self.tok
+        return start.to(last.span)
+
+    def report(self, error: _SyntaxError) -> None:
+        if error.token.type is TokenType.EOF and self.truncated:
+            return  # the unterminated comment already explains the end of the tokens
+        if any(
+            d.code == "illegal-character" and d.span and d.span.line == error.token.span.line
+            and d.span.start < error.token.span.start
+            for d in self.diagnostics
+            if d.file == self.path
+        ):
+            return  # a follow-up of the illegal character just skipped on this line
+        self.diagnostics.add(error.code, error.message, error.token.span, self.path)
+
+    # ---------------------------------------------------------------- file
+
+    def parse(self) -> ast.SourceFile:
+        source = ast.SourceFile(self.path, self.text)
+        if self.tok.type is TokenType.INITIAL_COMMENT:
+            source.title_comment = self.advance().text[4:-2]
+        try:
+            while self.tok.is_kw("include"):
+                start = self.advance().span
+                path = self.expect_string("a file name in quotes")
+                self.expect_op(";")
+                source.includes.append(ast.Include(path, self.span_from(start)))
+            doc_start = self.pos
+            doc = self.take_doc()
+            if self.tok.is_kw("option"):
+                source.option = self.parse_option(doc)
+            elif self.tok.is_kw("namespace"):
+                source.namespace = self.parse_namespace(doc)
+            elif self.tok.is_kw("agent"):
+                self.pos = doc_start
+                self.parse_agents(source)
+            elif self.tok.type is not TokenType.EOF:
+                raise self.error("'include', 'option', 'namespace' or 'agent'")
+            if self.tok.type is not TokenType.EOF:
+                raise self.error("end of file (a file holds one option, one namespace or the agents)")
+        except _SyntaxError as error:
+            self.report(error)
+        return source
+
+    # ---------------------------------------------------------------- agents
+
+    def parse_agents(self, source: ast.SourceFile) -> None:
+        while self.tok.type is not TokenType.EOF:
+            try:
+                doc = self.take_doc()
+                start = self.expect_kw("agent").span
+                name = self.expect_ident("the agent's name")
+                self.expect_op("(")
+                title = self.expect_string("the agent's title in quotes")
+                self.expect_op(",")
+                root = self.expect_ident("the root option's name")
+                self.expect_op(")")
+                self.expect_op(";")
+                source.agents.append(ast.AgentDecl(name, title, root, self.span_from(start), doc))
+            except _SyntaxError as error:
+                self.report(error)
+                self.advance()
+                while self.tok.type is not TokenType.EOF and not self.tok.is_kw("agent"):
+                    self.advance()
+                # a doc comment right before the resumed agent belongs to it
+                if self.pos > 0 and self.tokens[self.pos - 1].type is TokenType.DOC_COMMENT:
+                    self.pos -= 1
+
+    # ---------------------------------------------------------------- namespaces
+
+    def parse_namespace(self, doc: str | None) -> ast.Namespace:
+        start = self.expect_kw("namespace").span
+        name = self.expect_ident("the namespace's name")
+        self.expect_op("(")
+        title = self.expect_string("the namespace's title in quotes")
+        self.expect_op(")")
+        self.expect_op("{")
+        depth = self.depth[self.pos]
+        items: list[ast.NamespaceItem] = []
+        while not self.tok.is_op("}"):
+            if self.tok.type is TokenType.EOF:
+                raise self.error("'}'")
+            try:
+                items.append(self.parse_namespace_item())
+            except _SyntaxError as error:
+                self.report(error)
+                self.recover_to_item(depth)
+        self.advance()
+        return ast.Namespace(name, title, items, self.span_from(start), doc)
+
+    def recover_to_item(self, depth: int) -> None:
+        """Skip to just after a ``;`` or ``}`` at the namespace body's depth."""
+        self.advance()
+        while self.tok.type is not TokenType.EOF:
+            previous = self.tokens[self.pos - 1]
+            at_depth = self.depth[self.pos] == depth
+            if at_depth and (previous.is_op(";") or previous.is_op("}")):
+                if self.tok.is_op(";"):  # the ';' after an enum's '}'
+                    self.advance()
+                return
+            if at_depth and self.tok.is_op("}"):
+                return
+            if self.depth[self.pos] < depth:
+                return
+            self.advance()
+
+    def parse_namespace_item(self) -> ast.NamespaceItem:
+        doc = self.take_doc()
+        token = self.tok
+        start = token.span
+        if token.is_kw("behavior"):
+            self.advance()
+            name = self.expect_ident("the basic behavior's name")
+            self.expect_op("{")
+            params = []
+            while not self.tok.is_op("}"):
+                params.append(self.parse_param_decl())
+            self.advance()
+            return ast.BehaviorDecl(name, params, self.span_from(start), doc)
+        if token.is_kw("const") or (token.is_kw("float") and self.peek().is_kw("const")):
+            if token.is_kw("float"):
+                self.advance()
+            self.expect_kw("const")
+            name = self.expect_ident("the constant's name")
+            self.expect_op("=")
+            negative = False
+            if self.tok.is_op("-"):
+                self.advance()
+                negative = True
+            if self.tok.type is not TokenType.NUMBER:
+                raise self.error("a number")
+            text = self.advance().text
+            unit = self.expect_string() if self.tok.type is TokenType.STRING else None
+            self.expect_op(";")
+            return ast.ConstDecl(name, text, negative, unit, self.span_from(start), doc)
+        if token.is_kw("enum") and self.peek().type is TokenType.IDENTIFIER:
+            # `enum E { .. };` and `enum E internal { .. };` declare enumerations, while
+            # `enum E internal name;` declares an internal symbol of type E
+            after = self.peek(2)
+            if after.is_op("{") or (after.is_kw("internal") and self.peek(3).is_op("{")):
+                return self.parse_enum_decl(doc, start)
+            if after.type is TokenType.KEYWORD and after.text in ("input", "output") and self.peek(3).is_op("{"):
+                raise _SyntaxError(after, "syntax error: an enumeration can only be declared 'internal'")
+        return self.parse_symbol_decl(doc, start)
+
+    def parse_enum_decl(self, doc: str | None, start: Span) -> ast.EnumDecl:
+        self.expect_kw("enum")
+        name = self.expect_ident("the enumeration's name")
+        internal = False
+        if self.tok.is_kw("internal"):
+            self.advance()
+            internal = True
+        self.expect_op("{")
+        elements = [self.expect_ident("an enum element")]
+        while self.tok.is_op(","):
+            self.advance()
+            elements.append(self.expect_ident("an enum element"))
+        self.expect_op("}")
+        self.expect_op(";")
+        return ast.EnumDecl(name, internal, elements, self.span_from(start), doc)
+
+    def parse_type(self) -> ast.TypeRef:
+        token = self.tok
+        if token.is_kw("float") or token.is_kw("bool"):
+            self.advance()
+            return ast.TypeRef("decimal" if token.text == "float" else "boolean", None, token.span)
+        if token.is_kw("enum"):
+            self.advance()
+            enum = self.expect_ident("the enumeration's name")
+            return ast.TypeRef("enum", enum, token.span.to(enum.span))
+        return ast.TypeRef("decimal", None, None)
+
+    def parse_symbol_decl(self, doc: str | None, start: Span) -> ast.SymbolDecl:
+        type_ = self.parse_type()
+        if not (self.tok.type is TokenType.KEYWORD and self.tok.text in IO_KEYWORDS):
+            raise self.error("'input', 'output' or 'internal'")
+        io = self.advance().text
+        name = self.expect_ident("the symbol's name")
+        range_, range_span, unit, unit_span = self.parse_range_unit()
+        params = None
+        if self.tok.is_op("("):
+            self.advance()
+            params = []
+            while not self.tok.is_op(")"):
+                params.append(self.parse_param_decl())
+            self.advance()
+        self.expect_op(";")
+        return ast.SymbolDecl(
+            type_, io, name, range_, unit, params, self.span_from(start), doc, range_span, unit_span
+        )
+
+    def parse_range_unit(self) -> tuple[str | None, Span | None, str | None, Span | None]:
+        range_ = unit = None
+        range_span = unit_span = None
+        if self.tok.type is TokenType.RANGE:
+            token = self.advance()
+            range_, range_span = token.text[1:-1], token.span
+        if self.tok.type is TokenType.STRING:
+            token = self.advance()
+            unit, unit_span = token.text[1:-1], token.span
+        return range_, range_span, unit, unit_span
+
+    def parse_param_decl(self) -> ast.ParamDecl:
+        doc = self.take_doc()
+        if doc is not None and self.tok.type is TokenType.KEYWORD and self.tok.text in STATE_START | {"common"}:
+            raise _SyntaxError(
+                self.tok,
+                f"syntax error: unexpected keyword '{self.tok.text}' after a doc comment; doc comments "
+                "are not allowed before states or common decisions (use a // comment)",
+            )
+        start = self.tok.span
+        type_ = self.parse_type()
+        name = self.expect_ident("a parameter name" if type_.span else "a parameter type or name")
+        range_, range_span, unit, unit_span = self.parse_range_unit()
+        self.expect_op(";")
+        return ast.ParamDecl(type_, name, range_, unit, self.span_from(start), doc, range_span, unit_span)
+
+    # ---------------------------------------------------------------- options
+
+    def parse_option(self, doc: str | None) -> ast.OptionDecl:
+        start = self.expect_kw("option").span
+        name = self.expect_ident("the option's name")
+        self.expect_op("{")
+        body_depth = self.depth[self.pos]
+        params: list[ast.ParamDecl] = []
+        common_decision = None
+        common_action = None
+        states: list[ast.StateDecl] = []
+        try:
+            while not self.tok.is_kw("common") and not (
+                self.tok.type is TokenType.KEYWORD and self.tok.text in STATE_START
+            ):
+                params.append(self.parse_param_decl())
+            if self.tok.is_kw("common") and self.peek().is_kw("decision"):
+                common_decision = self.parse_common_decision()
+            if self.tok.is_kw("common"):
+                self.advance()
+                self.expect_kw("action")
+                common_action = self.parse_action_block()
+            states.append(self.parse_state())
+        except _SyntaxError as error:
+            self.report(error)
+            self.recover_to_state(body_depth)
+        while not self.tok.is_op("}"):
+            if self.tok.type is TokenType.EOF:
+                raise self.error("'}' closing the option")
+            try:
+                states.append(self.parse_state())
+            except _SyntaxError as error:
+                self.report(error)
+                self.recover_to_state(body_depth)
+        self.advance()
+        return ast.OptionDecl(name, params, common_decision, common_action, states, self.span_from(start), doc)
+
+    def recover_to_state(self, depth: int) -> None:
+        """Skip to the next state header, or to the ``}`` closing the option."""
+        self.advance()
+        while self.tok.type is not TokenType.EOF:
+            token = self.tok
+            if token.type is TokenType.KEYWORD and token.text in STATE_START:
+                return
+            if token.is_op("}") and self.depth[self.pos] == depth:
+                return
+            self.advance()
+
+    def parse_common_decision(self) -> ast.CommonDecision:
+        start = self.advance().span
+        self.advance()  # 'decision'
+        branches: list[ast.IfElse] = []
+        if self.tok.is_op("{") or self.tok.is_kw("if") or self.tok.type is TokenType.DOC_COMMENT:
+            self.parse_cdtree(branches)
+        return ast.CommonDecision(branches, self.span_from(start))
+
+    def parse_cdtree(self, branches: list[ast.IfElse]) -> None:
+        """``cdtree ::= '{' cdtree '}' | [DOC] if (exp) dtree [[DOC] else cdtree]``."""
+        if self.tok.is_op("{"):
+            self.advance()
+            self.parse_cdtree(branches)
+            self.expect_op("}")
+            return
+        doc = self.take_doc()
+        start = self.expect_kw("if").span
+        self.expect_op("(")
+        condition = self.parse_expression()
+        self.expect_op(")")
+        then = self.parse_dtree()
+        branch = ast.IfElse(condition, then, None, self.span_from(start), doc)
+        branches.append(branch)
+        mark = self.pos
+        else_doc = self.take_doc()
+        if self.tok.is_kw("else"):
+            self.advance()
+            branch.else_doc = else_doc
+            self.parse_cdtree(branches)
+        else:
+            self.pos = mark
+
+    def parse_dtree(self) -> ast.DTree:
+        token = self.tok
+        if token.is_op("{"):
+            self.advance()
+            tree = self.parse_dtree()
+            self.expect_op("}")
+            return tree
+        if token.is_kw("goto"):
+            self.advance()
+            target = self.expect_ident("a state name")
+            self.expect_op(";")
+            return ast.Goto(target, self.span_from(token.span))
+        if token.is_kw("stay"):
+            self.advance()
+            self.expect_op(";")
+            return ast.Stay(self.span_from(token.span))
+        doc = self.take_doc()
+        if not self.tok.is_kw("if"):
+            raise self.error("'if', 'goto', 'stay' or '{'")
+        start = self.advance().span
+        self.expect_op("(")
+        condition = self.parse_expression()
+        self.expect_op(")")
+        then = self.parse_dtree()
+        else_doc = self.take_doc()
+        self.expect_kw("else")
+        otherwise = self.parse_dtree()
+        return ast.IfElse(condition, then, otherwise, self.span_from(start), doc, else_doc)
+
+    def parse_state(self) -> ast.StateDecl:
+        start = self.tok.span
+        initial = target = False
+        if self.tok.is_kw("initial"):
+            self.advance()
+            initial = True
+        if self.tok.is_kw("target"):
+            self.advance()
+            target = True
+        self.expect_kw("state")
+        name = self.expect_ident("the state's name")
+        coop, count, given = "n", 0, False
+        if self.tok.is_kw("capacity"):
+            self.advance()
+            if self.tok.type is not TokenType.NUMBER:
+                raise self.error("the capacity (a number)")
+            coop, count, given = "c", int(float(self.advance().text)), True
+        elif self.tok.is_kw("synchronized"):
+            self.advance()
+            coop = "s"
+            if self.tok.type is TokenType.NUMBER:
+                count, given = int(float(self.advance().text)), True
+        self.expect_op("{")
+        decision = None
+        leading_else = False
+        decision_span = None
+        if self.tok.is_kw("decision"):
+            decision_span = self.advance().span
+            self.expect_op("{")
+            mark = self.pos
+            doc = self.take_doc()
+            if self.tok.is_kw("else"):
+                self.advance()
+                leading_else = True
+                decision = self.parse_dtree()
+                if isinstance(decision, ast.IfElse) and decision.doc is None:
+                    decision.doc = doc
+            else:
+                self.pos = mark
+                decision = self.parse_dtree()
+            self.expect_op("}")
+        self.expect_kw("action")
+        actions = self.parse_action_block()
+        self.expect_op("}")
+        return ast.StateDecl(
+            name, initial, target, coop, count, decision, leading_else, decision_span, actions,
+            self.span_from(start), given,
+        )
+
+    def parse_action_block(self) -> list[ast.ActionStmt]:
+        self.expect_op("{")
+        actions: list[ast.ActionStmt] = []
+        while not self.tok.is_op("}"):
+            actions.append(self.parse_action())
+        self.advance()
+        return actions
+
+    def parse_action(self) -> ast.ActionStmt:
+        name = self.expect_ident("an output symbol, option or basic behavior")
+        if self.tok.is_op("="):
+            self.advance()
+            value = self.parse_expression()
+            self.expect_op(";")
+            return ast.Assign(name, value, self.span_from(name.span))
+        explicit = None
+        if self.tok.is_kw("option") or self.tok.is_kw("behavior"):
+            explicit = self.advance().text
+        if not self.tok.is_op("("):
+            raise self.error("'=' or '('")
+        args = self.parse_call_args()
+        self.expect_op(";")
+        return ast.CallAction(name, args, self.span_from(name.span), explicit)
+
+    def parse_call_args(self) -> list[ast.CallArg]:
+        self.expect_op("(")
+        args: list[ast.CallArg] = []
+        if not self.tok.is_op(")"):
+            while True:
+                name = self.expect_ident("a parameter name")
+                self.expect_op("=")
+                value = self.parse_expression()
+                args.append(ast.CallArg(name, value, self.span_from(name.span)))
+                if not self.tok.is_op(","):
+                    break
+                self.advance()
+        self.expect_op(")")
+        return args
+
+    # ---------------------------------------------------------------- expressions
+
+    def parse_expression(self) -> ast.Expr:
+        """``?:`` is non-associative: its else-branch may not itself be an unparenthesised ``?:``."""
+        condition = self.parse_binary(0)
+        if not self.tok.is_op("?"):
+            return condition
+        op = self.advance()
+        then = self.parse_expression()
+        self.expect_op(":")
+        otherwise = self.parse_binary(0)
+        if self.tok.is_op("?"):
+            raise self.error("an operator or ')' (nested ?: needs parentheses)")
+        return ast.CondOp(condition, then, otherwise, _expr_span(condition).to(_expr_span(otherwise)), op.span)
+
+    def parse_binary(self, level: int) -> ast.Expr:
+        if level == len(BINARY_LEVELS):
+            return self.parse_unary()
+        operators = BINARY_LEVELS[level]
+        left = self.parse_binary(level + 1)
+        while self.tok.type is TokenType.OPERATOR and self.tok.text in operators:
+            op = self.advance()
+            right = self.parse_binary(level + 1)
+            left = ast.BinaryOp(op.text, left, right, _expr_span(left).to(_expr_span(right)), op.span)
+            if level in NONASSOC_LEVELS and self.tok.type is TokenType.OPERATOR and self.tok.text in operators:
+                raise self.error("an operator of another kind (comparisons do not chain)")
+        return left
+
+    def parse_unary(self) -> ast.Expr:
+        token = self.tok
+        if token.is_op("-") or token.is_op("!"):
+            self.advance()
+            operand = self.parse_unary()
+            return ast.UnaryOp(token.text, operand, token.span.to(_expr_span(operand)), token.span)
+        return self.parse_primary()
+
+    def parse_primary(self) -> ast.Expr:
+        token = self.tok
+        if token.type is TokenType.NUMBER:
+            self.advance()
+            return ast.NumberLit(token.text, token.span)
+        if token.is_kw("true") or token.is_kw("false"):
+            self.advance()
+            return ast.BoolLit(token.text == "true", token.span)
+        if token.type is TokenType.KEYWORD and token.text in BUILTINS:
+            self.advance()
+            return ast.Builtin(token.text, token.span)
+        if token.type is TokenType.IDENTIFIER:
+            self.advance()
+            if self.tok.is_op("("):
+                args = self.parse_call_args()
+                return ast.Call(ast.Name(token.text, token.span), args, self.span_from(token.span))
+            return ast.Ident(token.text, token.span)
+        if token.is_op("("):
+            self.advance()
+            inner = self.parse_expression()
+            self.expect_op(")")
+            return ast.Paren(inner, self.span_from(token.span))
+        raise self.error("an expression")
+
+
+def _expr_span(expr: ast.Expr) -> Span:
+    return expr.span

@@ -1,0 +1,218 @@
+"""Tokenizer for XABSL 2 source files (§1.2), quirks of the original ``tokenizer.rb`` included.
+
+Lexical facts are tables (:data:`KEYWORDS`, :data:`OPERATORS`) so tests and the editor can read
+them. The quirks, each reproduced on purpose:
+
+* keyword-run rule: the maximal run ``[A-Za-z_][A-Za-z0-9_.-]*`` is a keyword only if the whole
+  run is one, so ``state_time-500`` lexes as the identifier ``state_time`` (then ``-``, ``500``);
+* identifiers may start with ``@`` (option parameters) and contain dots (``ball.distance``);
+* ``/*** */`` is the title comment, ``/** */`` a doc comment (a token the grammar places), plain
+  ``/* */`` is discarded; ``/**/`` opens a doc comment; an unterminated comment is an error at
+  the line where it starts;
+* a ``//`` comment needs a terminating newline, else it degrades into ``/`` tokens;
+* numbers are ``[0-9]+(\\.[0-9]*)?``: no leading dot, no exponent;
+* ``[ ... ]`` is one RANGE token of free text; strings have no escapes;
+* CRLF and LF are both line ends; bytes that are not UTF-8 are read as Latin-1.
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from dataclasses import dataclass
+
+from engine.lang.diagnostics import Diagnostics
+from engine.types import Span
+
+
+class TokenType(enum.Enum):
+    IDENTIFIER = "identifier"
+    KEYWORD = "keyword"
+    NUMBER = "number"
+    STRING = "string"
+    RANGE = "range"
+    OPERATOR = "operator"
+    DOC_COMMENT = "doc comment"
+    INITIAL_COMMENT = "title comment"
+    EOF = "end of file"
+
+
+#: Reserved words (§1.2). ``function`` is reserved but unused by the grammar.
+KEYWORDS = frozenset(
+    """true false option action initial target state common decision stay goto if else
+    state_time option_time action_done agent function enum input output bool float const
+    namespace behavior include internal capacity synchronized conflict""".split()
+)
+
+#: Two-character operators are tried before single characters.
+TWO_CHAR_OPERATORS = ("<=", ">=", "==", "!=", "&&", "||")
+SINGLE_CHAR_OPERATORS = frozenset("%!<>[]{}();|+-*/=,?:")
+OPERATORS = frozenset(TWO_CHAR_OPERATORS) | SINGLE_CHAR_OPERATORS
+
+_KEYWORD_RUN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+_IDENTIFIER = re.compile(r"@?[A-Za-z_][A-Za-z0-9_.]*")
+_NUMBER = re.compile(r"[0-9]+(?:\.[0-9]*)?")
+_WHITESPACE = re.compile(r"[ \t\r\n\f\v]+")
+
+
+@dataclass(frozen=True, slots=True)
+class Token:
+    """One token with its exact text and position."""
+
+    type: TokenType
+    text: str
+    span: Span
+
+    def is_op(self, text: str) -> bool:
+        return self.type is TokenType.OPERATOR and self.text == text
+
+    def is_kw(self, text: str) -> bool:
+        return self.type is TokenType.KEYWORD and self.text == text
+
+    def describe(self) -> str:
+        """How a message names this token: ``';'``, ``keyword 'state'``, ``end of file``."""
+        if self.type is TokenType.EOF:
+            return "end of file"
+        if self.type is TokenType.OPERATOR:
+            return f"'{self.text}'"
+        if self.type in (TokenType.DOC_COMMENT, TokenType.INITIAL_COMMENT):
+            return f"a {self.type.value}"
+        shown = self.text if len(self.text) <= 40 else self.text[:37] + "..."
+        return f"{self.type.value} '{shown}'"
+
+
+def decode_source(data: bytes) -> str:
+    """Source bytes to text: UTF-8 when valid, else Latin-1 (the original reads bytes)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+class _LineIndex:
+    """Offset -> (line, column) for one text, by binary search over line starts."""
+
+    __slots__ = ("starts",)
+
+    def __init__(self, text: str) -> None:
+        self.starts = [0]
+        self.starts.extend(m.end() for m in re.finditer("\n", text))
+
+    def position(self, offset: int) -> tuple[int, int]:
+        lo, hi = 0, len(self.starts) - 1
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if self.starts[mid] <= offset:
+                lo = mid
+            else:
+                hi = mid - 1
+        return lo + 1, offset - self.starts[lo] + 1
+
+
+def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
+    """Split ``text`` into tokens; lexical errors go to ``diagnostics``.
+
+    An illegal character is reported and skipped; an unterminated comment is reported at its
+    start and ends the token stream. The list always ends with an EOF token.
+    """
+    lines = _LineIndex(text)
+    tokens: list[Token] = []
+    pos = 0
+    length = len(text)
+
+    def span(start: int, end: int) -> Span:
+        line, col = lines.position(start)
+        end_line, end_col = lines.position(end)
+        return Span(file, line, col, end_line, end_col, start, end)
+
+    def add(kind: TokenType, start: int, end: int) -> None:
+        tokens.append(Token(kind, text[start:end], span(start, end)))
+
+    while pos < length:
+        char = text[pos]
+        if char in " \t\r\n\f\v":
+            match = _WHITESPACE.match(text, pos)
+            assert match is not None
+            pos = match.end()
+            continue
+        if char == "/" and text.startswith("//", pos):
+            newline = text.find("\n", pos)
+            if newline >= 0:
+                pos = newline + 1
+                continue
+            # no newline after the comment: the original lexes it as '/' tokens
+            add(TokenType.OPERATOR, pos, pos + 1)
+            pos += 1
+            continue
+        if char == "/" and text.startswith("/*", pos):
+            if text.startswith("/***", pos):
+                kind, body = TokenType.INITIAL_COMMENT, pos + 4
+            elif text.startswith("/**", pos):
+                kind, body = TokenType.DOC_COMMENT, pos + 3
+            else:
+                kind, body = None, pos + 2
+            close = text.find("*/", body)
+            if close < 0:
+                diagnostics.add("unterminated-comment", "end-of-comment missing: '*/' never comes", span(pos, pos + 2))
+                break
+            if kind is not None:
+                add(kind, pos, close + 2)
+            pos = close + 2
+            continue
+        if char.isascii() and (char.isalpha() or char == "_"):
+            run = _KEYWORD_RUN.match(text, pos)
+            assert run is not None
+            if run.group() in KEYWORDS:
+                add(TokenType.KEYWORD, pos, run.end())
+                pos = run.end()
+                continue
+            ident = _IDENTIFIER.match(text, pos)
+            assert ident is not None
+            add(TokenType.IDENTIFIER, pos, ident.end())
+            pos = ident.end()
+            continue
+        if char == "@":
+            ident = _IDENTIFIER.match(text, pos)
+            if ident is not None:
+                add(TokenType.IDENTIFIER, pos, ident.end())
+                pos = ident.end()
+                continue
+        if "0" <= char <= "9":
+            number = _NUMBER.match(text, pos)
+            assert number is not None
+            add(TokenType.NUMBER, pos, number.end())
+            pos = number.end()
+            continue
+        if char == '"':
+            close = text.find('"', pos + 1)
+            if close >= 0:
+                add(TokenType.STRING, pos, close + 1)
+                pos = close + 1
+                continue
+        if char == "[":
+            close = text.find("]", pos + 1)
+            if close >= 0:
+                add(TokenType.RANGE, pos, close + 1)
+                pos = close + 1
+                continue
+        two = text[pos : pos + 2]
+        if two in TWO_CHAR_OPERATORS:
+            add(TokenType.OPERATOR, pos, pos + 2)
+            pos += 2
+            continue
+        if char in SINGLE_CHAR_OPERATORS:
+            add(TokenType.OPERATOR, pos, pos + 1)
+            pos += 1
+            continue
+        end = pos + 1
+        diagnostics.add("illegal-character", f"illegal character {char!r} encountered", span(pos, end))
+        pos = end
+    tokens.append(Token(TokenType.EOF, "", span(min(pos, length), min(pos, length))))
+    return tokens
+
+
+def doc_text(token: Token) -> str:
+    """The text of a ``/** */`` or ``/*** */`` comment without the markers, tidied per line."""
+    inner = token.text[4:-2] if token.type is TokenType.INITIAL_COMMENT else token.text[3:-2]
+    lines = [line.strip().lstrip("*").strip() for line in inner.replace("\r\n", "\n").split("\n")]
+    return "\n".join(line for line in lines if line).strip()
