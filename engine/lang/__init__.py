@@ -25,6 +25,7 @@ from engine.lang.check import OptionChecker, title_fields
 from engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
 from engine.lang.loader import load
 from engine.lang.symbols import Declarations
+from engine.types import Span
 
 __all__ = ["Compilation", "Diagnostic", "Severity", "compile_file"]
 
@@ -38,6 +39,15 @@ class Compilation:
     files: list[str] = field(default_factory=list)
     #: seconds spent per stage: "parse", "check"
     timings: dict[str, float] = field(default_factory=dict)
+    #: source text of every file, by display name
+    sources: dict[str, str] = field(default_factory=dict)
+    #: names of all options declared, also when the program has errors
+    option_names: list[str] = field(default_factory=list)
+
+    def source_text(self, span: Span) -> str:
+        """The source text of a span, whitespace runs collapsed to one blank."""
+        text = self.sources.get(span.file, "")
+        return " ".join(text[span.start : span.end].split())
 
     @property
     def errors(self) -> list[Diagnostic]:
@@ -91,10 +101,14 @@ def compile_file(
     agent_names: set[str] = set()
     for decl in table.agents:
         if decl.name.text in agent_names:
-            diagnostics.add("duplicate-definition", f"agent '{decl.name.text}' is defined more than once", decl.name.span)
+            diagnostics.add(
+                "duplicate-definition", f"agent '{decl.name.text}' is defined more than once", decl.name.span
+            )
         agent_names.add(decl.name.text)
         if decl.root.text not in table.options:
-            diagnostics.add("unknown-option", f"agent '{decl.name.text}': no option named '{decl.root.text}'", decl.root.span)
+            diagnostics.add(
+                "unknown-option", f"agent '{decl.name.text}': no option named '{decl.root.text}'", decl.root.span
+            )
         agents.append(ir.Agent(decl.name.text, decl.title, decl.root.text, decl.doc, decl.name.span))
 
     fields = title_fields(loaded.root.title_comment if loaded.root else None)
@@ -121,4 +135,6 @@ def compile_file(
         diagnostics=diagnostics.sorted(),
         files=[f.path for f in loaded.files],
         timings={"parse": parsed - started, "check": checked - parsed},
+        sources={f.path: f.text for f in loaded.files},
+        option_names=sorted(table.options, key=str.lower),
     )

@@ -100,7 +100,7 @@ class OptionChecker:
             matches.append(ir.OutputRef(name, output.kind, output.enum, span))
         if not matches:
             hint = f" (and no element of enumeration '{enum}')" if enum else ""
-            if enum is None and name in self.table.elements.values() or self.is_enum_element(name):
+            if (enum is None and name in self.table.elements.values()) or self.is_enum_element(name):
                 hint = " (enum elements can only be used where an enum value is expected)"
             self.diagnostics.add(
                 "no-matching-symbol",
@@ -111,9 +111,7 @@ class OptionChecker:
             return None
         if len(matches) > 1:
             kinds = ", ".join(type(m).__name__ for m in matches)
-            self.diagnostics.add(
-                "multiple-matching-symbols", f"'{name}' names several things ({kinds})", span
-            )
+            self.diagnostics.add("multiple-matching-symbols", f"'{name}' names several things ({kinds})", span)
             return None
         self.note_use(matches[0])
         return matches[0]
@@ -285,7 +283,9 @@ class OptionChecker:
                 node.op_span,
             )
             return None
-        if not (self.expect(left, Kind.DECIMAL, op, node.op_span) and self.expect(right, Kind.DECIMAL, op, node.op_span)):
+        if not (
+            self.expect(left, Kind.DECIMAL, op, node.op_span) and self.expect(right, Kind.DECIMAL, op, node.op_span)
+        ):
             return None
         kind = Kind.DECIMAL if op in _ARITHMETIC else Kind.BOOLEAN
         return ir.Binary(op, left, right, kind, node.span)
@@ -339,9 +339,7 @@ class OptionChecker:
         if value is None:
             return None
         if value.kind is not Kind.BOOLEAN:
-            self.diagnostics.add(
-                "type-mismatch", f"a condition must be boolean, found {_describe(value)}", node.span
-            )
+            self.diagnostics.add("type-mismatch", f"a condition must be boolean, found {_describe(value)}", node.span)
             return None
         return value
 
@@ -400,11 +398,14 @@ class OptionChecker:
             return None if args is None else ir.BehaviorCall(name, args, node.span)
         if name in self.table.inputs or name in self.table.outputs:
             self.diagnostics.add(
-                "not-callable", f"'{name}' is a symbol; only options and basic behaviors can be called here",
+                "not-callable",
+                f"'{name}' is a symbol; only options and basic behaviors can be called here",
                 node.name.span,
             )
         else:
-            wanted = {"option": "option", "behavior": "basic behavior"}.get(node.explicit or "", "option or basic behavior")
+            wanted = {"option": "option", "behavior": "basic behavior"}.get(
+                node.explicit or "", "option or basic behavior"
+            )
             self.diagnostics.add("no-matching-symbol", f"no {wanted} named '{name}'", node.name.span)
         return None
 
@@ -467,7 +468,9 @@ class OptionChecker:
         for index_in_option, state in enumerate(states):
             self.check_leading_else(decl, state)
             own: ir.DecisionTree = (
-                self.tree(state.decision) if state.decision is not None else ir.Transition(None, True, -1, state.name.span)
+                self.tree(state.decision)
+                if state.decision is not None
+                else ir.Transition(None, True, -1, state.name.span)
             )
             decision = own
             for branch in reversed(common):
@@ -522,8 +525,7 @@ class OptionChecker:
         for extra in initials[1:]:
             self.diagnostics.add(
                 "multiple-initial-states",
-                f"multiple initial state definitions: '{extra.name.text}' (the first is "
-                f"'{initials[0].name.text}')",
+                f"multiple initial state definitions: '{extra.name.text}' (the first is '{initials[0].name.text}')",
                 extra.name.span,
                 related=(("first initial state", initials[0].name.span),),
             )

@@ -54,9 +54,7 @@ def parse_file(path: str, text: str, diagnostics: Diagnostics) -> ast.SourceFile
 
 
 class _Parser:
-    def __init__(
-        self, path: str, text: str, tokens: list[Token], diagnostics: Diagnostics, truncated: bool
-    ) -> None:
+    def __init__(self, path: str, text: str, tokens: list[Token], diagnostics: Diagnostics, truncated: bool) -> None:
         self.path = path
         self.text = text
         self.tokens = tokens
@@ -137,7 +135,9 @@ class _Parser:
         if error.token.type is TokenType.EOF and self.truncated:
             return  # the unterminated comment already explains the end of the tokens
         if any(
-            d.code == "illegal-character" and d.span and d.span.line == error.token.span.line
+            d.code == "illegal-character"
+            and d.span
+            and d.span.line == error.token.span.line
             and d.span.start < error.token.span.start
             for d in self.diagnostics
             if d.file == self.path
@@ -272,7 +272,9 @@ class _Parser:
             if after.is_op("{") or (after.is_kw("internal") and self.peek(3).is_op("{")):
                 return self.parse_enum_decl(doc, start)
             if after.type is TokenType.KEYWORD and after.text in ("input", "output") and self.peek(3).is_op("{"):
-                raise _SyntaxError(after, "syntax error: an enumeration can only be declared 'internal'")
+                raise _SyntaxError(
+                    after, "an enumeration can only be declared 'internal', not input or output", "enum-io"
+                )
         return self.parse_symbol_decl(doc, start)
 
     def parse_enum_decl(self, doc: str | None, start: Span) -> ast.EnumDecl:
@@ -317,9 +319,7 @@ class _Parser:
                 params.append(self.parse_param_decl())
             self.advance()
         self.expect_op(";")
-        return ast.SymbolDecl(
-            type_, io, name, range_, unit, params, self.span_from(start), doc, range_span, unit_span
-        )
+        return ast.SymbolDecl(type_, io, name, range_, unit, params, self.span_from(start), doc, range_span, unit_span)
 
     def parse_range_unit(self) -> tuple[str | None, Span | None, str | None, Span | None]:
         range_ = unit = None
@@ -501,8 +501,17 @@ class _Parser:
         actions = self.parse_action_block()
         self.expect_op("}")
         return ast.StateDecl(
-            name, initial, target, coop, count, decision, leading_else, decision_span, actions,
-            self.span_from(start), given,
+            name,
+            initial,
+            target,
+            coop,
+            count,
+            decision,
+            leading_else,
+            decision_span,
+            actions,
+            self.span_from(start),
+            given,
         )
 
     def parse_action_block(self) -> list[ast.ActionStmt]:

@@ -112,14 +112,10 @@ class Declarations:
             return None
         assert type_.enum is not None
         if type_.enum.text not in self.table.enums:
-            self.diagnostics.add(
-                "unknown-enum", f"no enumeration named '{type_.enum.text}'", type_.enum.span
-            )
+            self.diagnostics.add("unknown-enum", f"no enumeration named '{type_.enum.text}'", type_.enum.span)
         return type_.enum.text
 
-    def check_range_unit(
-        self, kind: Kind, what: str, range_span: Span | None, unit_span: Span | None
-    ) -> None:
+    def check_range_unit(self, kind: Kind, what: str, range_span: Span | None, unit_span: Span | None) -> None:
         # The original prints X2537 for these but does not count it (§1.7): a warning here.
         if kind is Kind.DECIMAL:
             return
@@ -211,12 +207,11 @@ class Declarations:
                     self.table.constants[item.name.text] = ir.ConstantDecl(
                         item.name.text, float(text), text, item.unit, item.doc, name, item.name.span
                     )
-            elif isinstance(item, ast.BehaviorDecl):
-                if self.key(item.name, "behavior"):
-                    params = self.parameters(item.name.text, item.params, "basic behavior")
-                    self.table.behaviors[item.name.text] = ir.BasicBehavior(
-                        item.name.text, params, item.doc, name, len(self.table.behaviors), item.name.span
-                    )
+            elif isinstance(item, ast.BehaviorDecl) and self.key(item.name, "behavior"):
+                params = self.parameters(item.name.text, item.params, "basic behavior")
+                self.table.behaviors[item.name.text] = ir.BasicBehavior(
+                    item.name.text, params, item.doc, name, len(self.table.behaviors), item.name.span
+                )
 
     def declare_symbol(self, decl: ast.SymbolDecl, namespace: str) -> None:
         kind = _kind(decl.type)
@@ -224,7 +219,9 @@ class Declarations:
         klass = "input" if decl.io == "input" else "output"
         if decl.params is not None and klass != "input":
             self.diagnostics.add(
-                "parameters-on-non-input", f"only input symbols can have parameters ('{decl.name.text}')", decl.name.span
+                "parameters-on-non-input",
+                f"only input symbols can have parameters ('{decl.name.text}')",
+                decl.name.span,
             )
         self.check_range_unit(kind, "symbol", decl.range_span, decl.unit_span)
         if not self.key(decl.name, klass, _KIND_CLASS[kind]):
@@ -234,13 +231,29 @@ class Declarations:
         if klass == "input":
             params = self.parameters(decl.name.text, decl.params or [], "input symbol")
             self.table.inputs[decl.name.text] = ir.InputSymbol(
-                decl.name.text, kind, enum, params, range_, unit, decl.doc, namespace,
-                len(self.table.inputs), decl.name.span,
+                decl.name.text,
+                kind,
+                enum,
+                params,
+                range_,
+                unit,
+                decl.doc,
+                namespace,
+                len(self.table.inputs),
+                decl.name.span,
             )
         else:
             self.table.outputs[decl.name.text] = ir.OutputSymbol(
-                decl.name.text, kind, enum, decl.io == "internal", range_, unit, decl.doc, namespace,
-                len(self.table.outputs), decl.name.span,
+                decl.name.text,
+                kind,
+                enum,
+                decl.io == "internal",
+                range_,
+                unit,
+                decl.doc,
+                namespace,
+                len(self.table.outputs),
+                decl.name.span,
             )
 
     def declare_option(self, source: ast.SourceFile) -> None:

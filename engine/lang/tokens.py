@@ -39,9 +39,39 @@ class TokenType(enum.Enum):
 
 #: Reserved words (§1.2). ``function`` is reserved but unused by the grammar.
 KEYWORDS = frozenset(
-    """true false option action initial target state common decision stay goto if else
-    state_time option_time action_done agent function enum input output bool float const
-    namespace behavior include internal capacity synchronized conflict""".split()
+    [
+        "true",
+        "false",
+        "option",
+        "action",
+        "initial",
+        "target",
+        "state",
+        "common",
+        "decision",
+        "stay",
+        "goto",
+        "if",
+        "else",
+        "state_time",
+        "option_time",
+        "action_done",
+        "agent",
+        "function",
+        "enum",
+        "input",
+        "output",
+        "bool",
+        "float",
+        "const",
+        "namespace",
+        "behavior",
+        "include",
+        "internal",
+        "capacity",
+        "synchronized",
+        "conflict",
+    ]
 )
 
 #: Two-character operators are tried before single characters.

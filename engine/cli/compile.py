@@ -1,0 +1,92 @@
+"""``xabsl compile``: check a behavior and write its intermediate code and JSON description.
+
+Text diagnostics are one per line (``path:line:col: error|warning: message [code]``) followed by
+a summary line; ``--format json`` prints one JSON object instead. Exit status: 0 without errors,
+1 with errors (or warnings under ``--werror``), 2 for usage or I/O problems.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import orjson
+
+from engine.cli import UsageError
+from engine.emit.ic import emit_ic
+from engine.emit.json import program_to_json
+from engine.files import write_atomically
+from engine.lang import compile_file
+
+#: Diagnostic codes of the whole-program lint that ``--no-lint`` silences.
+LINT_CODES = frozenset({"unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"})
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    parser = subparsers.add_parser(
+        "compile",
+        help="check a behavior; write intermediate code (--ic) and a JSON description (--json)",
+        description=(
+            "Compile AGENTS_FILE and every file it includes. Prints diagnostics and a summary; "
+            "writes output files only when there is no error."
+        ),
+    )
+    parser.add_argument("agents_file", metavar="AGENTS_FILE", help="the agents file, e.g. agents.xabsl")
+    parser.add_argument("--ic", metavar="OUT", help="write the intermediate code for the C++ XabslEngine")
+    parser.add_argument("--json", metavar="OUT", help="write the behavior description the studio reads")
+    parser.add_argument("--format", choices=("text", "json"), default="text", help="diagnostics format")
+    parser.add_argument("--werror", action="store_true", help="treat warnings as errors")
+    parser.add_argument(
+        "--no-lint", action="store_true", help="omit the lint warnings (unreachable and unused declarations)"
+    )
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if not os.path.isfile(args.agents_file):
+        raise UsageError(f"no such file: {args.agents_file}")
+    started = time.perf_counter()
+    compilation = compile_file(args.agents_file)
+    diagnostics = [d for d in compilation.diagnostics if not (args.no_lint and d.code in LINT_CODES)]
+    errors = sum(d.is_error for d in diagnostics)
+    warnings = len(diagnostics) - errors
+    failed = errors > 0 or (args.werror and warnings > 0)
+
+    emit_started = time.perf_counter()
+    if not failed and compilation.program is not None:
+        try:
+            if args.ic:
+                write_atomically(args.ic, emit_ic(compilation.program).encode("utf-8"))
+            if args.json:
+                document = program_to_json(compilation.program, compilation.source_text)
+                write_atomically(args.json, orjson.dumps(document, option=orjson.OPT_INDENT_2))
+        except OSError as error:
+            raise UsageError(f"cannot write output: {error.strerror}: {error.filename}") from error
+    finished = time.perf_counter()
+
+    summary = {
+        "files": len(compilation.files),
+        "options": len(compilation.option_names),
+        "errors": errors,
+        "warnings": warnings,
+        "milliseconds": round((finished - started) * 1000, 1),
+        "parse_ms": round(compilation.timings.get("parse", 0) * 1000, 1),
+        "check_ms": round(compilation.timings.get("check", 0) * 1000, 1),
+        "emit_ms": round((finished - emit_started) * 1000, 1),
+    }
+    if args.format == "json":
+        sys.stdout.buffer.write(
+            orjson.dumps({"ok": not failed, "diagnostics": [d.as_dict() for d in diagnostics], "summary": summary})
+        )
+        sys.stdout.write("\n")
+    else:
+        for diagnostic in diagnostics:
+            print(diagnostic.format())
+        verdict = "failed" if failed else "ok"
+        print(
+            f"{verdict}: {summary['files']} files, {summary['options']} options, "
+            f"{errors} errors, {warnings} warnings in {summary['milliseconds']} ms"
+        )
+    return 1 if failed else 0

@@ -1,0 +1,252 @@
+"""IR -> JSON for the studio UI (``xabsl compile --json``), and back to the IR's shape on read.
+
+The document describes the behavior, not its execution: agents; options with parameters,
+states, decision trees (conditions as source text, leaf ids), transitions (from, to, leaf id,
+the chain of conditions that leads to the leaf) and calls; basic behaviors; symbols with types,
+units, ranges and doc comments; enumerations and constants. Integer ids are the IR's indices:
+an option's ``id`` is its IC index, a state's ``id`` its index in the option, a symbol's ``id``
+its index among the inputs or outputs.
+
+Expression texts come from the source (``source_text`` callback); for programs read from
+intermediate code, where there is no source, a canonical XABSL rendering is used instead.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from engine import ir
+from engine.types import Span
+
+SCHEMA_VERSION = 1
+
+SourceText = Callable[[Span], str]
+
+_OPERATOR_TEXT = {"enum==": "==", "enum!=": "!="}
+
+
+def render_expression(e: ir.Expression) -> str:
+    """A canonical XABSL rendering of an IR expression (fully parenthesised where needed)."""
+    match e:
+        case ir.Number(value=value):
+            return repr(value).removesuffix(".0") if value == int(value) else repr(value)
+        case ir.Constant(name=name):
+            return name
+        case ir.BooleanLiteral(value=value):
+            return "true" if value else "false"
+        case ir.EnumLiteral(element=element, enum=enum):
+            return element.removeprefix(enum + ".")
+        case ir.InputRef(symbol=symbol, args=args):
+            if not args:
+                return symbol
+            inner = ", ".join(f"{a.param.rsplit('.', 1)[-1]} = {render_expression(a.value)}" for a in args)
+            return f"{symbol}({inner})"
+        case ir.OutputRef(symbol=symbol):
+            return symbol
+        case ir.ParameterRef(param=param):
+            return "@" + param.rsplit(".", 1)[-1]
+        case ir.StateTime():
+            return "state_time"
+        case ir.OptionTime():
+            return "option_time"
+        case ir.ActionDone():
+            return "action_done"
+        case ir.Conflict():
+            return "conflict"
+        case ir.Unary(op=op, operand=operand):
+            return f"{op}{_wrapped(operand)}"
+        case ir.Binary(op=op, left=left, right=right):
+            return f"{_wrapped(left)} {_OPERATOR_TEXT.get(op, op)} {_wrapped(right)}"
+        case ir.Logical(op=op, operands=operands):
+            return f" {op} ".join(_wrapped(o) for o in operands)
+        case ir.Conditional(condition=c, then=t, otherwise=o):
+            return f"{_wrapped(c)} ? {_wrapped(t)} : {_wrapped(o)}"
+    raise AssertionError(e)
+
+
+def _wrapped(e: ir.Expression) -> str:
+    text = render_expression(e)
+    return f"({text})" if isinstance(e, ir.Binary | ir.Logical | ir.Conditional) else text
+
+
+class _Exporter:
+    def __init__(self, source_text: SourceText | None) -> None:
+        self.source_text = source_text
+
+    def text(self, e: ir.Expression) -> str:
+        if self.source_text is not None and e.span is not None:
+            return self.source_text(e.span)
+        return render_expression(e)
+
+    @staticmethod
+    def span(span: Span | None) -> dict[str, Any] | None:
+        return span.as_dict() if span else None
+
+    def parameter(self, p: ir.Parameter) -> dict[str, Any]:
+        return {
+            "name": p.name,
+            "short_name": p.short_name,
+            "type": p.kind.value,
+            "enum": p.enum,
+            "range": p.range,
+            "unit": p.unit,
+            "doc": p.doc,
+            "span": self.span(p.span),
+        }
+
+    def arguments(self, args: tuple[ir.Argument, ...]) -> list[dict[str, Any]]:
+        return [{"param": a.param, "type": a.kind.value, "value": self.text(a.value)} for a in args]
+
+    def action(self, a: ir.Action) -> dict[str, Any]:
+        if isinstance(a, ir.OptionCall):
+            return {"type": "option", "name": a.option, "args": self.arguments(a.args), "span": self.span(a.span)}
+        if isinstance(a, ir.BehaviorCall):
+            return {"type": "behavior", "name": a.behavior, "args": self.arguments(a.args), "span": self.span(a.span)}
+        return {"type": "assign", "symbol": a.symbol, "value": self.text(a.value), "span": self.span(a.span)}
+
+    def tree(self, t: ir.DecisionTree) -> dict[str, Any]:
+        if isinstance(t, ir.Transition):
+            return {"goto": t.target, "stay": t.stay, "leaf": t.leaf, "span": self.span(t.span)}
+        return {
+            "if": t.text or self.text(t.condition),
+            "doc": t.doc,
+            "span": self.span(t.span),
+            "then": self.tree(t.then),
+            "else": self.tree(t.otherwise),
+        }
+
+    def transitions(self, option: ir.Option, state: ir.State) -> list[dict[str, Any]]:
+        result = []
+        for leaf in ir.leaves(state.decision):
+            path = ir.leaf_path(state.decision, leaf.leaf)
+            result.append(
+                {
+                    "from": state.name,
+                    "to": leaf.target,
+                    "leaf": leaf.leaf,
+                    "stay": leaf.stay,
+                    "conditions": [
+                        {"text": node.text or self.text(node.condition), "value": taken} for node, taken in path
+                    ],
+                    "span": self.span(leaf.span),
+                }
+            )
+        return result
+
+    def option(self, option: ir.Option) -> dict[str, Any]:
+        states = []
+        for state in option.states:
+            states.append(
+                {
+                    "id": state.index,
+                    "name": state.name,
+                    "initial": state.name == option.initial_state,
+                    "target": state.target,
+                    "coop": state.coop,
+                    "coop_count": state.coop_count,
+                    "doc": state.doc,
+                    "span": self.span(state.span),
+                    "actions": [self.action(a) for a in state.actions],
+                    "decision": self.tree(state.decision),
+                }
+            )
+        calls = []
+        for state in option.states:
+            for action in state.actions:
+                if isinstance(action, ir.OptionCall | ir.BehaviorCall):
+                    calls.append(
+                        {
+                            "state": state.name,
+                            "type": "option" if isinstance(action, ir.OptionCall) else "behavior",
+                            "name": action.option if isinstance(action, ir.OptionCall) else action.behavior,
+                        }
+                    )
+        return {
+            "id": option.index,
+            "name": option.name,
+            "file": option.file,
+            "doc": option.doc,
+            "span": self.span(option.span),
+            "params": [self.parameter(p) for p in option.params],
+            "initial_state": option.initial_state,
+            "states": states,
+            "transitions": [t for s in option.states for t in self.transitions(option, s)],
+            "calls": calls,
+            "common_decision": [
+                {"if": b.text or self.text(b.condition), "doc": b.doc, "then": self.tree(b.tree)}
+                for b in option.common_decision
+            ],
+            "common_action": [self.action(a) for a in option.common_action],
+        }
+
+    def symbol(self, s: ir.InputSymbol | ir.OutputSymbol) -> dict[str, Any]:
+        data: dict[str, Any] = {
+            "id": s.index,
+            "name": s.name,
+            "type": s.kind.value,
+            "enum": s.enum,
+            "range": s.range,
+            "unit": s.unit,
+            "doc": s.doc,
+            "namespace": s.namespace,
+            "span": self.span(s.span),
+        }
+        if isinstance(s, ir.InputSymbol):
+            data["params"] = [self.parameter(p) for p in s.params]
+        else:
+            data["internal"] = s.internal
+        return data
+
+    def program(self, program: ir.Program) -> dict[str, Any]:
+        return {
+            "version": SCHEMA_VERSION,
+            "title": program.title,
+            "platform": program.platform,
+            "software_environment": program.software_environment,
+            "files": list(program.files),
+            "agents": [
+                {"name": a.name, "title": a.title, "root": a.root, "doc": a.doc, "span": self.span(a.span)}
+                for a in program.agents
+            ],
+            "options": [self.option(o) for o in program.options.values()],
+            "behaviors": [
+                {
+                    "id": b.index,
+                    "name": b.name,
+                    "doc": b.doc,
+                    "namespace": b.namespace,
+                    "params": [self.parameter(p) for p in b.params],
+                    "span": self.span(b.span),
+                }
+                for b in program.behaviors.values()
+            ],
+            "inputs": [self.symbol(s) for s in program.inputs.values()],
+            "outputs": [self.symbol(s) for s in program.outputs.values()],
+            "enums": [
+                {
+                    "name": e.name,
+                    "elements": list(e.elements),
+                    "internal": e.internal,
+                    "doc": e.doc,
+                    "span": self.span(e.span),
+                }
+                for e in program.enums.values()
+            ],
+            "constants": [
+                {
+                    "name": c.name,
+                    "value": c.value,
+                    "text": c.text,
+                    "unit": c.unit,
+                    "doc": c.doc,
+                    "span": self.span(c.span),
+                }
+                for c in program.constants.values()
+            ],
+        }
+
+
+def program_to_json(program: ir.Program, source_text: SourceText | None = None) -> dict[str, Any]:
+    """The JSON document of a program (plain dicts and lists, ready for orjson)."""
+    return _Exporter(source_text).program(program)

@@ -1,0 +1,25 @@
+"""Shared fixtures: compile XABSL snippets written into a temporary behavior folder."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from engine.lang import Compilation, compile_file
+
+
+@pytest.fixture
+def compile_sources(tmp_path: Path) -> Callable[..., Compilation]:
+    """Write ``{name: text}`` files into a temp folder and compile ``main`` (default: the first)."""
+
+    def run(files: dict[str, str], main: str | None = None) -> Compilation:
+        for name, text in files.items():
+            path = tmp_path / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(text.encode("utf-8") if isinstance(text, str) else text)
+        entry = main or next(iter(files))
+        return compile_file(str(tmp_path / entry), base=str(tmp_path))
+
+    return run
