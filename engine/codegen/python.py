@@ -54,7 +54,6 @@ from engine.ir.model import (
     Program,
     State,
     StateTime,
-    Transition,
     Unary,
     walk,
 )
@@ -133,12 +132,14 @@ class _ExpressionWriter:
         self.slot: OptionSlot = layout.options[option.name]
         self.state = state
         self.temps = 0
+        #: input functions whose arguments are being generated (outermost first)
+        self.calling: list[str] = []
 
     def temp(self) -> str:
         self.temps += 1
         return f"_t{self.temps}"
 
-    def __call__(self, e: Expression) -> str:  # noqa: C901 - one dispatch over the node kinds
+    def __call__(self, e: Expression) -> str:
         match e:
             case Number(value=value):
                 return _number(value)
@@ -206,21 +207,24 @@ class _ExpressionWriter:
         if not slot.params:
             return f"I{slot.index}()"
         assigned = {a.param: a for a in ref.args}
-        nested = any(
-            isinstance(node, InputRef) and node.args for a in ref.args for node in walk(a.value)
-        )
-        if not nested:
-            # No host function inside the arguments: evaluation order is unobservable, so the
-            # arguments go straight into the call in registration order.
-            values = [self.arg_or_default(assigned.get(name), kind) for name, kind in slot.params]
-            return f"I{slot.index}({', '.join(values)})"
-        # A host function inside an argument: set the shared parameter storage one parameter at
-        # a time in the engine's order, so a nested call of the same symbol clobbers earlier
-        # arguments exactly as in the original engine (§2.5).
-        parts = [
-            f"FS{slot.index}({i}, {self.arg_or_default(assigned.get(slot.params[i][0]), slot.params[i][1])})"
-            for i in engine_order(slot.params)
-        ]
+        nested = any(isinstance(node, InputRef) and node.args for a in ref.args for node in walk(a.value))
+        self.calling.append(ref.symbol)
+        try:
+            if not nested and ref.symbol not in self.calling[:-1]:
+                # No host function inside the arguments and no enclosing call of the same
+                # symbol: the storage is unobservable, so the arguments go straight into the
+                # call in registration order.
+                values = [self.arg_or_default(assigned.get(name), kind) for name, kind in slot.params]
+                return f"I{slot.index}({', '.join(values)})"
+            # Set the shared parameter storage one parameter at a time in the engine's order,
+            # so a nested call of the same symbol clobbers earlier arguments exactly as in the
+            # original engine (§2.5).
+            parts = [
+                f"FS{slot.index}({i}, {self.arg_or_default(assigned.get(slot.params[i][0]), slot.params[i][1])})"
+                for i in engine_order(slot.params)
+            ]
+        finally:
+            self.calling.pop()
         parts.append(f"I{slot.index}(*FP{slot.index})")
         return f"({', '.join(parts)})[{len(parts) - 1}]"
 
@@ -261,6 +265,8 @@ class _OptionWriter:
         self.emit(f"DEC{i} = ({', '.join(f'D{i}_{s.index}' for s in self.option.states)},)")
         self.emit(f"ACT{i} = ({', '.join(f'A{i}_{s.index}' for s in self.option.states)},)")
         self.emit(f"TG{i} = {tuple(self.slot.targets)!r}")
+        if any(self.slot.coop):
+            self.emit(f"CO{i} = {tuple(self.slot.coop)!r}")
         self.execute()
         return "\n".join(self.lines) + "\n"
 
@@ -375,9 +381,6 @@ class _OptionWriter:
         if any(self.slot.coop):
             e(f"    if n != s and CO{i}[n] and not CC({i}, n, s):")
             e("        n = s")
-            self.lines.insert(0, f"CO{i} = {tuple(self.slot.coop)!r}")
-            self.origins = {k + 1: v for k, v in self.origins.items()}
-            self.origins[1] = Origin(self.option.name, None, None, "cooperative states")
         e("    if n != s:")
         e(f"        S[{i}] = n")
         e(f"        TS[{i}] = now")

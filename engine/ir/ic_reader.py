@@ -164,9 +164,7 @@ class _Facts:
 class _Reader:
     """Recursive-descent reader over the token list (one instance per pass)."""
 
-    def __init__(
-        self, tokens: list[_Token], facts: _Facts, final: bool, declarations: Program | None = None
-    ) -> None:
+    def __init__(self, tokens: list[_Token], facts: _Facts, final: bool, declarations: Program | None = None) -> None:
         self.tokens = tokens
         self.declarations = declarations
         self.pos = 0
@@ -299,8 +297,7 @@ class _Reader:
             name: BasicBehavior(
                 name,
                 tuple(
-                    Parameter(p, k, facts.enum_of(f"param:{p}") if k is Kind.ENUM else None)
-                    for p, k in params.items()
+                    Parameter(p, k, facts.enum_of(f"param:{p}") if k is Kind.ENUM else None) for p, k in params.items()
                 ),
                 index=i,
             )

@@ -1,0 +1,191 @@
+"""The activation tree of a tick: what ran, in which state, with which times and parameters.
+
+Recording is two-stage so that ticks stay cheap (§2.12, architecture "Engine"):
+
+1. :class:`Snapshot` copies the engine's flat storage lists into tuples (a few C-level copies,
+   no walk, no dicts): active states, tick stamps, activation times, decision records, option
+   and basic-behavior parameters, the values of this tick's output assignments.
+2. :func:`build_tree` turns a snapshot into :class:`OptionNode` / :class:`BehaviorNode` /
+   :class:`AssignmentNode` objects on request, by walking root actions -> active state ->
+   actions, as the original debugging hosts reconstruct it (§2.12).
+
+An option node appears when the option ran in the snapshot's tick; its children are the calls
+of its active state in action order (common-action items first, §2.4) that ran. With policy B1 an
+option executed twice shows its final values twice.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from engine.codegen.layout import Layout
+from engine.codegen.support import MS_MASK
+from engine.ir.model import Assignment, BehaviorCall, OptionCall, Program
+from engine.types import Kind, Ms, Value
+
+__all__ = ["AssignmentNode", "BehaviorNode", "Node", "OptionNode", "Root", "Snapshot", "build_tree"]
+
+
+@dataclass(frozen=True, slots=True)
+class Root:
+    """A root action: an option or a basic behavior (``kind`` is ``"option"`` or ``"behavior"``)."""
+
+    kind: str
+    name: str
+
+
+@dataclass(frozen=True, slots=True)
+class Snapshot:
+    """The engine's storage after one tick, copied into tuples (cheap; see module docstring)."""
+
+    now: Ms
+    tick: int
+    roots: tuple[Root, ...]
+    states: tuple[int, ...]
+    last_tick: tuple[int, ...]
+    activated: tuple[Ms, ...]
+    state_entered: tuple[Ms, ...]
+    decisions: tuple[tuple[int, int, int] | None, ...]
+    decision_state_time: tuple[float, ...]
+    option_params: tuple[Value, ...]
+    behavior_params: tuple[Value, ...]
+    behavior_last_tick: tuple[int, ...]
+    behavior_activated: tuple[Ms, ...]
+    assignments: tuple[Value | None, ...]
+    outputs: tuple[Value, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class AssignmentNode:
+    """An output-symbol assignment executed in the tick, with the value it wrote."""
+
+    symbol: str
+    value: Value
+    kind: Kind
+    enum: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class BehaviorNode:
+    """A basic behavior call: its parameter values and time of execution."""
+
+    behavior: str
+    params: dict[str, Value]
+    time: Ms
+    enums: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class OptionNode:
+    """An option that ran: active state after the tick, times, parameters, decision, calls.
+
+    ``decided_in`` is the state whose decision ran this tick and ``leaf`` the id of the decision
+    leaf that fired (pre-order within that state's tree); ``state_time`` is 0 for a state entered
+    in this tick.
+    """
+
+    option: str
+    state: str
+    option_time: Ms
+    state_time: Ms
+    params: dict[str, Value]
+    leaf: int
+    decided_in: str
+    sub: tuple[Node, ...]
+    enums: dict[str, str] = field(default_factory=dict)
+
+
+Node = OptionNode | BehaviorNode | AssignmentNode
+
+
+def build_tree(
+    snapshot: Snapshot,
+    program: Program,
+    layout: Layout,
+    behavior_params: dict[str, tuple[tuple[str, Kind, str | None], ...]],
+) -> list[Node]:
+    """The activation tree of ``snapshot`` (see the module docstring)."""
+    tick = snapshot.tick
+    options = list(program.options.values())
+
+    def option_node(name: str) -> OptionNode | None:
+        slot = layout.options[name]
+        i = slot.index
+        if snapshot.last_tick[i] != tick:
+            return None
+        option = options[i]
+        state = option.states[snapshot.states[i]]
+        sub: list[Node] = []
+        for position, action in enumerate(state.actions):
+            if isinstance(action, OptionCall):
+                child = option_node(action.option)
+                if child is not None:
+                    sub.append(child)
+            elif isinstance(action, BehaviorCall):
+                node = behavior_node(action.behavior)
+                if node is not None:
+                    sub.append(node)
+            elif isinstance(action, Assignment):
+                value = snapshot.assignments[layout.sites[(option.name, state.index, position)]]
+                if value is not None:
+                    sub.append(AssignmentNode(action.symbol, value, action.kind, _output_enum(program, action)))
+        decision = snapshot.decisions[i]
+        params = {p.name: snapshot.option_params[slot.offset + k] for k, p in enumerate(option.params)}
+        enums = {p.name: p.enum for p in option.params if p.enum is not None}
+        return OptionNode(
+            option.name,
+            state.name,
+            (snapshot.now - snapshot.activated[i]) & MS_MASK,
+            (snapshot.now - snapshot.state_entered[i]) & MS_MASK,
+            params,
+            decision[1] if decision is not None else -1,
+            option.states[decision[2]].name if decision is not None else state.name,
+            tuple(sub),
+            enums,
+        )
+
+    def behavior_node(name: str) -> BehaviorNode | None:
+        slot = layout.behaviors[name]
+        if snapshot.behavior_last_tick[slot.index] != tick:
+            return None
+        declared = behavior_params[name]
+        params = {p[0]: snapshot.behavior_params[slot.offset + k] for k, p in enumerate(declared)}
+        enums = {p[0]: p[2] for p in declared if p[2] is not None}
+        time = (snapshot.now - snapshot.behavior_activated[slot.index]) & MS_MASK
+        return BehaviorNode(name, params, time, enums)
+
+    tree: list[Node] = []
+    for root in snapshot.roots:
+        node = option_node(root.name) if root.kind == "option" else behavior_node(root.name)
+        if node is not None:
+            tree.append(node)
+    return tree
+
+
+def _output_enum(program: Program, action: Assignment) -> str | None:
+    symbol = program.outputs.get(action.symbol)
+    return symbol.enum if symbol is not None else action.enum
+
+
+def node_to_dict(node: Node, enum_name: Callable[[str | None, Value], Any]) -> dict[str, Any]:
+    """A JSON-ready dict of ``node`` (enum values as element names via ``enum_name``)."""
+    if isinstance(node, OptionNode):
+        return {
+            "option": node.option,
+            "state": node.state,
+            "option_time": node.option_time,
+            "state_time": node.state_time,
+            "params": {k: enum_name(node.enums.get(k), v) for k, v in node.params.items()},
+            "leaf": node.leaf,
+            "decided_in": node.decided_in,
+            "sub": [node_to_dict(n, enum_name) for n in node.sub],
+        }
+    if isinstance(node, BehaviorNode):
+        return {
+            "behavior": node.behavior,
+            "params": {k: enum_name(node.enums.get(k), v) for k, v in node.params.items()},
+            "time": node.time,
+        }
+    return {"output": node.symbol, "value": enum_name(node.enum, node.value)}

@@ -1,0 +1,202 @@
+"""Host registration: input and output symbols, enum element values and basic behaviors (§3.5).
+
+A host fills a :class:`Bindings` before it loads a program, exactly as a host of the original
+engine registers everything before ``createOptionGraph`` (§2.10). Internal symbols and
+enumerations are engine storage and must not be registered (§2.1).
+
+* **Input symbols** are read through a getter (a callable without arguments) on every
+  reference; an input symbol with parameters is a host *function* called with its parameters
+  positionally, in the order they are registered.
+* **Output symbols** are plain storage kept by the engine (``initial`` value, read back with
+  ``Engine.output``), or a ``setter``/``getter`` pair of the host. Writes go through at once
+  (§2.2).
+* **Enumerations** map qualified element names to host integers; several names may share a
+  value (they then compare equal, §2.8).
+* **Basic behaviors** are :class:`BasicBehavior` subclasses with declared parameters.
+
+Value conventions: decimals are Python floats (return floats from decimal getters: an ``int``
+works but integer arithmetic is exact where the engine's doubles round), booleans are bools,
+enum values are host ints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from engine.ir.model import Parameter
+from engine.types import Kind, Ms, Value
+
+__all__ = ["BasicBehavior", "Bindings", "InputBinding", "OutputBinding"]
+
+
+def _qualify(owner: str, name: str) -> str:
+    return name if name.startswith(owner + ".") else f"{owner}.{name}"
+
+
+def _parameters(owner: str, params: Iterable[Parameter | tuple[str, Kind]]) -> tuple[Parameter, ...]:
+    result = []
+    for p in params:
+        if isinstance(p, Parameter):
+            result.append(Parameter(_qualify(owner, p.name), p.kind, p.enum))
+        else:
+            name, kind = p
+            result.append(Parameter(_qualify(owner, name), kind))
+    return tuple(result)
+
+
+@dataclass(frozen=True, slots=True)
+class InputBinding:
+    """An input symbol as the host provides it: a getter, or a function of ``params``."""
+
+    name: str
+    kind: Kind
+    read: Callable[..., Value]
+    params: tuple[Parameter, ...] = ()
+    enum: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class OutputBinding:
+    """An output symbol: engine storage (``setter is None``) or a host setter/getter pair."""
+
+    name: str
+    kind: Kind
+    enum: str | None = None
+    initial: Value | None = None
+    setter: Callable[[Value], None] | None = None
+    getter: Callable[[], Value] | None = None
+
+
+class BasicBehavior:
+    """A basic behavior: the host's leaf skill that options call (§2.2, §3.5).
+
+    Subclass it, set ``name`` and ``parameters`` (qualified as ``"walk.speed"`` or short as
+    ``"speed"``), and override the hooks. The engine creates one instance per engine from the
+    class (or uses a registered instance as is).
+
+    Framework attributes, valid inside the hooks:
+
+    * ``time_of_execution``: ms since the behavior was activated (0 on its first tick, §2.6).
+    * ``param(name)`` / ``params``: the values set by the current call (every parameter is set
+      on every call; unassigned ones are 0.0, false or enum raw value 0, §2.5).
+    """
+
+    #: The name options use to call this behavior.
+    name: ClassVar[str] = ""
+    #: Declared parameters, in registration order (the engine's evaluation order groups them
+    #: decimals, booleans, enums, each in this order, §2.5).
+    parameters: ClassVar[Sequence[Parameter | tuple[str, Kind]]] = ()
+
+    def __init__(self) -> None:
+        self.time_of_execution: Ms = 0
+        self._store: list[Any] = []
+        self._offset = 0
+        self._index: dict[str, int] = {}
+        self._names: tuple[str, ...] = ()
+
+    # -- framework --------------------------------------------------------------------------
+
+    @classmethod
+    def declared_parameters(cls) -> tuple[Parameter, ...]:
+        """The parameters with qualified names."""
+        return _parameters(cls.name, cls.parameters)
+
+    def _attach(self, store: list[Any], offset: int, names: Sequence[str]) -> None:
+        self._store = store
+        self._offset = offset
+        self._index = {}
+        self._names = tuple(names)
+        for i, name in enumerate(names):
+            self._index[name] = i
+            self._index.setdefault(name.rsplit(".", 1)[-1], i)
+
+    def param(self, name: str) -> Value:
+        """The current value of parameter ``name`` (qualified or short)."""
+        return self._store[self._offset + self._index[name]]
+
+    @property
+    def params(self) -> dict[str, Value]:
+        """All parameter values by qualified name."""
+        return {name: self._store[self._offset + i] for i, name in enumerate(self._names)}
+
+    # -- hooks ------------------------------------------------------------------------------
+
+    def parameters_changed(self) -> None:
+        """Override to react when a call set different parameter values than the previous one.
+
+        Called before ``execute`` in the same call. Must not call back into the engine.
+        """
+
+    def execute(self) -> None:
+        """Override to act: called once per call, after the parameters and time are set.
+
+        May raise: the engine then records a fault for the agent and stops it until reset.
+        Must not call back into the engine.
+        """
+
+
+class Bindings:
+    """Everything a host registers before loading a program (§3.5).
+
+    Example::
+
+        b = Bindings()
+        b.enum("mode", ["mode.idle", "mode.walk"])               # values 0, 1
+        b.input("ball.distance", Kind.DECIMAL, lambda: world.ball_distance)
+        b.input("clamp", Kind.DECIMAL, clamp, params=[("value", Kind.DECIMAL), ...])
+        b.output("motion.mode", Kind.ENUM, enum="mode")          # engine storage
+        b.behavior(StandUp)
+    """
+
+    def __init__(self) -> None:
+        self.inputs: dict[str, InputBinding] = {}
+        self.outputs: dict[str, OutputBinding] = {}
+        self.enums: dict[str, dict[str, int]] = {}
+        self.behaviors: dict[str, type[BasicBehavior] | BasicBehavior] = {}
+
+    def input(
+        self,
+        name: str,
+        kind: Kind,
+        read: Callable[..., Value],
+        *,
+        params: Iterable[Parameter | tuple[str, Kind]] = (),
+        enum: str | None = None,
+    ) -> None:
+        """Register an input symbol: a getter, or (with ``params``) a host function."""
+        self.inputs[name] = InputBinding(name, kind, read, _parameters(name, params), enum)
+
+    def output(
+        self,
+        name: str,
+        kind: Kind,
+        *,
+        enum: str | None = None,
+        initial: Value | None = None,
+        setter: Callable[[Value], None] | None = None,
+        getter: Callable[[], Value] | None = None,
+    ) -> None:
+        """Register an output symbol: engine storage, or a host ``setter`` + ``getter`` pair."""
+        if (setter is None) != (getter is None):
+            raise ValueError(f"output symbol {name}: give both setter and getter, or neither")
+        self.outputs[name] = OutputBinding(name, kind, enum, initial, setter, getter)
+
+    def enum(self, name: str, elements: Mapping[str, int] | Sequence[str]) -> None:
+        """Register enum elements: a mapping to host values, or names valued 0..n-1 in order."""
+        if isinstance(elements, Mapping):
+            values = {_qualify(name, k): int(v) for k, v in elements.items()}
+        else:
+            values = {_qualify(name, k): i for i, k in enumerate(elements)}
+        self.enums.setdefault(name, {}).update(values)
+
+    def enum_element(self, enum: str, element: str, value: int) -> None:
+        """Register one element (``registerEnumElement("mode", "mode.walk", 1)``)."""
+        self.enums.setdefault(enum, {})[_qualify(enum, element)] = int(value)
+
+    def behavior(self, behavior: type[BasicBehavior] | BasicBehavior) -> None:
+        """Register a basic behavior class (one instance per engine) or a shared instance."""
+        if not behavior.name:
+            raise ValueError(f"basic behavior {behavior!r} has no name")
+        self.behaviors[behavior.name] = behavior

@@ -1,0 +1,539 @@
+"""The Engine: load a program against host bindings and execute it tick by tick (§2).
+
+One :class:`Engine` runs one agent. ``load`` links the program (§2.10), checks the option
+graph of every agent root, generates Python code for it once (:mod:`engine.codegen.python`)
+and binds that code to this engine's storage. ``execute(now_ms)`` runs one tick exactly as
+§2.2 says: one clock value for the whole tick, the root actions in order, decision before
+actions in every option, outputs written through at once.
+
+Persistent per-option state lives in flat lists indexed by option index (active state, tick
+stamps of the last two executions, activation times, the tick's decision record): a tick stamp
+replaces the original's per-tick ``wasActive``/``isActive`` flag swap, so nothing is reset at
+the end of a tick.
+
+Faults (§2.9, architecture "Engine"): a host callable or basic behavior that raises, a ``%`` by
+zero or (policy B2) a double execution marks the engine as errored with a :class:`Fault`
+naming the option, state and XABSL span; ``execute`` then does nothing until ``reset()``.
+
+Hot reload: ``reload(program)`` swaps programs between ticks, keeping the active state and
+times of options and states that still exist by name; a program that fails to link or check
+leaves the running one untouched and raises.
+"""
+
+from __future__ import annotations
+
+import traceback
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from engine.codegen.layout import default_value, engine_order
+from engine.codegen.python import GeneratedProgram, generate
+from engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
+from engine.ir.model import Agent, Program
+from engine.runtime.activation import Node, Root, Snapshot, build_tree, node_to_dict
+from engine.runtime.bindings import Bindings
+from engine.runtime.checks import Policy, check_root
+from engine.runtime.coop import CoopStates
+from engine.runtime.errors import DebugError, DoubleExecutionError, Fault
+from engine.runtime.linker import Linked, link
+from engine.types import Kind, Ms, Value
+
+__all__ = ["Engine"]
+
+#: Tick stamp of "never executed": never equal to ``tick - 1`` for a real tick (ticks start at 1).
+_NEVER = -10
+
+RootAction = Callable[[int, int], None]
+
+
+class _Loaded:
+    """One program bound to one engine: storage lists, generated functions, host objects."""
+
+    def __init__(self, linked: Linked, generated: GeneratedProgram, engine: Engine) -> None:
+        self.linked = linked
+        self.program = linked.program
+        self.layout = linked.layout
+        self.generated = generated
+        n = len(linked.option_names)
+        self.LT = [_NEVER] * n
+        self.PV = [_NEVER] * n
+        self.TA = [0] * n
+        self.S = [linked.layout.options[name].initial for name in linked.option_names]
+        self.TS = [0] * n
+        self.LF: list[tuple[int, int, int] | None] = [None] * n
+        self.SD = [0.0] * n
+        self.PP: list[Value] = [0.0] * linked.n_option_params
+        for name, slot in linked.layout.options.items():
+            for k, (_, kind) in enumerate(slot.params):
+                self.PP[slot.offset + k] = default_value(kind)
+            del name
+        self.BP: list[Value] = [0.0] * linked.n_behavior_params
+        self.behavior_params: dict[str, tuple[tuple[str, Kind, str | None], ...]] = {}
+        for name, bslot in linked.layout.behaviors.items():
+            instance = linked.behaviors[bslot.index]
+            declared = type(instance).declared_parameters()
+            self.behavior_params[name] = tuple((p.name, p.kind, p.enum) for p in declared)
+            for k, (_, kind) in enumerate(bslot.params):
+                self.BP[bslot.offset + k] = default_value(kind)
+            instance._attach(self.BP, bslot.offset, [p[0] for p in bslot.params])
+        nb = len(linked.behaviors)
+        self.BLT = [_NEVER] * nb
+        self.BPV = [_NEVER] * nb
+        self.BTA = [0] * nb
+        self.OV: list[Value] = list(linked.output_initial)
+        self.AV: list[Value | None] = [None] * len(linked.layout.sites)
+        self.coop = CoopStates.of(self.program)
+        self.coop.tick = lambda: engine._tick
+        self.coop.executing = self.executing_coop_states
+        g: dict[str, Any] = dict(SUPPORT_GLOBALS)
+        g.update(
+            LT=self.LT,
+            PV=self.PV,
+            TA=self.TA,
+            S=self.S,
+            TS=self.TS,
+            LF=self.LF,
+            SD=self.SD,
+            PP=self.PP,
+            BP=self.BP,
+            OV=self.OV,
+            AV=self.AV,
+            DX=engine._double_execution,
+            RB=self.run_behavior,
+            CC=self.coop.check,
+            CF=self.coop.conflict,
+        )
+        for k, binding in enumerate(linked.inputs):
+            g[f"I{k}"] = binding.read
+            if binding.params:
+                storage = [default_value(p.kind) for p in binding.params]
+                g[f"FP{k}"] = storage
+                g[f"FS{k}"] = storage.__setitem__
+        for k, out in enumerate(linked.outputs):
+            if out is not None and out.setter is not None:
+                g[f"OS{k}"] = out.setter
+                g[f"OG{k}"] = out.getter
+        self.globals = g
+        generated.bind(g)
+        self.functions: list[Callable[[int, int], None]] = [g[f"O{i}"] for i in range(n)]
+        self.input_reads = {name: g[f"I{slot.index}"] for name, slot in linked.layout.inputs.items()}
+
+    def run_behavior(self, k: int, now: int, tick: int, changed: bool) -> None:
+        """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set."""
+        lt = self.BLT[k]
+        if lt != tick:
+            self.BPV[k] = lt
+            self.BLT[k] = tick
+            was = lt == tick - 1
+        else:
+            was = self.BPV[k] == tick - 1
+        behavior = self.linked.behaviors[k]
+        if changed:
+            behavior.parameters_changed()
+        if not was:
+            self.BTA[k] = now
+        behavior.time_of_execution = (now - self.BTA[k]) & MS_MASK
+        behavior.execute()
+
+    def executing_coop_states(self) -> list[tuple[int, int]]:
+        tick = self.globals_tick()
+        return [key for key in self.coop.states if self.LT[key[0]] == tick and self.S[key[0]] == key[1]]
+
+    def globals_tick(self) -> int:
+        return self.coop.tick()
+
+    def root_action(self, root: Root, params: Mapping[str, Value]) -> RootAction:
+        """A root action calling ``root`` with constant ``params`` (others get defaults, §2.5)."""
+        if root.kind == "option":
+            slot = self.layout.options[root.name]
+            values = [
+                (slot.offset + p, params.get(slot.params[p][0], default_value(slot.params[p][1])))
+                for p in engine_order(slot.params)
+            ]
+            function = self.functions[slot.index]
+            store = self.PP
+
+            def run_option(now: int, tick: int) -> None:
+                for position, value in values:
+                    store[position] = value
+                function(now, tick)
+
+            return run_option
+        bslot = self.layout.behaviors[root.name]
+        bvalues = [
+            (bslot.offset + p, params.get(bslot.params[p][0], default_value(bslot.params[p][1])))
+            for p in engine_order(bslot.params)
+        ]
+        bstore = self.BP
+        index = bslot.index
+        run = self.run_behavior
+
+        def run_behavior(now: int, tick: int) -> None:
+            changed = False
+            for position, value in bvalues:
+                if bstore[position] != value:
+                    bstore[position] = value
+                    changed = True
+            run(index, now, tick, changed)
+
+        return run_behavior
+
+
+class Engine:
+    """Runs one agent's behavior: load, execute ticks, inspect, force, reload.
+
+    Example::
+
+        engine = Engine(bindings)           # bindings: engine.runtime.bindings.Bindings
+        engine.load(program)                # LinkError lists everything missing
+        engine.execute(now_ms)              # one tick; never raises
+        engine.activation()                 # the tick's activation tree
+    """
+
+    def __init__(
+        self, bindings: Bindings, program: Program | None = None, *, policy: Policy = Policy.B2, agent_name: str = ""
+    ) -> None:
+        self.bindings = bindings
+        self.policy = policy
+        self.agent_name = agent_name
+        self.warnings: list[str] = []
+        self._loaded: _Loaded | None = None
+        self._tick = 0
+        self._now: Ms = 0
+        self._fault: Fault | None = None
+        self._agent: Agent | None = None
+        self._forced: tuple[Root, dict[str, Value]] | None = None
+        self._overrides: dict[str, Value] = {}
+        self._roots: list[RootAction] = []
+        self._root_names: tuple[Root, ...] = ()
+        if program is not None:
+            self.load(program)
+
+    # -- loading ----------------------------------------------------------------------------------
+
+    def _prepare(self, program: Program) -> _Loaded:
+        reuse = None
+        if self._loaded is not None:
+            reuse = dict(zip(self._loaded.linked.behavior_names, self._loaded.linked.behaviors, strict=True))
+        linked = link(program, self.bindings, double_execution_is_error=self.policy is Policy.B2, reuse=reuse)
+        for agent in program.agents:
+            check_root(program, agent.root, self.policy)
+        generated = generate(program, linked.layout)
+        return _Loaded(linked, generated, self)
+
+    def load(self, program: Program) -> None:
+        """Load ``program`` from scratch: every option starts fresh, the first agent is selected.
+
+        Raises:
+            LinkError: the program names unregistered symbols, enum elements or behaviors.
+            LoadError: the option graph of an agent has a loop (or a B2 double execution).
+        """
+        loaded = self._prepare(program)
+        self._loaded = loaded
+        self._loaded.coop.agent = self.agent_name
+        self._fault = None
+        self._forced = None
+        self._overrides = {}
+        self._agent = program.agents[0] if program.agents else None
+        self._install_roots()
+
+    def reload(self, program: Program) -> None:
+        """Swap in a new version of the behavior between ticks (hot reload).
+
+        Options and states that still exist (by name) keep their active state, times and
+        parameters; everything else starts fresh; bindings are re-linked; input overrides, the
+        selected agent and a forced root are kept when their names still exist.
+
+        Raises:
+            LinkError, LoadError: the new program cannot run; the running one stays in place.
+        """
+        old = self._require()
+        new = self._prepare(program)
+        for name in program.options:
+            if name not in old.layout.options:
+                continue
+            oi = old.layout.options[name].index
+            ni = new.layout.options[name].index
+            old_option = old.program.options[name]
+            new_option = program.options[name]
+            state = old_option.states[old.S[oi]].name
+            if state not in {s.name for s in new_option.states}:
+                continue  # its active state is gone: the option restarts when next called
+            new.S[ni] = new_option.state(state).index
+            new.LT[ni], new.PV[ni] = old.LT[oi], old.PV[oi]
+            new.TA[ni], new.TS[ni], new.SD[ni] = old.TA[oi], old.TS[oi], old.SD[oi]
+            old_slot, new_slot = old.layout.options[name], new.layout.options[name]
+            old_params = {p: (k, kind) for k, (p, kind) in enumerate(old_slot.params)}
+            for k, (p, kind) in enumerate(new_slot.params):
+                if p in old_params and old_params[p][1] is kind:
+                    new.PP[new_slot.offset + k] = old.PP[old_slot.offset + old_params[p][0]]
+        for name, slot in new.layout.behaviors.items():
+            if name in old.layout.behaviors:
+                o = old.layout.behaviors[name].index
+                new.BLT[slot.index], new.BPV[slot.index], new.BTA[slot.index] = old.BLT[o], old.BPV[o], old.BTA[o]
+        for name, slot in new.layout.outputs.items():
+            old_slot_out = old.layout.outputs.get(name)
+            if (
+                old_slot_out is not None
+                and slot.stored
+                and old_slot_out.stored
+                and program.outputs[name].kind is old.program.outputs[name].kind
+            ):
+                new.OV[slot.index] = old.OV[old_slot_out.index]
+        new.coop.agent = old.coop.agent
+        new.coop.agent_priority = old.coop.agent_priority
+        new.coop.synchronization_ticks = old.coop.synchronization_ticks
+        self._loaded = new
+        agent_name = self._agent.name if self._agent is not None else None
+        self._agent = next((a for a in program.agents if a.name == agent_name), None) or (
+            program.agents[0] if program.agents else None
+        )
+        if self._forced is not None and not self._root_exists(self._forced[0]):
+            self._forced = None
+        overrides = self._overrides
+        self._overrides = {}
+        for symbol, value in overrides.items():
+            if symbol in program.inputs and symbol in new.layout.inputs:
+                self._apply_override(symbol, value)
+        self._install_roots()
+
+    def _require(self) -> _Loaded:
+        if self._loaded is None:
+            raise DebugError("no program is loaded")
+        return self._loaded
+
+    def _root_exists(self, root: Root) -> bool:
+        loaded = self._require()
+        table = loaded.layout.options if root.kind == "option" else loaded.layout.behaviors
+        return root.name in table
+
+    def _install_roots(self) -> None:
+        loaded = self._require()
+        if self._forced is not None:
+            root, params = self._forced
+            self._root_names = (root,)
+            self._roots = [loaded.root_action(root, params)]
+        elif self._agent is not None:
+            root = Root("option", self._agent.root)
+            self._root_names = (root,)
+            self._roots = [loaded.root_action(root, {})]
+        else:
+            self._root_names = ()
+            self._roots = []
+
+    # -- ticks ----------------------------------------------------------------------------------
+
+    def execute(self, now: Ms) -> None:
+        """Run one tick at clock ``now`` (ms, taken modulo 2**32). Never raises (see ``fault``)."""
+        if self._fault is not None or self._loaded is None:
+            return
+        now = int(now) & MS_MASK
+        self._tick += 1
+        tick = self._tick
+        self._now = now
+        self._loaded.coop.entering_now.clear()
+        try:
+            for action in self._roots:
+                action(now, tick)
+        except Exception as error:
+            self._fault = self._locate(error)
+
+    def _double_execution(self, option: int, tick: int) -> bool:
+        loaded = self._require()
+        name = loaded.linked.option_names[option]
+        message = f"option {name} is contained in the activation tree more than once"
+        if self.policy is Policy.B2:
+            raise DoubleExecutionError(message)
+        self.warnings.append(message)
+        return loaded.PV[option] == tick - 1
+
+    def _locate(self, error: BaseException) -> Fault:
+        loaded = self._require()
+        origin = None
+        for frame, line in traceback.walk_tb(error.__traceback__):
+            filename = frame.f_code.co_filename
+            if filename.startswith("<xabsl:"):
+                found = loaded.generated.origin(filename, line)
+                if found is not None:
+                    origin = found
+        text = f"{type(error).__name__}: {error}"
+        if origin is None:
+            return Fault(text, error=type(error).__name__)
+        if origin.what.startswith(("call of", "assignment")) and not isinstance(error, DoubleExecutionError):
+            text = f"{origin.what}: {text}"
+        return Fault(text, origin.option, origin.state, origin.span, type(error).__name__)
+
+    @property
+    def fault(self) -> Fault | None:
+        """Why the agent stopped, or None while it runs."""
+        return self._fault
+
+    @property
+    def errored(self) -> bool:
+        return self._fault is not None
+
+    def reset(self) -> None:
+        """Every option restarts in its initial state on the next tick; clears a fault (§2.9)."""
+        loaded = self._require()
+        for table in (loaded.LT, loaded.PV, loaded.BLT, loaded.BPV):
+            table[:] = [_NEVER] * len(table)
+        self._fault = None
+
+    # -- agents ----------------------------------------------------------------------------------
+
+    @property
+    def program(self) -> Program:
+        return self._require().program
+
+    @property
+    def agents(self) -> tuple[Agent, ...]:
+        return self._require().program.agents
+
+    @property
+    def selected_agent(self) -> str | None:
+        return self._agent.name if self._agent is not None else None
+
+    def select_agent(self, name: str) -> None:
+        """Select agent ``name`` (§2.9): a fresh root action, no option state is reset."""
+        loaded = self._require()
+        agent = next((a for a in loaded.program.agents if a.name == name), None)
+        if agent is None:
+            raise DebugError(f"unknown agent {name}")
+        if self._agent is not None and self._agent.name == name:
+            return
+        self._agent = agent
+        self._install_roots()
+
+    @property
+    def roots(self) -> tuple[Root, ...]:
+        """The current root actions (the agent's root option, or a forced root)."""
+        return self._root_names
+
+    @property
+    def tick(self) -> int:
+        """How many ticks ran since the engine was created."""
+        return self._tick
+
+    @property
+    def now(self) -> Ms:
+        """The clock of the last tick."""
+        return self._now
+
+    # -- symbols ---------------------------------------------------------------------------------
+
+    def output(self, name: str) -> Value:
+        """The current value of an output or internal symbol (enum values as host ints)."""
+        loaded = self._require()
+        slot = loaded.layout.outputs.get(name)
+        if slot is None:
+            raise DebugError(f"unknown output symbol {name}")
+        if slot.stored:
+            return loaded.OV[slot.index]
+        binding = loaded.linked.outputs[slot.index]
+        assert binding is not None and binding.getter is not None
+        return binding.getter()
+
+    def outputs(self) -> dict[str, Value]:
+        """Every output and internal symbol, in program order."""
+        return {name: self.output(name) for name in self._require().layout.outputs}
+
+    def set_output(self, name: str, value: Value) -> None:
+        """Write an output symbol as an assignment would (hosts may reset outputs, §2.2)."""
+        loaded = self._require()
+        slot = loaded.layout.outputs.get(name)
+        if slot is None:
+            raise DebugError(f"unknown output symbol {name}")
+        if slot.stored:
+            loaded.OV[slot.index] = value
+        else:
+            binding = loaded.linked.outputs[slot.index]
+            assert binding is not None and binding.setter is not None
+            binding.setter(value)
+
+    def enum_value(self, element: str) -> int:
+        """The host value of a qualified enum element."""
+        return self._require().linked.enum_values[element]
+
+    def enum_element(self, enum: str | None, value: Value) -> Value:
+        """The first element of ``enum`` with ``value`` (the value itself if none has it)."""
+        if enum is None:
+            return value
+        return self._require().linked.enum_names.get(enum, {}).get(int(value), value)
+
+    # -- activation tree ---------------------------------------------------------------------------
+
+    def snapshot(self) -> Snapshot:
+        """The storage after the last tick, copied (cheap); build the tree later."""
+        loaded = self._require()
+        return Snapshot(
+            self._now,
+            self._tick,
+            self._root_names,
+            tuple(loaded.S),
+            tuple(loaded.LT),
+            tuple(loaded.TA),
+            tuple(loaded.TS),
+            tuple(loaded.LF),
+            tuple(loaded.SD),
+            tuple(loaded.PP),
+            tuple(loaded.BP),
+            tuple(loaded.BLT),
+            tuple(loaded.BTA),
+            tuple(loaded.AV),
+            tuple(loaded.OV),
+        )
+
+    def activation(self, snapshot: Snapshot | None = None) -> list[Node]:
+        """The activation tree of the last tick (or of ``snapshot``)."""
+        loaded = self._require()
+        return build_tree(snapshot or self.snapshot(), loaded.program, loaded.layout, loaded.behavior_params)
+
+    def activation_dict(self) -> list[dict[str, Any]]:
+        """The activation tree as JSON-ready dicts, enum values as element names."""
+        return [node_to_dict(node, self.enum_element) for node in self.activation()]
+
+    # -- inspection --------------------------------------------------------------------------------
+
+    def source(self, option: str) -> str:
+        """The generated Python source of ``option`` (compiled as ``<xabsl:option>``)."""
+        return self._require().generated.options[option].source
+
+    @property
+    def coop(self) -> CoopStates:
+        """The cooperative-state team-message interface of this agent (§2.11)."""
+        return self._require().coop
+
+    @property
+    def debug(self) -> Any:
+        """The debug interface (:class:`engine.runtime.debug.Debugger`)."""
+        from engine.runtime.debug import Debugger
+
+        return Debugger(self)
+
+    # -- used by the debugger ---------------------------------------------------------------------
+
+    def _loaded_program(self) -> _Loaded:
+        return self._require()
+
+    def _force(self, root: Root | None, params: dict[str, Value]) -> None:
+        if root is not None and root.kind == "option":
+            check_root(self._require().program, root.name, self.policy)
+        self._forced = None if root is None else (root, params)
+        self._install_roots()
+
+    def _apply_override(self, symbol: str, value: Value | None) -> None:
+        loaded = self._require()
+        slot = loaded.layout.inputs[symbol]
+        key = f"I{slot.index}"
+        if value is None:
+            self._overrides.pop(symbol, None)
+            loaded.globals[key] = loaded.linked.inputs[slot.index].read
+        else:
+            self._overrides[symbol] = value
+            loaded.globals[key] = lambda *_args, _value=value: _value
+        loaded.input_reads[symbol] = loaded.globals[key]
+
+    @property
+    def overrides(self) -> dict[str, Value]:
+        """Input symbols currently overridden by the debugger, with their values."""
+        return dict(self._overrides)

@@ -1,0 +1,1 @@
+"""Activation logs: the conformance trace host and runner (:mod:`engine.trace.conformance`)."""

@@ -1,0 +1,221 @@
+"""The conformance host: the kit's symbol bindings and its per-tick trace format.
+
+The conformance kit (``data/conformance/README.md``) runs a behavior under fixed host
+conventions and records one JSON object per tick. This module is that host:
+
+* :func:`conformance_bindings` registers, for a program, every external enumeration (element
+  *i* in declaration order has value *i*), every input symbol (plain ones read a value table
+  that starts at 0 / false / the first element; parameterized ones are the kit's functions of
+  ``sum((i+1) * value_i)``), every output symbol as engine storage, and every basic behavior as
+  a behavior that only records its calls.
+* :class:`TraceRunner` applies one ``in.jsonl`` line (agent switch, ``set``, clock), executes
+  one tick and renders the ``expected.out.jsonl`` line: the activation tree without output
+  assignments and every output and internal symbol, enum values as qualified element names.
+
+Bad input (an unknown or parameterized symbol in ``set``, a value of the wrong type, an
+unqualified enum element, an unknown agent) raises :class:`TraceInputError` with one line.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
+
+from engine.ir.model import Program
+from engine.runtime.activation import AssignmentNode, BehaviorNode, Node, OptionNode
+from engine.runtime.bindings import BasicBehavior, Bindings
+from engine.runtime.checks import Policy
+from engine.runtime.engine import Engine
+from engine.types import Kind, Value
+
+__all__ = ["TraceFaultError", "TraceInputError", "TraceRunner", "conformance_bindings"]
+
+
+class TraceInputError(ValueError):
+    """A line of the input trace cannot be applied (message is one line, names the tick)."""
+
+
+class TraceFaultError(RuntimeError):
+    """The behavior faulted during the trace (the engine stopped the agent)."""
+
+
+def _enum_size(program: Program, enum: str | None) -> int:
+    if enum is None or enum not in program.enums:
+        return 0
+    return len(program.enums[enum].elements)
+
+
+def _function(kind: Kind, size: int) -> Callable[..., Value]:
+    """The kit's binding for a parameterized input symbol of ``kind``."""
+
+    def weighted(*values: Value) -> float:
+        total = 0.0
+        for i, value in enumerate(values):
+            total += (i + 1) * float(value)
+        return total
+
+    if kind is Kind.DECIMAL:
+        return weighted
+    if kind is Kind.BOOLEAN:
+        return lambda *values: weighted(*values) > 0
+    if size == 0:
+        raise ValueError("an enum-valued input function needs a declared enumeration")
+    return lambda *values: math.trunc(weighted(*values)) % size
+
+
+class _RecordingBehavior(BasicBehavior):
+    """A kit basic behavior: does nothing but count its calls."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.calls = 0
+
+    def execute(self) -> None:
+        self.calls += 1
+
+
+def conformance_bindings(program: Program) -> tuple[Bindings, dict[str, Value]]:
+    """Bindings of the kit's host for ``program`` and the table the plain inputs read.
+
+    Returns:
+        ``(bindings, values)``: assign ``values[name]`` to change a plain input symbol.
+    """
+    bindings = Bindings()
+    for enum in program.enums.values():
+        if not enum.internal:
+            bindings.enum(enum.name, list(enum.elements))
+    values: dict[str, Value] = {}
+    for symbol in program.inputs.values():
+        if symbol.params:
+            bindings.input(
+                symbol.name,
+                symbol.kind,
+                _function(symbol.kind, _enum_size(program, symbol.enum)),
+                params=symbol.params,
+                enum=symbol.enum,
+            )
+            continue
+        values[symbol.name] = 0.0 if symbol.kind is Kind.DECIMAL else (False if symbol.kind is Kind.BOOLEAN else 0)
+        bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
+    for out in program.outputs.values():
+        if not out.internal:
+            bindings.output(out.name, out.kind, enum=out.enum)
+    for behavior in program.behaviors.values():
+        cls = type(
+            f"Kit_{behavior.name}",
+            (_RecordingBehavior,),
+            {"name": behavior.name, "parameters": behavior.params, "__doc__": "A kit basic behavior."},
+        )
+        bindings.behavior(cls)
+    return bindings, values
+
+
+def _reader(values: dict[str, Value], name: str) -> Callable[[], Value]:
+    return lambda: values[name]
+
+
+class TraceRunner:
+    """Runs a program under the kit's host conventions, one input line per tick."""
+
+    def __init__(self, program: Program, *, policy: Policy = Policy.B2) -> None:
+        self.program = program
+        self.bindings, self.values = conformance_bindings(program)
+        self.engine = Engine(self.bindings, program, policy=policy)
+        self.line = 0
+
+    def select_agent(self, name: str) -> None:
+        if name not in {a.name for a in self.program.agents}:
+            raise TraceInputError(f"tick {self.line}: unknown agent {name!r}")
+        self.engine.select_agent(name)
+
+    def apply(self, settings: dict[str, Any]) -> None:
+        """Apply a ``set`` object: validate every name and value, then assign."""
+        for name, raw in settings.items():
+            symbol = self.program.inputs.get(name)
+            if symbol is None:
+                raise TraceInputError(f"tick {self.line}: unknown input symbol {name!r}")
+            if symbol.params:
+                raise TraceInputError(f"tick {self.line}: input symbol {name!r} has parameters and cannot be set")
+            self.values[name] = self._value(name, symbol.kind, symbol.enum, raw)
+
+    def _value(self, name: str, kind: Kind, enum: str | None, raw: Any) -> Value:
+        where = f"tick {self.line}: input symbol {name!r}"
+        if kind is Kind.DECIMAL:
+            if isinstance(raw, bool) or not isinstance(raw, int | float):
+                raise TraceInputError(f"{where} is decimal, got {raw!r}")
+            return float(raw)
+        if kind is Kind.BOOLEAN:
+            if not isinstance(raw, bool):
+                raise TraceInputError(f"{where} is boolean, got {raw!r}")
+            return raw
+        if not isinstance(raw, str):
+            raise TraceInputError(f"{where} is an enum, give a qualified element name, got {raw!r}")
+        elements = self.program.enums[enum].elements if enum in self.program.enums else ()
+        if raw not in elements:
+            if "." not in raw:
+                raise TraceInputError(f"{where}: enum element {raw!r} is not qualified (write {enum}.{raw})")
+            raise TraceInputError(f"{where}: {raw!r} is not an element of enumeration {enum}")
+        return self.engine.enum_value(raw)
+
+    def tick(self, line: dict[str, Any]) -> dict[str, Any]:
+        """Apply one input line, execute one tick and return the output line."""
+        self.line += 1
+        if not isinstance(line, dict):
+            raise TraceInputError(f"tick {self.line}: expected a JSON object")
+        t = line.get("t")
+        if isinstance(t, bool) or not isinstance(t, int):
+            raise TraceInputError(f"tick {self.line}: 't' must be an integer number of milliseconds")
+        unknown = set(line) - {"t", "set", "agent"}
+        if unknown:
+            raise TraceInputError(f"tick {self.line}: unknown key(s) {', '.join(sorted(unknown))}")
+        if "agent" in line:
+            if not isinstance(line["agent"], str):
+                raise TraceInputError(f"tick {self.line}: 'agent' must be a string")
+            self.select_agent(line["agent"])
+        settings = line.get("set", {})
+        if not isinstance(settings, dict):
+            raise TraceInputError(f"tick {self.line}: 'set' must be an object")
+        self.apply(settings)
+        self.engine.execute(t)
+        if self.engine.fault is not None:
+            raise TraceFaultError(f"tick {self.line}: the behavior faulted: {self.engine.fault}")
+        return self.render(t)
+
+    def render(self, t: int) -> dict[str, Any]:
+        engine = self.engine
+        outputs: dict[str, Any] = {}
+        for out in self.program.outputs.values():
+            outputs[out.name] = _json_value(engine.enum_element(out.enum, engine.output(out.name)), out.kind)
+        return {
+            "t": t,
+            "tree": [self._node(n) for n in engine.activation() if not isinstance(n, AssignmentNode)],
+            "outputs": outputs,
+        }
+
+    def _node(self, node: Node) -> dict[str, Any]:
+        engine = self.engine
+        if isinstance(node, OptionNode):
+            params = {k: _json_value(engine.enum_element(node.enums.get(k), v), None) for k, v in node.params.items()}
+            return {
+                "option": node.option,
+                "state": node.state,
+                "option_time": node.option_time,
+                "state_time": node.state_time,
+                "params": params,
+                "sub": [self._node(n) for n in node.sub if not isinstance(n, AssignmentNode)],
+            }
+        assert isinstance(node, BehaviorNode)
+        params = {k: _json_value(engine.enum_element(node.enums.get(k), v), None) for k, v in node.params.items()}
+        return {"behavior": node.behavior, "params": params}
+
+    def run(self, lines: Iterable[dict[str, Any]]) -> Iterator[dict[str, Any]]:
+        """Run every input line; yields the output lines."""
+        for line in lines:
+            yield self.tick(line)
+
+
+def _json_value(value: Value | str, kind: Kind | None) -> Value | str:
+    if kind is Kind.DECIMAL and not isinstance(value, bool) and isinstance(value, int):
+        return float(value)
+    return value
