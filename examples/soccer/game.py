@@ -92,7 +92,8 @@ class GameController:
     """The referee's state machine for one match between team 0 and team 1.
 
     ``side[t]`` is the direction team ``t`` attacks (+1: towards +x), ``score[t]`` its goals.
-    Times are kept in integer microseconds so that a match is exactly reproducible.
+    Times are kept in integer nanoseconds (the physics step of 1/120 s is not a whole number of
+    microseconds), so a match is exactly reproducible and its clock does not drift measurably.
     """
 
     def __init__(self, dims: FieldDimensions, rules: GameRules, ball_radius: float) -> None:
@@ -103,17 +104,17 @@ class GameController:
         self.score = [0, 0]
         self.side = [1, -1]
         self.kickoff_team = 0
-        self.time_us = 0
-        self.state_us = 0
-        self.play_us = 0
+        self.time_ns = 0
+        self.state_ns = 0
+        self.play_ns = 0
         self.goals_log: list[tuple[int, int]] = []  # (time_ms, scoring team)
         self.outs = 0
-        self._durations_us = {
-            GameState.INITIAL: round(rules.initial_s * 1e6),
-            GameState.READY: round(rules.ready_s * 1e6),
-            GameState.SET: round(rules.set_s * 1e6),
+        self._durations_ns = {
+            GameState.INITIAL: round(rules.initial_s * 1e9),
+            GameState.READY: round(rules.ready_s * 1e9),
+            GameState.SET: round(rules.set_s * 1e9),
         }
-        self._half_us = round(rules.half_duration_s * 1e6)
+        self._half_ns = round(rules.half_duration_s * 1e9)
         half_line = dims.line_width / 2.0
         self._goal_x = dims.half_length + half_line + ball_radius
         self._out_y = dims.half_width + half_line + ball_radius
@@ -134,29 +135,37 @@ class GameController:
         return self.state == GameState.FINISHED
 
     @property
+    def time_ms(self) -> int:
+        """Time since the start of the match, rounded to the millisecond."""
+        return round(self.time_ns / 1e6)
+
+    @property
     def half_time_left_ms(self) -> int:
-        return max(0, self._half_us - self.play_us) // 1000
+        return round(max(0, self._half_ns - self.play_ns) / 1e6)
 
     # ---------------------------------------------------------------------------- progress
 
     def step(self, dt: float, ball_x: float, ball_y: float, referee: Referee) -> None:
         """Advance the referee by ``dt`` seconds, given the ball's world position [m]."""
-        dt_us = round(dt * 1e6)
-        self.time_us += dt_us
-        self.state_us += dt_us
+        dt_ns = round(dt * 1e9)
+        self.time_ns += dt_ns
+        self.state_ns += dt_ns
         state = self.state
         if state == GameState.PLAYING:
-            self.play_us += dt_us
-            if self.play_us >= self._half_us:
+            self.play_ns += dt_ns
+            if self.play_ns >= self._half_ns:
                 self._end_half(referee)
                 return
             self._check_ball(ball_x, ball_y, referee)
-        elif state != GameState.FINISHED and self.state_us >= self._durations_us[state]:
-            self._enter(GameState(state + 1), referee)
+        elif state != GameState.FINISHED and self.state_ns >= self._durations_ns[state]:
+            # Carry the overshoot into the next state, so state changes do not lose time.
+            self._enter(GameState(state + 1), referee, self.state_ns - self._durations_ns[state])
 
-    def _enter(self, state: GameState, referee: Referee) -> None:
+    def _enter(self, state: GameState, referee: Referee, carry_ns: int = 0) -> None:
         self.state = state
-        self.state_us = 0
+        self.state_ns = carry_ns
+        if state == GameState.PLAYING:
+            self.play_ns += carry_ns
         if state == GameState.SET:
             referee.place_for_kickoff(only_misplaced=True)
             referee.place_ball(0.0, 0.0)
@@ -164,14 +173,14 @@ class GameController:
     def _end_half(self, referee: Referee) -> None:
         if self.half >= self.rules.halves:
             self.state = GameState.FINISHED
-            self.state_us = 0
+            self.state_ns = 0
             return
         self.half += 1
-        self.play_us = 0
+        self.play_ns = 0
         self.side = [-self.side[0], -self.side[1]]
         self.kickoff_team = (self.half - 1) % 2
         self.state = GameState.INITIAL
-        self.state_us = 0
+        self.state_ns = 0
         referee.place_for_kickoff(only_misplaced=False)
         referee.place_ball(0.0, 0.0)
 
@@ -182,10 +191,10 @@ class GameController:
                 goal_side = 1 if x > 0.0 else -1
                 scorer = 0 if self.side[0] == goal_side else 1
                 self.score[scorer] += 1
-                self.goals_log.append((self.time_us // 1000, scorer))
+                self.goals_log.append((self.time_ms, scorer))
                 self.kickoff_team = 1 - scorer
                 self.state = GameState.READY
-                self.state_us = 0
+                self.state_ns = 0
                 return
             self.outs += 1
             referee.place_ball(*self.throw_in_point(x, y))

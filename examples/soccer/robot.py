@@ -9,7 +9,8 @@ Walk modes:
 * ``STAND``: stop (decelerating within the acceleration limits).
 * ``WALK``: walk at ``(vx, vy, vrot)`` in the robot frame (x forward, y left, ccw positive).
 * ``WALK_TO``: walk to ``(target_x, target_y, target_rot)`` in the *team frame* (own goal at
-  negative x, see ``field``), with a proportional controller that respects the same limits.
+  negative x, see ``field``), with a proportional controller that respects the same limits;
+  far from the target (> 0.6 m) the robot faces the target, near it turns to ``target_rot``.
 
 Limits (:class:`WalkLimits`): 0.25 m/s forward, 0.15 m/s backward and sideways (combined
 elliptically, so walking diagonally at full speed on both axes is not possible), 1 rad/s turn
@@ -81,6 +82,8 @@ class WalkLimits:
     #: Gains of the WALK_TO controller [1/s]: how fast an offset is closed before saturation.
     walk_to_gain: float = 1.5
     walk_to_turn_gain: float = 2.0
+    #: Beyond this distance WALK_TO turns towards the target, closer it turns to the target heading.
+    walk_to_face_distance: float = 0.6  # m
     #: WALK_TO stops within these tolerances instead of dithering around the target.
     walk_to_tolerance: float = 0.02  # m
     walk_to_turn_tolerance: float = 0.05  # rad
@@ -204,8 +207,13 @@ class Robot:
         dx, dy = tx - x, ty - y
         c, s = math.cos(theta), math.sin(theta)
         rel_x, rel_y = c * dx + s * dy, -s * dx + c * dy
-        turn = normalize_rad(target_theta - theta)
-        if math.hypot(rel_x, rel_y) < lim.walk_to_tolerance:
+        distance = math.hypot(rel_x, rel_y)
+        if distance > lim.walk_to_face_distance:
+            # Far away, face the target: forward is the walk's fastest direction.
+            turn = math.atan2(rel_y, rel_x)
+        else:
+            turn = normalize_rad(target_theta - theta)
+        if distance < lim.walk_to_tolerance:
             rel_x = rel_y = 0.0
         if abs(turn) < lim.walk_to_turn_tolerance:
             turn = 0.0

@@ -13,7 +13,7 @@ A behavior tick for the world is: ``sense`` (a physics snapshot read once per ti
 messages delivered, each world model refreshed), ``controller.execute``, ``act`` (motion
 requests to the legs, team messages sent), then ``step`` at the physics rate (pymunk, then the
 referee looks at the ball). Determinism: every random number comes from one numpy ``Generator``
-seeded with ``seed``, time is counted in integer microseconds, and nothing reads the wall clock.
+seeded with ``seed``, time is counted in integer nanoseconds, and nothing reads the wall clock.
 """
 
 from __future__ import annotations
@@ -148,7 +148,7 @@ class SoccerWorld:
 
     @property
     def time_ms(self) -> int:
-        return self.game.time_us // 1000
+        return self.game.time_ms
 
     def step(self, dt: float) -> None:
         """Advance physics by ``dt`` seconds, then let the referee judge the ball's position."""
@@ -211,6 +211,13 @@ class SoccerWorld:
     def place_ball(self, x: float, y: float) -> None:
         """Put the ball at rest at a world point [m]."""
         self.physics.place_ball(x, y)
+        self._snapshot_steps = -1
+
+    def place_robot(self, agent: SoccerAgent, x: float, y: float, heading: float) -> None:
+        """Put a robot at rest at a world pose [m, rad] (referee, tests, the studio's drag)."""
+        self.physics.place_robot(agent.index, x, y, heading)
+        agent.robot.halt()
+        self._snapshot_steps = -1
 
     def place_for_kickoff(self, only_misplaced: bool) -> None:
         """Put robots on their kick-off poses: all of them, or those not within the tolerance."""
@@ -225,8 +232,7 @@ class SoccerWorld:
                 x, y, theta = self.physics.robot_pose(agent.index)
                 if math.hypot(x - wx, y - wy) <= tolerance and abs(normalize_rad(theta - wth)) <= math.pi / 4:
                     continue
-            self.physics.place_robot(agent.index, wx, wy, wth)
-            agent.robot.halt()
+            self.place_robot(agent, wx, wy, wth)
 
     # -------------------------------------------------------------------------- agent hooks
 

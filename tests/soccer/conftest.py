@@ -22,8 +22,7 @@ def playing_world(players_per_team: int = 1, seed: int = 0, **options) -> Soccer
 
 
 def place(world: SoccerWorld, agent_index: int, x: float, y: float, heading_deg: float = 0.0) -> None:
-    world.physics.place_robot(world.agents[agent_index].index, x, y, math.radians(heading_deg))
-    world.agents[agent_index].robot.halt()
+    world.place_robot(world.agents[agent_index], x, y, math.radians(heading_deg))
 
 
 def run_ticks(world: SoccerWorld, ticks: int, loop: BehaviorLoop | None = None) -> BehaviorLoop:
