@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import traceback
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from engine.codegen.layout import default_value, engine_order
 from engine.codegen.python import GeneratedProgram, generate
@@ -37,6 +37,9 @@ from engine.runtime.coop import CoopStates
 from engine.runtime.errors import DebugError, DoubleExecutionError, Fault
 from engine.runtime.linker import Linked, link
 from engine.types import Kind, Ms, Value
+
+if TYPE_CHECKING:
+    from engine.runtime.debug import Debugger
 
 __all__ = ["Engine"]
 
@@ -136,11 +139,8 @@ class _Loaded:
         behavior.execute()
 
     def executing_coop_states(self) -> list[tuple[int, int]]:
-        tick = self.globals_tick()
+        tick = self.coop.tick()
         return [key for key in self.coop.states if self.LT[key[0]] == tick and self.S[key[0]] == key[1]]
-
-    def globals_tick(self) -> int:
-        return self.coop.tick()
 
     def root_action(self, root: Root, params: Mapping[str, Value]) -> RootAction:
         """A root action calling ``root`` with constant ``params`` (others get defaults, §2.5)."""
@@ -504,7 +504,7 @@ class Engine:
         return self._require().coop
 
     @property
-    def debug(self) -> Any:
+    def debug(self) -> Debugger:
         """The debug interface (:class:`engine.runtime.debug.Debugger`)."""
         from engine.runtime.debug import Debugger
 
