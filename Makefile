@@ -17,7 +17,8 @@ $(STAMP): pyproject.toml | check-python
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/xabsl compile examples/demo/agents.xabsl
+	mkdir -p build
+	$(BIN)/xabsl compile examples/demo/agents.xabsl --ic build/demo.ic --json build/demo.json
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

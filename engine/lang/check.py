@@ -12,7 +12,9 @@ one mistake gives one diagnostic.
 
 from __future__ import annotations
 
+import difflib
 import re
+from collections.abc import Iterable
 from dataclasses import replace
 
 from engine import ir
@@ -30,6 +32,12 @@ _BUILTINS: dict[str, type] = {
 _ARITHMETIC = frozenset(ir.ARITHMETIC_OPERATORS)
 _ORDERING = frozenset({"<", "<=", ">", ">="})
 _EQUALITY = frozenset({"==", "!="})
+
+
+def _did_you_mean(name: str, candidates: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for a close match, else ``""``."""
+    matches = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.75)
+    return f" (did you mean '{matches[0]}'?)" if matches else ""
 
 
 def _describe(expr: ir.Expression) -> str:
@@ -102,6 +110,9 @@ class OptionChecker:
             hint = f" (and no element of enumeration '{enum}')" if enum else ""
             if (enum is None and name in self.table.elements.values()) or self.is_enum_element(name):
                 hint = " (enum elements can only be used where an enum value is expected)"
+            if not hint:
+                known = [*self.table.constants, *self.table.inputs, *self.table.outputs, *self.header.params]
+                hint = _did_you_mean(name, known)
             self.diagnostics.add(
                 "no-matching-symbol",
                 f"no matching symbol found for '{name}': no constant, option parameter, input or "
@@ -228,9 +239,10 @@ class OptionChecker:
     def expect(self, value: ir.Expression, kind: Kind, op: str, span: Span) -> bool:
         if value.kind is kind:
             return True
+        shown = f" '{self.source(value.span)}'" if value.span is not None else ""
         self.diagnostics.add(
             "type-mismatch",
-            f"type mismatch on '{op}': it takes {kind.value} operands, found {_describe(value)}",
+            f"type mismatch on '{op}': it takes {kind.value} operands, found {_describe(value)}{shown}",
             span,
         )
         return False
@@ -421,7 +433,10 @@ class OptionChecker:
             case ast.Goto(target=target, span=span):
                 if target.text not in self.state_names:
                     self.diagnostics.add(
-                        "unknown-state", f"option '{self.name}' has no state '{target.text}'", target.span
+                        "unknown-state",
+                        f"option '{self.name}' has no state '{target.text}'"
+                        + _did_you_mean(target.text, self.state_names),
+                        target.span,
                     )
                 return ir.Transition(target.text, False, -1, span)
             case ast.Stay(span=span):

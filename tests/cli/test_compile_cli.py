@@ -1,0 +1,83 @@
+"""``xabsl compile``: exit statuses, output files, text and JSON diagnostics."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from engine.cli import main
+from tests.kit import KIT
+
+DEMO = Path(__file__).resolve().parents[2] / "examples" / "demo" / "agents.xabsl"
+
+
+def test_clean_compile_writes_ic_and_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    ic, doc = tmp_path / "out.ic", tmp_path / "out.json"
+    assert main(["compile", str(KIT / "demo-approach" / "agents.xabsl"), "--ic", str(ic), "--json", str(doc)]) == 0
+    assert ic.read_bytes() == (KIT / "demo-approach" / "expected.ic").read_bytes()
+    data = json.loads(doc.read_text())
+    approach = data["options"][0]
+    assert approach["name"] == "approach" and approach["params"][0]["name"] == "approach.stop_at"
+    transition = next(t for t in approach["transitions"] if t["from"] == "go" and t["to"] == "arrived")
+    assert transition["conditions"] == [
+        {"text": "robot.fallen", "value": False},
+        {"text": "ball.distance < @stop_at", "value": True},
+    ]
+    summary = capsys.readouterr().out.strip().splitlines()[-1]
+    assert summary.startswith("ok: 4 files, 1 options, 0 errors, 0 warnings in ")
+
+
+def test_errors_exit_1_and_write_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    ic = tmp_path / "out.ic"
+    case = KIT / "compile-errors" / "10-unknown-symbol" / "main.xabsl"
+    assert main(["compile", str(case), "--ic", str(ic)]) == 1
+    assert not ic.exists()
+    lines = capsys.readouterr().out.splitlines()
+    error = next(line for line in lines if ": error: " in line)
+    assert error.endswith("[no-matching-symbol]") and ":6:17: error: no matching symbol found for 'distance'" in error
+    assert lines[-1].startswith("failed: ")
+
+
+def test_werror_turns_warnings_into_failure(tmp_path: Path) -> None:
+    source = tmp_path / "agents.xabsl"
+    (tmp_path / "s.xabsl").write_text('namespace s("S") { float input unused_input; float output o; }\n')
+    (tmp_path / "main.xabsl").write_text("option main { initial state s { action { o = 1; } } }\n")
+    source.write_text('include "s.xabsl"; include "main.xabsl"; agent a("A", main);\n')
+    assert main(["compile", str(source)]) == 0
+    assert main(["compile", str(source), "--werror"]) == 1
+    assert main(["compile", str(source), "--werror", "--no-lint"]) == 0
+
+
+def test_json_format(capsys: pytest.CaptureFixture[str]) -> None:
+    case = KIT / "compile-errors" / "13-two-initial-states" / "main.xabsl"
+    assert main(["compile", str(case), "--format", "json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert report["ok"] is False and report["summary"]["errors"] == 1
+    error = next(d for d in report["diagnostics"] if d["severity"] == "error")
+    assert (error["code"], error["original_code"], error["span"]["line"]) == ("multiple-initial-states", "X5327", 8)
+
+
+def test_missing_file_is_one_line_exit_2() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "engine.cli", "compile", "no/such/agents.xabsl"], capture_output=True, text=True
+    )
+    assert result.returncode == 2
+    assert result.stderr.strip() == "xabsl compile: no such file: no/such/agents.xabsl"
+
+
+def test_usage_error_exit_2() -> None:
+    result = subprocess.run([sys.executable, "-m", "engine.cli", "compile"], capture_output=True, text=True)
+    assert result.returncode == 2 and "AGENTS_FILE" in result.stderr
+
+
+def test_unwritable_output_is_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["compile", str(DEMO), "--ic", str(tmp_path / "missing" / "out.ic")]) == 2
+    assert "cannot write output" in capsys.readouterr().err
+
+
+def test_demo_example_compiles_cleanly(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["compile", str(DEMO), "--werror"]) == 0
