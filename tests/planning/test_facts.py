@@ -9,9 +9,7 @@ INIT = {"at-robot a", "at book b", "at mug c"}
 def base_signals(**over):
     s = {f"δ_{x}": 0.0 for x in "abc"}
     for o in ("book", "mug"):
-        s.update(
-            {f"γ_{o}": 0.0, f"alpha.gather_{o}": 0.0, f"alpha.dump_{o}": 0.0, f"g_{o}": 0.0, f"d_{o}": 0.0}
-        )
+        s.update({f"γ_{o}": 0.0, f"alpha.gather_{o}": 0.0, f"alpha.dump_{o}": 0.0, f"g_{o}": 0.0, f"d_{o}": 0.0})
     s.update(over)
     return s
 
@@ -189,3 +187,20 @@ def test_event_log_and_reset(deriver):
     assert [(e.fact, e.value) for e in deriver.events] == [("at-robot a", False), ("at-robot b", True)]
     deriver.reset(INIT)
     assert deriver.facts == INIT
+
+
+def test_errands_rules_read_only_signals_the_dd_model_publishes():
+    from pathlib import Path
+
+    from engine.dynamics.model import load_model
+    from engine.dynamics.system import DDSystem
+
+    path = Path(__file__).resolve().parents[2] / "examples/errands/model/errands_dd.json"
+    dd = DDSystem(load_model(path))
+    sensors = dict.fromkeys(dd.model.sensors, 0.0)
+    published = set(dd.signals(sensors))
+    read = {t.signal for r in errands_rules() for t in (*r.set_when, *r.veto_when, *r.clear_when) if t.signal}
+    assert read <= published
+    # And a derivation tick over real DD signals works end to end.
+    d = FactDeriver(errands_rules(), facts=frozenset(INIT))
+    assert d.update(0.02, dd.signals(sensors)) == []
