@@ -109,6 +109,7 @@ def link(
 
     # -- enumerations -------------------------------------------------------------------------
     enum_values: dict[str, int] = {}
+    missing_elements: set[str] = set()
     for enum in program.enums.values():
         if enum.internal:
             if enum.name in bindings.enums:
@@ -120,14 +121,16 @@ def link(
                 if element in registered:
                     enum_values[element] = registered[element]
                 else:
+                    missing_elements.add(element)
                     problems.append(f"enum element {element} of enumeration {enum.name} is not registered")
     # Elements the program mentions but no declaration lists (e.g. IC-only enums).
     for node in program_expressions(program):
-        if isinstance(node, EnumLiteral) and node.element not in enum_values:
+        if isinstance(node, EnumLiteral) and node.element not in enum_values and node.element not in missing_elements:
             registered = bindings.enums.get(node.enum, {})
             if node.element in registered:
                 enum_values[node.element] = registered[node.element]
             else:
+                missing_elements.add(node.element)
                 problems.append(f"enum element {node.element} is not registered")
     enum_names: dict[str, dict[int, str]] = {}
     for enum in program.enums.values():

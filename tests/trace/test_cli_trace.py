@@ -77,7 +77,9 @@ def test_bad_input_exits_2_with_one_line(case: str, agents_ic: Path, capsys: pyt
     assert len(err.strip().splitlines()) == 1 and message in err and "Traceback" not in err
 
 
-def test_parameterized_and_unqualified_enum_inputs_are_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_parameterized_and_unqualified_enum_inputs_are_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     folder = KIT / "input-functions"
     for text, message in (
         ('{"t": 0, "set": {"f": 1}}', "has parameters"),

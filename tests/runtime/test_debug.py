@@ -1,0 +1,87 @@
+"""The debug interface: forced roots and release, input overrides, explain, input values."""
+
+from __future__ import annotations
+
+import pytest
+
+from engine.runtime import DebugError
+from tests.runtime.helpers import Host, ic
+
+PROGRAM = """
+0 0 2 child 1 d child.v main 0
+2 c1 n c2 n c1
+0 1 d seen p child.v  i > p child.v v 10 t c2 t c1
+0 1 d seen p child.v  t c2
+2 a n b n a
+0 1 o child 1 d child.v i x 0  i & 2 > i x 0 v 1 ! i hold 0 t b t a
+0 1 a beep 1 d beep.loud v 2   t b
+1 solo main
+"""
+
+
+def test_force_option_with_parameters_then_release() -> None:
+    host = Host(ic(PROGRAM))
+    host.tick(0, x=0.0)
+    host.engine.debug.force_option("child", {"v": 20})
+    host.tick(10)
+    root = host.engine.activation()[0]
+    assert (root.option, root.state, root.params) == ("child", "c2", {"child.v": 20.0})
+    host.engine.debug.release()
+    host.tick(20, x=0.0)
+    assert host.engine.activation()[0].option == "main"
+    assert host.node("main").option_time == 0, "main did not run while forced: it restarts"
+    assert host.state("child") == "c2", "child ran in the previous tick: it continues"
+
+
+def test_force_basic_behavior() -> None:
+    host = Host(ic(PROGRAM))
+    host.engine.debug.force_behavior("beep", {"beep.loud": 3.5})
+    host.tick(0)
+    node = host.engine.activation()[0]
+    assert (node.behavior, node.params) == ("beep", {"beep.loud": 3.5})
+
+
+def test_force_with_unknown_names_or_wrong_values_is_refused() -> None:
+    debug = Host(ic(PROGRAM)).engine.debug
+    with pytest.raises(DebugError, match="unknown option"):
+        debug.force_option("nope")
+    with pytest.raises(DebugError, match="no parameter"):
+        debug.force_option("child", {"w": 1})
+    with pytest.raises(DebugError, match="decimal"):
+        debug.force_option("child", {"v": True})
+    assert debug.forced is None
+
+
+def test_override_input_and_release() -> None:
+    host = Host(ic(PROGRAM))
+    host.engine.debug.override_input("x", 5.0)
+    host.tick(0, x=0.0)
+    assert host.engine.debug.input_values()["x"] == 5.0
+    assert host.state("main") == "b"
+    host.engine.debug.release_input("x")
+    assert host.engine.debug.input_values() == {"x": 0.0, "hold": False}
+    assert host.engine.overrides == {}
+
+
+def test_explain_gives_the_conditions_on_the_path_to_the_leaf() -> None:
+    host = Host(ic(PROGRAM))
+    host.tick(0, x=3.0, hold=True)
+    explanation = host.engine.debug.explain("main")
+    print(explanation)
+    assert (explanation.decided_in, explanation.target, explanation.leaf, explanation.stay) == ("a", "a", 1, True)
+    assert [(c.value, c.branch) for c in explanation.conditions] == [(False, False)]
+    child = host.engine.debug.explain("child")
+    assert child.target == "c1" and child.stay and child.conditions[0].value is False
+    host.tick(10, hold=False)
+    explanation = host.engine.debug.explain("main")
+    print(explanation)
+    assert (explanation.target, explanation.leaf) == ("b", 0)
+    assert [(c.value, c.branch) for c in explanation.conditions] == [(True, True)]
+
+
+def test_explain_unknown_or_idle_option() -> None:
+    debug = Host(ic(PROGRAM)).engine.debug
+    with pytest.raises(DebugError):
+        debug.explain("nope")
+    with pytest.raises(DebugError, match="not run"):
+        debug.explain("child")
