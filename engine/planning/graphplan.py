@@ -23,6 +23,7 @@ whether the goals are present and pairwise non-mutex, and what extraction did at
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import time
 from collections.abc import Iterator, Sequence
@@ -232,9 +233,7 @@ class _Planner:
         lv = self.levels[level]
         goals = [self.fid[g] for g in sorted(self.task.goal)]
         present = all(g in lv.props for g in goals)
-        nonmutex = present and not any(
-            _pair(p, q) in lv.prop_mutex for p, q in itertools.combinations(goals, 2)
-        )
+        nonmutex = present and not any(_pair(p, q) in lv.prop_mutex for p, q in itertools.combinations(goals, 2))
         return present, nonmutex
 
     def leveled(self) -> bool:
@@ -345,10 +344,7 @@ def graphplan(task: Task, max_levels: int | None = None) -> GraphplanResult:
         else:
             rows.append(pl.row(n, "none"))
             if leveled_at is not None:
-                reason = (
-                    f"no plan: graph leveled off at level {leveled_at} with the goals "
-                    "absent or mutually exclusive"
-                )
+                reason = f"no plan: graph leveled off at level {leveled_at} with the goals absent or mutually exclusive"
                 break
         if max_levels is not None and n >= max_levels:
             reason = f"no plan within {max_levels} levels"
@@ -358,10 +354,7 @@ def graphplan(task: Task, max_levels: int | None = None) -> GraphplanResult:
             leveled_at = len(pl.levels) - 2
             if prev_nogoods_at_leveled is None and rows[-1].extraction == "failed":
                 prev_nogoods_at_leveled = len(pl.nogoods[leveled_at])
-    final = tuple(
-        LevelStats(**{**r.to_json(), "nogoods": len(pl.nogoods[r.level])})  # type: ignore[arg-type]
-        for r in rows
-    )
+    final = tuple(dataclasses.replace(r, nogoods=len(pl.nogoods[r.level])) for r in rows)
     return GraphplanResult(plan, final, leveled_at, reason, time.perf_counter() - started)
 
 

@@ -5,7 +5,8 @@ import pytest
 from engine.planning.graphplan import execute, format_stats, graphplan
 from engine.planning.strips import load_task, parse_task
 
-DATA = Path("/work/shared/data/errands")
+# Copies of /work/shared/data/errands so the tests do not depend on files outside the repository.
+DATA = Path(__file__).parent / "data"
 PAPER_PLAN = [
     ["goto a c"],
     ["load mug c"],

@@ -6,7 +6,8 @@ from engine.planning.graphplan import graphplan
 from engine.planning.monitor import DEFAULT_TIMEOUTS, OpStatus, PlanMonitor, PlanStatus, is_done
 from engine.planning.strips import load_task
 
-DATA = Path("/work/shared/data/errands")
+# Copies of /work/shared/data/errands so the tests do not depend on files outside the repository.
+DATA = Path(__file__).parent / "data"
 
 
 @pytest.fixture

@@ -10,7 +10,8 @@ from engine.planning.strips import (
     parse_task,
 )
 
-DATA = Path("/work/shared/data/errands")
+# Copies of /work/shared/data/errands so the tests do not depend on files outside the repository.
+DATA = Path(__file__).parent / "data"
 DOMAIN = (DATA / "domain.pddl").read_text()
 PROBLEM = (DATA / "problem.pddl").read_text()
 
@@ -64,17 +65,13 @@ def test_apply_deletes_then_adds(task):
 
 
 def test_unsupported_requirement_named():
-    dom = DOMAIN.replace(
-        "(:requirements :strips :typing)", "(:requirements :strips :typing :conditional-effects)"
-    )
+    dom = DOMAIN.replace("(:requirements :strips :typing)", "(:requirements :strips :typing :conditional-effects)")
     with pytest.raises(UnsupportedPDDLError, match=":conditional-effects"):
         parse_task(dom, PROBLEM)
 
 
 def test_negative_precondition_named():
-    dom = DOMAIN.replace(
-        "(:requirements :strips :typing)", "(:requirements :strips :typing :negative-preconditions)"
-    )
+    dom = DOMAIN.replace("(:requirements :strips :typing)", "(:requirements :strips :typing :negative-preconditions)")
     with pytest.raises(UnsupportedPDDLError, match="negative-preconditions"):
         parse_task(dom, PROBLEM)
 
@@ -102,9 +99,7 @@ def test_construct_check_independent_of_requirements():
 
     dom = DomainParser()(DOMAIN)
     goto = next(a for a in dom.actions if a.name == "goto")
-    bad = type(goto)(
-        goto.name, goto.parameters, precondition=Or(*goto.precondition.operands), effect=goto.effect
-    )
+    bad = type(goto)(goto.name, goto.parameters, precondition=Or(*goto.precondition.operands), effect=goto.effect)
     dom2 = Domain(
         dom.name,
         requirements=dom.requirements,
@@ -117,8 +112,6 @@ def test_construct_check_independent_of_requirements():
 
 
 def test_static_goal_false_is_error():
-    prob = PROBLEM.replace(
-        "(:goal (and (at book a) (at mug a)))", "(:goal (and (at book a) (connected a a)))"
-    )
+    prob = PROBLEM.replace("(:goal (and (at book a) (at mug a)))", "(:goal (and (at book a) (connected a a)))")
     with pytest.raises(PlanningError, match="static facts that are false initially: connected a a"):
         parse_task(DOMAIN, prob)
