@@ -80,8 +80,7 @@ class Term:
         m = _SIGNAL_TERM.match(text)
         if m is None:
             raise FactRuleError(
-                f"bad condition term {text!r}: expected 'NAME OP NUMBER', 'prev(NAME) OP NUMBER' "
-                "or '[not] fact(FACT)'"
+                f"bad condition term {text!r}: expected 'NAME OP NUMBER', 'prev(NAME) OP NUMBER' or '[not] fact(FACT)'"
             )
         return cls(
             text.strip(),
@@ -249,9 +248,7 @@ class FactDeriver:
     @property
     def tentative(self) -> frozenset[Fact]:
         """Facts waiting for confirmation (not part of ``facts`` yet)."""
-        return frozenset(
-            r.fact for i, r in enumerate(self.rules) if self._state[i].tentative_since is not None
-        )
+        return frozenset(r.fact for i, r in enumerate(self.rules) if self._state[i].tentative_since is not None)
 
     def reset(self, facts: Iterable[Fact]) -> None:
         """Start over from ``facts`` (the planning problem's init, as the paper does)."""
@@ -284,18 +281,14 @@ class FactDeriver:
                 if other in facts:
                     facts.discard(other)
                     phase = "implied" if other in rule.clears else "exclusive"
-                    new.append(
-                        FactEvent(t, other, False, {"rule": rule.name, "phase": phase, "by": rule.fact})
-                    )
+                    new.append(FactEvent(t, other, False, {"rule": rule.name, "phase": phase, "by": rule.fact}))
 
         for i, rule in enumerate(self.rules):
             st = self._state[i]
             set_ok = all(term.holds(signals, before, f0) for term in rule.set_when)
             if rule.fact in f0:
                 st.set_since = None
-                clear_ok = bool(rule.clear_when) and all(
-                    term.holds(signals, before, f0) for term in rule.clear_when
-                )
+                clear_ok = bool(rule.clear_when) and all(term.holds(signals, before, f0) for term in rule.clear_when)
                 if not clear_ok:
                     st.clear_since = None
                     continue
@@ -342,9 +335,7 @@ class FactDeriver:
         return new
 
 
-def errands_rules(
-    locations: Sequence[str] = ("a", "b", "c"), items: Sequence[str] = ("book", "mug")
-) -> list[FactRule]:
+def errands_rules(locations: Sequence[str] = ("a", "b", "c"), items: Sequence[str] = ("book", "mug")) -> list[FactRule]:
     """Build the §1.6 table for the errands world, with the DD model's signal names.
 
     Signals read: ``δ_<x>`` (near beacon x), ``γ_<o>`` (object detector), ``alpha.gather_<o>``,

@@ -184,11 +184,7 @@ class PlanMonitor:
                 self.events.append(MonitorEvent(t, "timeout", cur.name, self.reason))
                 return self.status
         nxt = next(
-            (
-                q
-                for q in self.queue
-                if q.status in (OpStatus.PENDING, OpStatus.CURRENT) and q.action.pre <= state
-            ),
+            (q for q in self.queue if q.status in (OpStatus.PENDING, OpStatus.CURRENT) and q.action.pre <= state),
             None,
         )
         if nxt is None:

@@ -236,9 +236,7 @@ def ground(domain: Domain, problem: Problem) -> Task:
 def _check_requirements(requirements: Iterable[Requirements], where: str) -> None:
     extra = sorted(str(r) for r in requirements if r not in SUPPORTED_REQUIREMENTS)
     if extra:
-        raise UnsupportedPDDLError(
-            f"{where} declares {' '.join(extra)}: only :strips and :typing are supported"
-        )
+        raise UnsupportedPDDLError(f"{where} declares {' '.join(extra)}: only :strips and :typing are supported")
 
 
 def _with_supertypes(tags: Iterable[object], parents: Mapping[str, str | None]) -> frozenset[str]:
