@@ -1,0 +1,376 @@
+"""``xabsl run examples/soccer``: a headless match between two XABSL team behaviors.
+
+What to watch for (see also ``examples/soccer/README.md``): the example team (``behavior/``,
+31 options) against the chase team (``chase/``, 2 options, every player runs to the ball). The
+example team should win clearly: its goalie stays home, defenders block the way to the goal, one
+striker at a time plays the ball (roles change by team messages as the ball moves), and it
+shoots only when the lane to the goal is free.
+
+The pieces, reusable by tests and benchmarks:
+
+* :func:`load_team` compiles a behavior folder (``agents.xabsl``);
+* :func:`build_world` makes a seeded world with an :class:`~examples.soccer.bindings.XabslController`
+  on every robot (home = blue = team 0, away = red = team 1);
+* :class:`MatchStats` watches a running match: possession, shots, passes, goals;
+* :func:`play_match` runs a whole match and returns a :class:`MatchReport`.
+
+The command line part (:func:`add_arguments`, :func:`main`) is what ``examples/cli.py`` plugs
+under ``xabsl run``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import orjson
+
+from engine.cli import UsageError
+from engine.emit.dot import option_graph
+from engine.files import write_atomically
+from engine.host import DEFAULT_BEHAVIOR_HZ, run_headless
+from engine.ir.model import Program
+from engine.lang import compile_file
+from examples.soccer.bindings import XabslController
+from examples.soccer.game import GameState
+from examples.soccer.world import SoccerWorld
+from examples.soccer.world import build_world as build_soccer_world
+
+HERE = Path(__file__).resolve().parent
+#: The example team.
+DEFAULT_HOME = HERE / "behavior"
+#: The simple opponent.
+DEFAULT_AWAY = HERE / "chase"
+AGENTS_FILE = "agents.xabsl"
+
+#: A robot "has" the ball when its centre is this close to the ball's centre [m] (body 0.13 m + ball 0.05 m + reach).
+POSSESSION_DISTANCE = 0.35
+#: A kick is a shot when the ball's path crosses the goal line this close to the goal centre [m].
+SHOT_HALF_WIDTH = 0.9
+#: A kick is a pass when it heads within this angle of a teammate [deg] ...
+PASS_ANGLE = 20.0
+#: ... that is between these distances from the ball [m].
+PASS_DISTANCE = (0.6, 5.0)
+
+TEAM_KEYS = ("home", "away")
+
+
+class TeamError(Exception):
+    """A team behavior does not compile; ``diagnostics`` holds the printed diagnostics."""
+
+    def __init__(self, folder: Path, diagnostics: list[str]) -> None:
+        super().__init__(f"{folder / AGENTS_FILE}: {len(diagnostics)} errors")
+        self.diagnostics = diagnostics
+
+
+def load_team(folder: str | Path) -> Program:
+    """Compile the team behavior in ``folder`` (its ``agents.xabsl`` and what that includes).
+
+    Raises:
+        UsageError: the folder or its agents file does not exist.
+        TeamError: the behavior has errors.
+    """
+    folder = Path(folder)
+    agents = folder / AGENTS_FILE
+    if not folder.is_dir():
+        raise UsageError(f"no such behavior folder: {folder}")
+    if not agents.is_file():
+        raise UsageError(f"{folder} has no {AGENTS_FILE}")
+    compilation = compile_file(str(agents))
+    errors = [d for d in compilation.diagnostics if d.is_error]
+    if errors or compilation.program is None:
+        raise TeamError(folder, [str(d) for d in errors])
+    return compilation.program
+
+
+def build_world(
+    seed: int,
+    home: Program | None = None,
+    away: Program | None = None,
+    *,
+    players: int = 5,
+    half_duration_s: float = 600.0,
+    record: bool = False,
+    **options: Any,
+) -> SoccerWorld:
+    """A seeded match with XABSL controllers plugged in (home plays blue, away red).
+
+    Args:
+        seed: the only source of randomness.
+        home: the home team's program (default: the example team).
+        away: the away team's program (default: the chase team).
+        players: robots per team.
+        half_duration_s: playing time per half.
+        record: count option activations and hash activation traces (see ``XabslController``).
+        **options: further ``SoccerWorld`` arguments (``sensor``, ``rules``, ...).
+    """
+    home = home if home is not None else load_team(DEFAULT_HOME)
+    away = away if away is not None else load_team(DEFAULT_AWAY)
+    world = build_soccer_world(seed, players_per_team=players, half_duration_s=half_duration_s, **options)
+    for agent in world.agents:
+        program = home if agent.team_index == 0 else away
+        agent.controller = XabslController(agent.perception, agent.motion, program, record=record, name=agent.name)
+    return world
+
+
+@dataclass
+class TeamStats:
+    """What one team did in a match."""
+
+    goals: int = 0
+    shots: int = 0
+    passes: int = 0
+    kicks: int = 0
+    possession_ticks: int = 0
+
+
+class MatchStats:
+    """Watches a match tick by tick (``on_tick`` of ``run_headless``): possession and kicks.
+
+    A kick is seen as a change of a robot's ``last_kick_ms``; it counts as a *shot* if the ball
+    then heads for the opponent goal mouth, as a *pass* if it heads for a teammate, else only as a
+    kick (a clearance). Possession goes, each PLAYING tick, to the team of the robot closest to the
+    ball if that robot is within ``POSSESSION_DISTANCE``.
+    """
+
+    def __init__(self, world: SoccerWorld) -> None:
+        self.world = world
+        self.teams = (TeamStats(), TeamStats())
+        self._last_kick: list[int | None] = [a.robot.last_kick_ms for a in world.agents]
+
+    def on_tick(self, now_ms: int) -> None:
+        world = self.world
+        game = world.game
+        if game.state != GameState.PLAYING:
+            return
+        physics = world.physics
+        bx, by = physics.ball_position()
+        best, best_team = POSSESSION_DISTANCE, -1
+        agents = world.agents
+        for i, agent in enumerate(agents):
+            body = physics.robots[agent.index]
+            x, y = body.position
+            d = math.hypot(x - bx, y - by)
+            if d < best:
+                best, best_team = d, agent.team_index
+            kicked = agent.robot.last_kick_ms
+            if kicked != self._last_kick[i]:
+                self._last_kick[i] = kicked
+                self._count_kick(agent.team_index, agent.index, bx, by)
+        if best_team >= 0:
+            self.teams[best_team].possession_ticks += 1
+
+    def _count_kick(self, team: int, robot_index: int, bx: float, by: float) -> None:
+        stats = self.teams[team]
+        stats.kicks += 1
+        world = self.world
+        side = world.game.side[team]
+        vx, vy = world.physics.ball_velocity()
+        # In the kicker's team frame the opponent goal is at +x.
+        tvx, tvy, tbx, tby = vx * side, vy * side, bx * side, by * side
+        goal_x = world.dims.half_length
+        if tvx > 0.0:
+            y_at_goal = tby + tvy * (goal_x - tbx) / tvx
+            if abs(y_at_goal) < SHOT_HALF_WIDTH:
+                stats.shots += 1
+                return
+        heading = math.atan2(vy, vx)
+        for agent in world.agents:
+            if agent.team_index != team or agent.index == robot_index:
+                continue
+            x, y = world.physics.robots[agent.index].position
+            d = math.hypot(x - bx, y - by)
+            off = abs(math.remainder(math.atan2(y - by, x - bx) - heading, math.tau))
+            if PASS_DISTANCE[0] < d < PASS_DISTANCE[1] and math.degrees(off) < PASS_ANGLE:
+                stats.passes += 1
+                return
+
+    def finish(self) -> None:
+        score = self.world.game.score
+        for team, stats in enumerate(self.teams):
+            stats.goals = score[team]
+
+
+@dataclass
+class MatchReport:
+    """The result of :func:`play_match`, JSON-ready through :meth:`as_dict`."""
+
+    seed: int
+    score: tuple[int, int]
+    teams: tuple[TeamStats, TeamStats]
+    activations: tuple[dict[str, int], dict[str, int]]
+    trace_hash: str
+    sim_seconds: float
+    wall_seconds: float
+    phases: dict[str, float] = field(default_factory=dict)
+    faults: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        possession = [t.possession_ticks for t in self.teams]
+        total = sum(possession) or 1
+        return {
+            "score": {"home": self.score[0], "away": self.score[1]},
+            "seed": self.seed,
+            "teams": {
+                key: {
+                    "goals": t.goals,
+                    "shots": t.shots,
+                    "passes": t.passes,
+                    "kicks": t.kicks,
+                    "possession": round(t.possession_ticks / total, 3),
+                }
+                for key, t in zip(TEAM_KEYS, self.teams, strict=True)
+            },
+            "activations": dict(zip(TEAM_KEYS, self.activations, strict=True)),
+            "trace_hash": self.trace_hash,
+            "sim_seconds": round(self.sim_seconds, 3),
+            "wall_seconds": round(self.wall_seconds, 3),
+            "real_time_factor": round(self.sim_seconds / self.wall_seconds, 1) if self.wall_seconds else None,
+            "phases": {k: round(v, 3) for k, v in self.phases.items()},
+            "faults": self.faults,
+        }
+
+
+def play_match(
+    seed: int,
+    home: Program | None = None,
+    away: Program | None = None,
+    *,
+    players: int = 5,
+    half_duration_s: float = 600.0,
+    progress: Any = None,
+    **options: Any,
+) -> MatchReport:
+    """Play a whole match headless and report score, statistics and option activations.
+
+    Args:
+        seed: the only source of randomness.
+        home: the home team's program (default: the example team).
+        away: the away team's program (default: the chase team).
+        players: robots per team.
+        half_duration_s: playing time per half (a match has two).
+        progress: called as ``progress(time_ms, status)`` every simulated second, if given.
+        **options: further ``SoccerWorld`` arguments.
+    """
+    world = build_world(seed, home, away, players=players, half_duration_s=half_duration_s, record=True, **options)
+    stats = MatchStats(world)
+    on_tick = stats.on_tick
+    if progress is not None:
+        ticks = 0
+
+        def on_tick(now_ms: int) -> None:
+            nonlocal ticks
+            stats.on_tick(now_ms)
+            ticks += 1
+            if ticks % DEFAULT_BEHAVIOR_HZ == 0:
+                progress(world.time_ms, world.game)
+
+    # Generous bound: the referee ends the match; pre-game and kick-off phases add a few seconds each.
+    run = run_headless(world, duration_s=2 * half_duration_s + 600.0, on_tick=on_tick)
+    stats.finish()
+    digest = hashlib.blake2b(digest_size=16)
+    activations: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    faults = []
+    for agent in world.agents:
+        controller = agent.controller
+        assert isinstance(controller, XabslController) and controller.recorder is not None
+        digest.update(controller.recorder.hash.digest())
+        counts = activations[agent.team_index]
+        for name, ticks in controller.recorder.counts().items():
+            counts[name] = counts.get(name, 0) + ticks
+        if controller.fault is not None:
+            faults.append(f"{agent.name}: {controller.fault}")
+    return MatchReport(
+        seed=seed,
+        score=(world.game.score[0], world.game.score[1]),
+        teams=stats.teams,
+        activations=(dict(sorted(activations[0].items())), dict(sorted(activations[1].items()))),
+        trace_hash=digest.hexdigest(),
+        sim_seconds=run.sim_seconds,
+        wall_seconds=run.wall_seconds,
+        phases=run.phases.shares(),
+        faults=faults,
+    )
+
+
+# -- command line -----------------------------------------------------------------------------------
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The soccer example's own flags (``xabsl run examples/soccer --help``)."""
+    parser.add_argument("--home", metavar="DIR", default=str(DEFAULT_HOME),
+                        help="home team behavior folder with agents.xabsl (default: the example team)")
+    parser.add_argument("--away", metavar="DIR", default=str(DEFAULT_AWAY),
+                        help="away team behavior folder (default: the chase team)")
+    parser.add_argument("--duration", metavar="S", type=float, default=1200.0,
+                        help="playing time of the match in simulated seconds, two halves (default 1200)")
+    parser.add_argument("--seed", metavar="N", type=int, default=1, help="random seed (default 1)")
+    parser.add_argument("--players", metavar="N", type=int, default=5, help="robots per team, 1..7 (default 5)")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object: score, per-team statistics, option activations")
+    parser.add_argument("--render", metavar="OUT.dot",
+                        help="write the home team's option graph as Graphviz DOT and exit")
+
+
+def main(args: argparse.Namespace) -> int:
+    """Play one match as the flags say; print the score (or JSON). Returns the exit status."""
+    if not 1 <= args.players <= 7:
+        raise UsageError(f"--players must be in 1..7, got {args.players}")
+    if args.duration <= 0:
+        raise UsageError(f"--duration must be positive, got {args.duration}")
+    try:
+        home = load_team(args.home)
+        away = load_team(args.away)
+    except TeamError as error:
+        print("\n".join(error.diagnostics), file=sys.stderr)
+        print(f"xabsl run: {error}", file=sys.stderr)
+        return 1
+    if args.render:
+        root = home.agents[0].root if home.agents else None
+        try:
+            write_atomically(args.render, option_graph(home, root).encode("utf-8"))
+        except OSError as error:
+            raise UsageError(f"cannot write {args.render}: {error.strerror}") from error
+        print(f"wrote the option graph of {args.home} to {args.render}")
+        return 0
+
+    half = args.duration / 2.0
+    if sys.stdout.isatty() and not args.json:
+        report = _play_with_progress(args.seed, home, away, args.players, half)
+    else:
+        report = play_match(args.seed, home, away, players=args.players, half_duration_s=half)
+    if args.json:
+        sys.stdout.buffer.write(orjson.dumps(report.as_dict()) + b"\n")
+        return 0
+    result = report.as_dict()
+    h, a = report.score
+    print(f"home {h} : {a} away   (seed {args.seed}, {args.duration:.0f} s of play, "
+          f"{result['real_time_factor']}x real time)")
+    for key in TEAM_KEYS:
+        t = result["teams"][key]
+        print(f"  {key:<4} possession {100 * t['possession']:4.1f} %  shots {t['shots']:3d}  "
+              f"passes {t['passes']:3d}  kicks {t['kicks']:3d}")
+    for fault in report.faults:
+        print(f"  fault: {fault}")
+    return 0
+
+
+def _play_with_progress(seed: int, home: Program, away: Program, players: int, half: float) -> MatchReport:
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    total_ms = 2 * half * 1000.0
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[score]}"),
+                  TimeElapsedColumn(), transient=True) as bar:
+        task = bar.add_task("match", total=total_ms, score="0 : 0")
+
+        def progress(_time_ms: int, game: Any) -> None:
+            played = (game.half - 1) * half * 1000.0 + (half * 1000.0 - game.half_time_left_ms)
+            bar.update(task, completed=played, score=f"{game.score[0]} : {game.score[1]}",
+                       description=f"half {game.half} {game.state.name.lower():<8}")
+
+        return play_match(seed, home, away, players=players, half_duration_s=half, progress=progress)
