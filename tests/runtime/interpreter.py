@@ -19,6 +19,14 @@ MASK = 0xFFFFFFFF
 GROUP = {Kind.DECIMAL: 0, Kind.BOOLEAN: 1, Kind.ENUM: 2}
 
 
+def cpp_int(value: float) -> int:
+    """C++ ``(int)value`` on x86: truncation; NaN and values outside int32 become INT_MIN."""
+    if math.isnan(value) or math.isinf(value):
+        return -(2**31)
+    truncated = int(value)
+    return truncated if -(2**31) <= truncated < 2**31 else -(2**31)
+
+
 def default(kind: Kind) -> Any:
     return {Kind.DECIMAL: 0.0, Kind.BOOLEAN: False, Kind.ENUM: 0}[kind]
 
@@ -150,7 +158,7 @@ class Interpreter:
             if e.op == "/":
                 return a / (b if b != 0 else 1e-7)
             if e.op == "%":
-                return float(int(math.fmod(int(a), int(b))))
+                return float(int(math.fmod(cpp_int(a), cpp_int(b))))
             return {
                 "+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b,
                 "<": lambda: a < b, "<=": lambda: a <= b, ">": lambda: a > b, ">=": lambda: a >= b,
