@@ -34,6 +34,9 @@ import numpy as np
 
 from engine.dynamics.model import DDModel, ModelError
 
+_minimum = np.minimum
+_maximum = np.maximum
+
 
 @dataclass(frozen=True, slots=True)
 class TickRecord:
@@ -49,11 +52,17 @@ class TickRecord:
         d_oct: per operator with s > 0, dt·s·c·(Z − α) per behavior.
         d_noise: σ·√dt·ξ per behavior.
         switches: s_OP after this tick's switch update (the values the OCTs used).
-        targets: behavior × actuator matrix of m*_i (NaN where a behavior has no target).
-        contributions: behavior × actuator matrix of α_i·λ_im·(m*_i − m) (1/s).
+        pair_targets: m*_i per (behavior, actuator) target pair of the model (``targets`` is the
+            behavior × actuator matrix, NaN where a behavior has no target, built on demand).
+        pair_contributions: α_i·λ_im·(m*_i − m) per target pair (1/s); ``contributions`` is the
+            matrix, built on demand.
         decay: per actuator, −decay·m (1/s).
         actuators: actuator values after commit.
         slow: slow variables after commit.
+        model: the model, for names and the pair layout.
+
+    The matrices are properties rather than fields because building them costs more than the
+    rest of the record, and the headless loop rarely looks at them (errands speed target, §4.4).
     """
 
     t: float
@@ -66,11 +75,28 @@ class TickRecord:
     d_oct: Mapping[str, np.ndarray]
     d_noise: np.ndarray
     switches: Mapping[str, float]
-    targets: np.ndarray
-    contributions: np.ndarray
+    pair_targets: np.ndarray
+    pair_contributions: np.ndarray
     decay: np.ndarray
     actuators: np.ndarray
     slow: np.ndarray
+    model: DDModel
+
+    @property
+    def targets(self) -> np.ndarray:
+        """Behavior × actuator matrix of m*_i (NaN where a behavior has no target)."""
+        m = self.model
+        tmat = np.full((m.n, len(m.actuators)), np.nan)
+        tmat[m.pair_behavior, m.pair_actuator] = self.pair_targets
+        return tmat
+
+    @property
+    def contributions(self) -> np.ndarray:
+        """Behavior × actuator matrix of α_i·λ_im·(m*_i − m) (1/s)."""
+        m = self.model
+        cmat = np.zeros((m.n, len(m.actuators)))
+        cmat[m.pair_behavior, m.pair_actuator] = self.pair_contributions
+        return cmat
 
     def dominant(self, behaviors: tuple[str, ...]) -> str:
         """The behavior with the largest activation (ties: first in model order)."""
@@ -159,6 +185,12 @@ class DDSystem:
             if sensors.shape != (len(m.sensors),):
                 raise ValueError(f"expected {len(m.sensors)} sensor values, got shape {sensors.shape}")
             return sensors.astype(float).tolist()
+        if len(sensors) == len(m.sensors):
+            # Fast path, once per tick: same size and every model name present means no extras.
+            try:
+                return [float(sensors[s]) for s in m.sensors]
+            except KeyError:
+                pass
         missing = [s for s in m.sensors if s not in sensors]
         if missing:
             raise ModelError(f"model {m.name!r}: missing sensor value(s) {', '.join(missing)}")
@@ -227,15 +259,12 @@ class DDSystem:
         d_alpha = d_relax + d_noise
         for d in d_oct.values():
             d_alpha = d_alpha + d
-        self.alpha = np.clip(alpha + d_alpha, 0.0, 1.0)
-        self.act = np.clip(act + d_act, m.act_lo, m.act_hi)
-        self.slow = np.clip(slow + d_slow, m.slow_lo, m.slow_hi)
+        # np.minimum(np.maximum(x, lo), hi) is np.clip's definition, without its dispatch overhead.
+        self.alpha = _minimum(_maximum(alpha + d_alpha, 0.0), 1.0)
+        self.act = _minimum(_maximum(act + d_act, m.act_lo), m.act_hi)
+        self.slow = _minimum(_maximum(slow + d_slow, m.slow_lo), m.slow_hi)
         self.t += h
 
-        tmat = np.full((m.n, len(m.actuators)), np.nan)
-        tmat[m.pair_behavior, m.pair_actuator] = tgt
-        cmat = np.zeros((m.n, len(m.actuators)))
-        cmat[m.pair_behavior, m.pair_actuator] = contrib
         self.last = TickRecord(
             t=self.t,
             dt=h,
@@ -247,11 +276,12 @@ class DDSystem:
             d_oct=d_oct,
             d_noise=d_noise,
             switches=dict(self.s),
-            targets=tmat,
-            contributions=cmat,
+            pair_targets=tgt,
+            pair_contributions=contrib,
             decay=decay,
             actuators=self.act,
             slow=self.slow,
+            model=m,
         )
         return self.last
 

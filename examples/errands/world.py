@@ -1,0 +1,662 @@
+"""The errands world: the host contract (``engine.host.World``) over the arena, DD, facts and the plan.
+
+``build_world(seed)`` makes the errands robot of dual-dynamics.md §1.5: one agent whose
+behavior is two layers,
+
+* the **Dual Dynamics** behavior system (:class:`engine.dynamics.system.DDSystem` on
+  ``model/errands_dd.json``): roam, approach_{a,b,c}, gather_{book,mug}, dump_{book,mug}, fused
+  into wheel and gripper commands by superposition; and
+* the **plan monitor** written in XABSL (``behavior/execute_plan.xabsl``), the agent's
+  controller (:class:`engine.runtime.Engine`). It reads derived facts and plan data as input
+  symbols and selects the current operator as output symbols; the host turns that into σ_OP,
+  so the operator's switch variable s_OP ramps up and its operator-coupling terms bias the
+  activations. The plan never commands an actuator.
+
+One behavior tick follows doc §4.1 inside the host loop's sense / execute / act / step frame::
+
+    sense    1 sensors S_t from the arena            2 facts F_t ← FactDeriver(S_t, α_{t−1}, g/d_{t−1})
+    execute  3 XABSL: fact.*, plan.* → plan.op, plan.op.*, plan.status (may call GRAPHPLAN)
+    act      4 σ_OP from plan.op; 5–6 DDSystem.step (s ramps, Δα, Δm, commit)  7 actuators → arena
+             8 the tick's record stays available: dynamic_scene(), debug_frame()
+    step     0 pymunk physics (2 × 10 ms per 20 ms tick by default)
+
+``plan=False`` selects the XABSL agent ``reactive`` (no operator ever), for the no-plan claims.
+
+Ground truth (the arena) and what the robot believes (derived facts) are kept apart; the world
+compares them every tick (:class:`examples.errands.facts.Agreement`) and counts what the §4.4
+claims need (:class:`RunRecord`). Perturbation hooks for tests and the studio: ``teleport``,
+``remove``, ``block_path``, ``place_robot``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+from time import perf_counter
+from typing import Any
+
+import numpy as np
+
+from engine.dynamics.model import DDModel, load_model
+from engine.dynamics.system import DDSystem
+from engine.host import RunStats, Scene, run_headless
+from engine.ir.model import Parameter, Program
+from engine.planning.facts import FactDeriver, FactEvent
+from engine.planning.strips import Fact, Task, load_task
+from engine.runtime import BasicBehavior, Bindings, Engine
+from engine.types import Kind, Ms
+from examples.errands.arena import Arena, ArenaLayout, Box
+from examples.errands.facts import Agreement, evidence_signals, fact_rules, truth_facts
+from examples.errands.plan import PlanBoard
+
+HERE = Path(__file__).resolve().parent
+MODEL_PATH = HERE / "model" / "errands_dd.json"
+DOMAIN_PATH = HERE / "pddl" / "domain.pddl"
+PROBLEM_PATH = HERE / "pddl" / "problem.pddl"
+AGENTS_PATH = HERE / "behavior" / "agents.xabsl"
+
+#: Host values of the XABSL enumerations (element order of behavior/symbols.xabsl).
+LOCATIONS = ("a", "b", "c")
+ITEMS = ("book", "mug")
+SCHEMAS = ("none", "go_to", "load", "unload")
+STATUSES = ("idle", "executing", "replanning", "done", "failed")
+REASONS = (
+    "none",
+    "start",
+    "op_timeout",
+    "precondition_lost",
+    "nothing_executable",
+    "extend",
+    "no_plan",
+    "replan_limit",
+)
+#: XABSL schema element -> PDDL action name.
+_PDDL_SCHEMA = {"go_to": "goto", "load": "load", "unload": "unload"}
+
+#: Where objects count as delivered for claim 15: released within this distance of beacon a.
+DELIVERY_RADIUS = 0.9
+
+
+@cache
+def _program(path: str) -> Program:
+    """Compile the behavior once per process (every world of a test session shares it)."""
+    from engine.lang import compile_file
+
+    compilation = compile_file(path)
+    if compilation.program is None:
+        raise RuntimeError("errands behavior does not compile:\n" + "\n".join(d.format() for d in compilation.errors))
+    return compilation.program
+
+
+@cache
+def _model(path: str, dt: float) -> DDModel:
+    return load_model(path, dt=dt)
+
+
+@cache
+def _task(domain: str, problem: str) -> Task:
+    return load_task(domain, problem)
+
+
+@dataclass
+class RunRecord:
+    """What happened during a run, counted per tick for the §4.4 claims.
+
+    Attributes:
+        started: operators in the order the monitor started them (``"goto a c"``).
+        completed: operators in the order the monitor marked them done.
+        max_switches_on: the largest number of s_OP ≥ 0.5 seen on one tick (claim 17).
+        dominant_switches: changes of the behavior with the largest α (claim 12).
+        roam_dominant_ticks: ticks on which roam had the largest α (claim 13).
+        arrivals: beacon name per arrival (truth At(robot, x) rising edge) (claim 11).
+        ever_held: whether the gripper ever held an object (claim 10).
+        positions: robot (t, x, y) once per simulated second (claim 14).
+        completed_at: first time both objects lay released within 0.9 m of a (claim 15).
+        monitor: (t, plan.status, plan.op, plan.last_failure) whenever one of them changed.
+        false_has_robot: confirmed Has-Robot events while the object was not held (claim 20).
+    """
+
+    started: list[str] = field(default_factory=list)
+    completed: list[str] = field(default_factory=list)
+    max_switches_on: int = 0
+    dominant_switches: int = 0
+    roam_dominant_ticks: int = 0
+    ticks: int = 0
+    arrivals: list[str] = field(default_factory=list)
+    ever_held: bool = False
+    positions: list[tuple[float, float, float]] = field(default_factory=list)
+    completed_at: float | None = None
+    monitor: list[tuple[float, str, str | None, str]] = field(default_factory=list)
+    false_has_robot: list[tuple[float, str]] = field(default_factory=list)
+
+
+class ErrandsAgent:
+    """The errands robot as the host loop sees it; its controller is the XABSL engine."""
+
+    __slots__ = ("_world", "controller", "name", "number", "team")
+
+    def __init__(self, world: ErrandsWorld, controller: Engine) -> None:
+        self._world = world
+        self.name = "robot"
+        self.team = "errands"
+        self.number = 1
+        self.controller: Engine | None = controller
+
+    def sense(self, now_ms: Ms) -> None:
+        """§4.1 steps 1–2: sensors from the arena, facts from the signal history (host hook)."""
+        self._world._sense()
+
+    def act(self, now_ms: Ms) -> None:
+        """§4.1 steps 4–7: σ_OP from plan.op, one DD tick, actuators to the arena (host hook)."""
+        self._world._act()
+
+
+class _PlanFromFacts(BasicBehavior):
+    """``plan_from_facts(reason)``: GRAPHPLAN from the derived facts, once per activation."""
+
+    name = "plan_from_facts"
+    parameters = (Parameter("reason", Kind.ENUM, "plan_reason"),)
+
+    def __init__(self, world: ErrandsWorld) -> None:
+        super().__init__()
+        self.world = world
+
+    def execute(self) -> None:
+        if self.time_of_execution == 0:
+            self.world._plan(REASONS[int(self.param("reason"))])
+
+
+class _CompleteOperator(BasicBehavior):
+    """``complete_operator()``: mark the monitor's operator done on the plan board."""
+
+    name = "complete_operator"
+
+    def __init__(self, world: ErrandsWorld) -> None:
+        super().__init__()
+        self.world = world
+
+    def execute(self) -> None:
+        self.world._complete()
+
+
+class ErrandsWorld:
+    """The errands robot in its arena; implements ``engine.host.World``.
+
+    Args:
+        seed: seeds the DD noise (the arena itself is deterministic).
+        plan: run the plan monitor (agent ``planner``) or the reactive robot (agent ``reactive``).
+        dt: the behavior tick in seconds (DD, facts and XABSL all run at this rate).
+        noise: multiplies every σ of the DD model (0: deterministic dynamics).
+        layout: the arena; defaults to the §1.5 sketch arena.
+        model_path, domain_path, problem_path, agents_path: the example's files, replaceable.
+    """
+
+    def __init__(
+        self,
+        seed: int = 1,
+        *,
+        plan: bool = True,
+        dt: float = 0.02,
+        noise: float = 1.0,
+        layout: ArenaLayout | None = None,
+        model_path: Path = MODEL_PATH,
+        domain_path: Path = DOMAIN_PATH,
+        problem_path: Path = PROBLEM_PATH,
+        agents_path: Path = AGENTS_PATH,
+    ) -> None:
+        self.seed = int(seed)
+        self.with_plan = plan
+        self.dt = float(dt)
+        self.arena = Arena(layout)
+        self.dd = DDSystem(_model(str(model_path), self.dt), seed=self.seed, dt=self.dt, noise=noise)
+        self.behaviors = self.dd.model.behaviors
+        self._roam = self.behaviors.index("roam") if "roam" in self.behaviors else -1
+        self.task = _task(str(domain_path), str(problem_path))
+        self.board = PlanBoard(self.task)
+        self.deriver = FactDeriver(fact_rules(LOCATIONS, ITEMS))
+        self.deriver.reset(self.task.init)
+        self.facts: frozenset[Fact] = self.deriver.facts
+        self.truth: frozenset[Fact] = truth_facts(self.arena)
+        self.agreement = Agreement()
+        self.record = RunRecord()
+        self.tick_events: list[FactEvent] = []
+        self.sensors: dict[str, float] = {}
+        self.signals: dict[str, float] = {}
+        self.ticks = 0
+        self.t = 0.0
+        self._next: tuple[int, int, int, int] | None = None
+        # Output symbols of the monitor, written through by the engine (host values).
+        self.out = {
+            "plan.op": 0,
+            "plan.op.from": 0,
+            "plan.op.loc": 0,
+            "plan.op.obj": 0,
+            "plan.status": 0,
+            "plan.last_failure": 0,
+        }
+        self.operator: str | None = None
+        self._dominant = -1
+        self._held_before: set[str] = set()
+        self._at_before: set[str] = set()
+        self._monitor_seen: tuple[int, str | None, int] = (-1, None, -1)
+        self.engine = Engine(self._bindings(), _program(str(agents_path)), agent_name="robot")
+        self.engine.select_agent("planner" if plan else "reactive")
+        self._agents = (ErrandsAgent(self, self.engine),)
+        self.sense_hooks: list[Callable[[ErrandsWorld], None]] = []
+
+    # -- XABSL bindings -----------------------------------------------------------------------------
+
+    def _bindings(self) -> Bindings:
+        b = Bindings()
+        for name, elements in (
+            ("location", LOCATIONS),
+            ("item", ITEMS),
+            ("op_schema", SCHEMAS),
+            ("plan_status", STATUSES),
+            ("plan_reason", REASONS),
+        ):
+            b.enum(name, list(elements))
+        at_robot = [f"at-robot {x}" for x in LOCATIONS]
+        has_robot = [f"has-robot {o}" for o in ITEMS]
+        at = [[f"at {o} {x}" for x in LOCATIONS] for o in ITEMS]
+        b.input(
+            "fact.at_robot",
+            Kind.BOOLEAN,
+            lambda loc: at_robot[loc] in self.facts,
+            params=[Parameter("loc", Kind.ENUM, "location")],
+        )
+        b.input(
+            "fact.has_robot",
+            Kind.BOOLEAN,
+            lambda obj: has_robot[obj] in self.facts,
+            params=[Parameter("obj", Kind.ENUM, "item")],
+        )
+        b.input(
+            "fact.at",
+            Kind.BOOLEAN,
+            lambda obj, loc: at[obj][loc] in self.facts,
+            params=[Parameter("obj", Kind.ENUM, "item"), Parameter("loc", Kind.ENUM, "location")],
+        )
+        b.input("plan.next.schema", Kind.ENUM, lambda: self._next_op()[0], enum="op_schema")
+        b.input("plan.next.from", Kind.ENUM, lambda: self._next_op()[1], enum="location")
+        b.input("plan.next.loc", Kind.ENUM, lambda: self._next_op()[2], enum="location")
+        b.input("plan.next.obj", Kind.ENUM, lambda: self._next_op()[3], enum="item")
+        b.input("plan.goal_holds", Kind.BOOLEAN, lambda: self.board.goal_holds(self.facts))
+        b.input("plan.solved", Kind.BOOLEAN, lambda: self.board.solved)
+        b.input("plan.can_extend", Kind.BOOLEAN, lambda: self.board.can_extend(self.facts))
+        b.input("plan.replans", Kind.DECIMAL, lambda: float(self.board.replans))
+        out = self.out
+        enums = {
+            "plan.op": "op_schema",
+            "plan.op.from": "location",
+            "plan.op.loc": "location",
+            "plan.op.obj": "item",
+            "plan.status": "plan_status",
+            "plan.last_failure": "plan_reason",
+        }
+        for name, enum in enums.items():
+            b.output(name, Kind.ENUM, enum=enum, setter=_setter(out, name), getter=_getter(out, name))
+        b.behavior(_PlanFromFacts(self))
+        b.behavior(_CompleteOperator(self))
+        return b
+
+    def _next_op(self) -> tuple[int, int, int, int]:
+        """plan.next.* as host enum values, computed once per tick (and after plan changes)."""
+        if self._next is None:
+            a = self.board.next_executable(self.facts)
+            if a is None:
+                self._next = (0, 0, 0, 0)
+            else:
+                args = a.args
+                if a.schema == "goto":
+                    self._next = (1, LOCATIONS.index(args[0]), LOCATIONS.index(args[1]), 0)
+                else:
+                    self._next = (SCHEMAS.index(a.schema), 0, LOCATIONS.index(args[1]), ITEMS.index(args[0]))
+        return self._next
+
+    def _operator(self) -> str | None:
+        """The ground operator named by the monitor's outputs (``"goto a c"``), or None."""
+        out = self.out
+        schema = SCHEMAS[out["plan.op"]]
+        if schema == "none":
+            return None
+        loc = LOCATIONS[out["plan.op.loc"]]
+        if schema == "go_to":
+            return f"goto {LOCATIONS[out['plan.op.from']]} {loc}"
+        return f"{_PDDL_SCHEMA[schema]} {ITEMS[out['plan.op.obj']]} {loc}"
+
+    def _plan(self, reason: str) -> None:
+        self.board.plan_from(self.facts, self.t, reason)
+        self._next = None
+
+    def _complete(self) -> None:
+        op = self._operator()
+        if op is not None:
+            if op not in self.board.done:
+                self.record.completed.append(op)
+            self.board.complete(op, self.t)
+        self._next = None
+
+    # -- host contract ----------------------------------------------------------------------------
+
+    @property
+    def agents(self) -> tuple[ErrandsAgent, ...]:
+        return self._agents
+
+    @property
+    def plan_status(self) -> str:
+        """``plan.status`` of the monitor: idle, executing, replanning, done or failed."""
+        return STATUSES[self.out["plan.status"]]
+
+    @property
+    def finished(self) -> bool:
+        """With a plan: the monitor reached done or failed. Without: never."""
+        if self.engine.fault is not None:
+            return True  # a faulted controller does nothing more: stop rather than run on blind
+        return self.with_plan and self.out["plan.status"] in (3, 4)
+
+    @property
+    def completed(self) -> bool:
+        """Ground truth: both objects lie released within 0.9 m of beacon a."""
+        return self.record.completed_at is not None
+
+    def _sense(self) -> None:
+        self.t = self.ticks * self.dt
+        for hook in self.sense_hooks:
+            hook(self)
+        sensors = self.arena.sense(self.sensors)
+        signals = self.dd.signals(sensors)
+        evidence_signals(signals, ITEMS)
+        self.signals = signals
+        self.tick_events = self.deriver.update(self.t, signals)
+        self.facts = self.deriver.facts
+        self._next = None
+        truth = truth_facts(self.arena)
+        self.truth = truth
+        self.agreement.update(self.t, self.facts, truth)
+        for ev in self.tick_events:
+            if ev.value and ev.fact.startswith("has-robot ") and ev.fact not in truth:
+                self.record.false_has_robot.append((self.t, ev.fact))
+
+    def _act(self) -> None:
+        rec = self.record
+        op = self._operator()
+        if op != self.operator:
+            self.dd.set_current_operator(op)
+            self.operator = op
+            if op is not None:
+                rec.started.append(op)
+        mon = (self.out["plan.status"], op, self.out["plan.last_failure"])
+        if mon != self._monitor_seen:
+            self._monitor_seen = mon
+            rec.monitor.append((round(self.t, 3), STATUSES[mon[0]], op, REASONS[mon[2]]))
+        tick = self.dd.step(self.sensors)
+        act = self.dd.act.tolist()
+        names = self.dd.model.actuators
+        a = dict(zip(names, act, strict=True))
+        arena = self.arena
+        arena.drive(a["m_l"], a["m_r"])
+        for item, change in arena.grip({o: a["g_" + o] for o in ITEMS}, {o: a["d_" + o] for o in ITEMS}):
+            if change == "grabbed":
+                rec.ever_held = True
+            del item
+        # Bookkeeping for the claims: cheap scalar work only.
+        on = sum(1 for v in tick.switches.values() if v >= 0.5)
+        if on > rec.max_switches_on:
+            rec.max_switches_on = on
+        dom = int(np.argmax(tick.alpha))
+        if dom != self._dominant:
+            if self._dominant >= 0:
+                rec.dominant_switches += 1
+            self._dominant = dom
+        if dom == self._roam:
+            rec.roam_dominant_ticks += 1
+        rec.ticks += 1
+        at_now = {f[9:] for f in self.truth if f.startswith("at-robot ")}
+        for x in sorted(at_now - self._at_before):
+            rec.arrivals.append(x)
+        self._at_before = at_now
+        self.ticks += 1
+
+    def step(self, dt: float) -> None:
+        """Advance physics by ``dt`` seconds (the loop calls this after act)."""
+        self.arena.step(dt)
+        rec = self.record
+        if rec.completed_at is None and self._delivered():
+            rec.completed_at = round(self.arena.time, 6)
+        if not rec.positions or self.arena.time - rec.positions[-1][0] >= 1.0 - 1e-9:
+            x, y, _ = self.arena.pose()
+            rec.positions.append((round(self.arena.time, 6), x, y))
+
+    def _delivered(self) -> bool:
+        ax, ay = self.arena.beacons["a"]
+        r2 = DELIVERY_RADIUS**2
+        return all(
+            it.present and not it.held and (it.x - ax) ** 2 + (it.y - ay) ** 2 <= r2 for it in self.arena.items.values()
+        )
+
+    # -- perturbations ---------------------------------------------------------------------------
+
+    def teleport(self, item: str, where: str | tuple[float, float], offset: tuple[float, float] = (0.0, 0.3)) -> None:
+        """Put ``item`` at a beacon (plus ``offset``) or at (x, y); the robot is not told."""
+        if isinstance(where, str):
+            bx, by = self.arena.beacons[where]
+            where = (bx + offset[0], by + offset[1])
+        self.arena.teleport(item, *where)
+
+    def remove(self, item: str) -> None:
+        """Take ``item`` out of the world; the robot is not told."""
+        self.arena.remove(item)
+
+    def block_path(self, frm: str, to: str, width: float = 1.6, thickness: float = 0.2) -> Box:
+        """Put a wall across the straight path between two beacons, halfway, and return it."""
+        (x0, y0), (x1, y1) = self.arena.beacons[frm], self.arena.beacons[to]
+        mx, my = (x0 + x1) / 2.0, (y0 + y1) / 2.0
+        # An axis-aligned wall across the dominant direction of the path.
+        box = Box(mx, my, thickness, width) if abs(x1 - x0) >= abs(y1 - y0) else Box(mx, my, width, thickness)
+        self.arena.block(box)
+        return box
+
+    def place_robot(self, x: float, y: float, heading: float) -> None:
+        """Move the robot; derived facts keep what they believed (they catch up from the sensors)."""
+        self.arena.place_robot(x, y, heading)
+
+    # -- scenes and debugging ----------------------------------------------------------------------
+
+    def static_scene(self) -> Scene:
+        scene = self.arena.static_scene()
+        scene["behaviors"] = list(self.behaviors)
+        scene["facts"] = list(self.task.facts)
+        scene["goal"] = sorted(self.task.goal)
+        return scene
+
+    def dynamic_scene(self) -> Scene:
+        x, y, h = self.arena.pose()
+        return {
+            "t": round(self.t, 3),
+            "robot": [round(x, 4), round(y, 4), round(h, 4)],
+            "objects": self.arena.object_scene(),
+            "obstacles_added": [[b.x, b.y, b.w, b.h] for b in self.arena.blocks],
+            "alpha": [round(v, 4) for v in self.dd.alpha.tolist()],
+            "s": {k: round(v, 4) for k, v in self.dd.s.items()},
+            "op": self.operator,
+            "plan_status": self.plan_status,
+            "facts": sorted(self.facts),
+            "truth": sorted(self.truth),
+        }
+
+    def status(self) -> Scene:
+        return {
+            "time_ms": round(self.t * 1000),
+            "finished": self.finished,
+            "completed": self.completed,
+            "completed_at": self.record.completed_at,
+            "plan_status": self.plan_status,
+            "reason": self.failure_reason(),
+            "operators": list(self.record.completed),
+            "replans": self.board.replans,
+            "fact_agreement": self.agreement.to_json(),
+        }
+
+    def failure_reason(self) -> str:
+        """Why the monitor failed, in words ("" unless plan.status is failed)."""
+        if self.plan_status != "failed":
+            return ""
+        last = REASONS[self.out["plan.last_failure"]]
+        if last == "no_plan":
+            return self.board.reason or "no plan"
+        causes = [f"{m[2] or '-'}: {m[3]}" for m in self.record.monitor if m[1] == "replanning"]
+        return f"gave up after {self.board.replans} replans ({'; '.join(causes[-3:])})"
+
+    def debug_frame(self) -> dict[str, Any]:
+        """Everything about the last tick, as plain data (doc §4.3): the studio's debugger frame."""
+        tick = self.dd.last
+        m = self.dd.model
+        frame: dict[str, Any] = {
+            "t": round(self.t, 4),
+            "sensors": {k: round(v, 4) for k, v in self.sensors.items()},
+            "slow": dict(zip(m.slow, [round(v, 4) for v in self.dd.slow.tolist()], strict=True)),
+            "alpha": dict(zip(m.behaviors, [round(v, 4) for v in self.dd.alpha.tolist()], strict=True)),
+            "switches": {k: round(v, 4) for k, v in self.dd.s.items()},
+            "actuators": {k: round(v, 4) for k, v in self.dd.actuators.items()},
+            "facts": sorted(self.facts),
+            "tentative": sorted(self.deriver.tentative),
+            "truth": sorted(self.truth),
+            "fact_events": [_event_json(e) for e in self.tick_events],
+            "plan": self.board.to_json(),
+            "monitor": {
+                "status": self.plan_status,
+                "op": self.operator,
+                "last_failure": REASONS[self.out["plan.last_failure"]],
+                "activation": self.engine.activation_dict(),
+            },
+            "ground_truth": {"robot": list(self.arena.pose()), "objects": self.arena.object_scene()},
+        }
+        if tick is not None:
+            frame["activation_terms"] = {
+                "T": _round(tick.T),
+                "relax": _round(tick.d_relax),
+                "noise": _round(tick.d_noise),
+                "oct": {op: _round(v) for op, v in tick.d_oct.items()},
+            }
+            frame["fusion"] = {
+                act: {
+                    b: round(float(tick.contributions[i, j]), 4)
+                    for i, b in enumerate(m.behaviors)
+                    if tick.contributions[i, j] != 0.0
+                }
+                | {"decay": round(float(tick.decay[j]), 4)}
+                for j, act in enumerate(m.actuators)
+            }
+        return frame
+
+
+def _round(a: np.ndarray) -> list[float]:
+    return [round(v, 5) for v in a.tolist()]
+
+
+def _event_json(e: FactEvent) -> dict[str, Any]:
+    return {"t": round(e.t, 3), "fact": e.fact, "value": e.value, "cause": dict(e.cause)}
+
+
+def _setter(store: dict[str, int], name: str) -> Callable[[Any], None]:
+    def set_value(value: Any) -> None:
+        store[name] = int(value)
+
+    return set_value
+
+
+def _getter(store: Mapping[str, int], name: str) -> Callable[[], int]:
+    return lambda: store[name]
+
+
+def build_world(
+    seed: int = 1, *, plan: bool = True, dt: float = 0.02, noise: float = 1.0, layout: ArenaLayout | None = None
+) -> ErrandsWorld:
+    """Build the errands world of doc §1.5 (robot near a, book at b, mug at c).
+
+    Args:
+        seed: DD noise seed; the same seed gives the same run.
+        plan: with the XABSL plan monitor (True) or the reactive robot only.
+        dt: behavior tick (s); the model's stability check must accept it.
+        noise: multiplies the DD model's σ (0 = deterministic).
+        layout: another arena.
+    """
+    return ErrandsWorld(seed, plan=plan, dt=dt, noise=noise, layout=layout)
+
+
+def physics_rate(dt: float) -> tuple[int, int]:
+    """The behavior rate for tick ``dt`` and the smallest physics rate ≥ 100 Hz it divides."""
+    behavior_hz = round(1.0 / dt)
+    if not math.isclose(behavior_hz * dt, 1.0, rel_tol=1e-9):
+        raise ValueError(f"the behavior tick must divide one second, got dt={dt}")
+    substeps = max(1, -(-100 // behavior_hz))
+    return behavior_hz, behavior_hz * substeps
+
+
+def run_world(
+    world: ErrandsWorld,
+    duration_s: float,
+    on_tick: Callable[[Ms], bool | None] | None = None,
+    stop_when_finished: bool = True,
+) -> RunStats:
+    """Run ``world`` headless for at most ``duration_s`` at its own tick.
+
+    Rates the host loop accepts (30–50 Hz behavior, physics ≥ 100 Hz) go through
+    :func:`engine.host.run_headless`; other ticks (dt = 10 ms for the numerics claims) use the
+    same sense / execute / act / physics order in a local loop.
+    """
+    behavior_hz, physics_hz = physics_rate(world.dt)
+    if 30 <= behavior_hz <= 50:
+        return run_headless(world, duration_s, physics_hz, behavior_hz, on_tick, stop_when_finished)
+    substeps = physics_hz // behavior_hz
+    h = 1.0 / physics_hz
+    agent = world.agents[0]
+    ticks = max(0, -(-round(duration_s * behavior_hz * 1000) // 1000))
+    stats = RunStats()
+    wall = perf_counter()
+    for k in range(ticks):
+        if stop_when_finished and world.finished:
+            break
+        now = round(k * 1000 / behavior_hz)
+        agent.sense(now)
+        assert agent.controller is not None
+        agent.controller.execute(now)
+        agent.act(now)
+        for _ in range(substeps):
+            world.step(h)
+        stats.ticks += 1
+        stats.physics_steps += substeps
+        if on_tick is not None and on_tick(now):
+            break
+    stats.sim_seconds = stats.physics_steps * h
+    stats.wall_seconds = perf_counter() - wall
+    return stats
+
+
+def summary(world: ErrandsWorld) -> dict[str, Any]:
+    """The run's outcome as plain data (what ``xabsl run examples/errands --json`` prints)."""
+    rec = world.record
+    return {
+        "seed": world.seed,
+        "plan": world.with_plan,
+        "completed": world.completed,
+        "time_s": rec.completed_at if rec.completed_at is not None else round(world.arena.time, 3),
+        "sim_s": round(world.arena.time, 3),
+        "plan_status": world.plan_status,
+        "reason": world.failure_reason(),
+        "operators": list(rec.started),
+        "plans": [str(p) for p in world.board.plans],
+        "replans": world.board.replans,
+        "fact_agreement": round(world.agreement.fraction, 5),
+        "fact_agreement_outside_lag": round(world.agreement.fraction_outside_lag, 5),
+        "max_switches_on": rec.max_switches_on,
+        "dominant_switches": rec.dominant_switches,
+        "roam_share": round(rec.roam_dominant_ticks / rec.ticks, 4) if rec.ticks else 0.0,
+        "beacon_arrivals": len(rec.arrivals),
+        "beacons_visited": sorted(set(rec.arrivals)),
+        "ever_held": rec.ever_held,
+    }
