@@ -1,0 +1,16 @@
+"""The studio server: a live simulation session over FastAPI and websockets (docs/protocol.md).
+
+One module per concern:
+
+* ``protocol``  message types, the schema version, close codes, limits (what the UI codes against)
+* ``examples``  adapters from an example folder to a world whose agents run XABSL engines
+* ``demo_world`` a small kinematic world for behaviors without a world of their own (the demo)
+* ``session``   the simulation thread: real time x speed, commands between ticks, hot reload
+* ``frames``    per-tick frames: sampling engines, compact encoding, the ring buffer, deltas
+* ``clients``   one websocket client: state, latest-frame slot, bounded control queue, sender
+* ``files``     behavior files: confinement, versions, atomic writes
+* ``graphs``    option-graph and state-machine SVGs cached by content hash
+* ``security``  token, origin and host checks, body size limits
+* ``app``       FastAPI wiring of all of the above
+* ``cli``       ``xabsl serve``
+"""
