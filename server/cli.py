@@ -1,0 +1,94 @@
+"""``xabsl serve``: run an example in a live studio session (FastAPI on uvicorn).
+
+Registered through the ``xabsl.commands`` entry point (``serve = "server.cli:register"``) so the
+engine's command line never imports the server. Binds to 127.0.0.1 unless told otherwise; off
+loopback a token is always required, generated and printed with the URL (as Jupyter does) when
+none is given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+from typing import Any
+
+DEFAULT_EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "soccer"
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``serve`` subcommand to the ``xabsl`` parser."""
+    parser = subparsers.add_parser(
+        "serve",
+        help="run an example in the live studio (web UI + websocket API)",
+        description="Run an example world with its XABSL behaviors and serve the studio: the web UI at /, "
+        "the REST API under /api (schema at /api/openapi.json), the live session on the websocket /ws "
+        "(docs/protocol.md).",
+    )
+    parser.add_argument("example", nargs="?", default=str(DEFAULT_EXAMPLE),
+                        help="example folder (default: examples/soccer)")
+    parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    parser.add_argument("--port", type=int, default=8000, help="port (default 8000; 0 picks a free one)")
+    parser.add_argument("--token", default=None, help="token clients must present (generated off loopback)")
+    parser.add_argument("--speed", type=float, default=1.0, help="simulation speed, x real time (0.1..20)")
+    parser.add_argument("--seed", type=int, default=1, help="the world's seed")
+    parser.add_argument("--paused", action="store_true", help="start paused")
+    parser.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
+                        help="also accept this Origin (e.g. http://localhost:5173 for the Vite dev server)")
+    parser.add_argument("--players", type=int, default=None, help="players per team (soccer)")
+    parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
+    parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from engine.cli import UsageError
+    from server.app import WEB_DIST, create_app
+    from server.examples import ExampleError, load_example
+    from server.protocol import MAX_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
+    from server.security import SecurityPolicy
+    from server.session import Session
+
+    if not MIN_SPEED <= args.speed <= MAX_SPEED:
+        raise UsageError(f"--speed must be in {MIN_SPEED:g}..{MAX_SPEED:g}")
+    options = {"players_per_team": args.players} if args.players else {}
+    try:
+        example = load_example(args.example, **options)
+    except (ExampleError, TypeError) as error:
+        raise UsageError(str(error)) from None
+    session = Session(example, seed=args.seed, speed=args.speed)
+    session.paused = args.paused
+    for key, state in session.programs.items():
+        comp = state.compilation
+        if comp is not None and not comp.ok:
+            print(f"warning: behavior {key!r} has errors; its agents stand until it is fixed:", file=sys.stderr)
+            for diagnostic in comp.errors[:10]:
+                print("  " + diagnostic.format(), file=sys.stderr)
+    policy = SecurityPolicy.for_host(args.host, args.token, args.allow_origin)
+    web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
+    app = create_app(session, policy, web_dist)
+
+    config = uvicorn.Config(
+        app,
+        host=args.host,
+        port=args.port,
+        ws_max_size=MAX_MESSAGE_BYTES,
+        ws_per_message_deflate=args.compress,
+        log_level="warning",
+        lifespan="on",
+    )
+    server = uvicorn.Server(config)
+    shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
+    query = f"/?token={policy.token}" if policy.token else "/"
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    print(f"xabsl studio: {example.name} ({len(session.engines)} agents), speed {session.speed:g}x")
+    print(f"  open  http://{shown}:{args.port}{query}")
+    print(f"  API   http://{shown}:{args.port}/api/openapi.json   websocket ws://{shown}:{args.port}/ws")
+    if not (web_dist / "index.html").is_file():
+        print(f"  (the web UI is not built: {web_dist} is missing; run make)")
+    sys.stdout.flush()
+    server.run()
+    return 0

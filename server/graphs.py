@@ -1,0 +1,65 @@
+"""Option-graph and state-machine pictures: DOT from ``engine.emit.dot``, SVG from Graphviz, cached.
+
+Laying out a graph costs tens of milliseconds of ``dot``; the picture only changes when the DOT
+text changes, so SVGs are cached by a hash of the DOT source (which is also the ETag). The cache
+is a small LRU: a hundred options after a few edits stay well under a few megabytes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections import OrderedDict
+
+from engine.emit.dot import option_graph, render_svg, state_machine
+from engine.ir.model import Program
+
+
+class GraphError(LookupError):
+    """No such agent or option in the program."""
+
+
+class GraphCache:
+    """SVG text by DOT hash (thread safe; renders outside the lock)."""
+
+    def __init__(self, capacity: int = 256) -> None:
+        self.capacity = capacity
+        self._svgs: OrderedDict[str, str] = OrderedDict()
+        self._lock = threading.Lock()
+        self.renders = 0
+
+    def svg(self, dot: str) -> tuple[str, str]:
+        """``(svg, etag)`` of a DOT source."""
+        digest = hashlib.sha256(dot.encode("utf-8")).hexdigest()[:24]
+        with self._lock:
+            cached = self._svgs.get(digest)
+            if cached is not None:
+                self._svgs.move_to_end(digest)
+                return cached, digest
+        svg = render_svg(dot)
+        with self._lock:
+            self.renders += 1
+            self._svgs[digest] = svg
+            while len(self._svgs) > self.capacity:
+                self._svgs.popitem(last=False)
+        return svg, digest
+
+
+def option_graph_dot(program: Program, agent: str | None) -> str:
+    """The DOT of the option graph below the root of XABSL agent ``agent`` (default: the first)."""
+    if not program.agents:
+        return option_graph(program, None)
+    chosen = next((a for a in program.agents if a.name == agent), None) if agent else program.agents[0]
+    if chosen is None:
+        raise GraphError(f"no agent {agent!r} in this behavior")
+    return option_graph(program, chosen.root)
+
+
+def state_machine_dot(program: Program, option: str) -> str:
+    """The DOT of one option's state machine; ``option`` is a name or an integer id."""
+    found = program.options.get(option)
+    if found is None and option.isdigit():
+        found = next((o for o in program.options.values() if o.index == int(option)), None)
+    if found is None:
+        raise GraphError(f"no option {option!r} in this behavior")
+    return state_machine(found)
