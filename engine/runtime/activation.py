@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from engine.codegen.layout import Layout
 from engine.codegen.support import MS_MASK
@@ -36,9 +36,12 @@ class Root:
     name: str
 
 
-@dataclass(frozen=True, slots=True)
-class Snapshot:
-    """The engine's storage after one tick, copied into tuples (cheap; see module docstring)."""
+class Snapshot(NamedTuple):
+    """The engine's storage after one tick, copied into tuples (cheap; see module docstring).
+
+    A NamedTuple rather than a frozen dataclass: it is built on every recorded tick, and a
+    frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field) costs several times more.
+    """
 
     now: Ms
     tick: int
