@@ -10,10 +10,32 @@ STAMP  := $(VENV)/.installed-stamp
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT_INSTALL := DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends
 
-.PHONY: run test lint check-python system-deps clean
+.PHONY: run test lint check-python system-deps test-deps web web-test clean
 
 system-deps:
 	@command -v dot >/dev/null || { $(SUDO) apt-get update -q && $(APT_INSTALL) graphviz; }
+
+# Only the tests need a browser: the e2e tests drive Debian's chromium through Playwright.
+test-deps: system-deps
+	@test -x /usr/bin/chromium || { $(SUDO) apt-get update -q && $(APT_INSTALL) chromium; }
+
+# The studio UI (web/): `npm ci` when node_modules is missing or package-lock.json changed,
+# then a Vite build into web/dist, which `xabsl serve` serves at `/`.
+WEB_STAMP   := web/node_modules/.xabsl-ci-stamp
+WEB_SOURCES := $(shell find web/src web/index.html web/vite.config.ts web/tsconfig.json -type f 2>/dev/null)
+
+$(WEB_STAMP): web/package-lock.json web/package.json
+	@command -v npm >/dev/null || { echo "npm (Node.js >= 20.19) is required to build the studio UI" >&2; exit 1; }
+	cd web && npm ci --no-audit --no-fund --loglevel=error
+	touch $(WEB_STAMP)
+
+web/dist/index.html: $(WEB_STAMP) $(WEB_SOURCES)
+	cd web && npm run build --silent
+
+web: web/dist/index.html
+
+web-test: $(WEB_STAMP)
+	cd web && npm test --silent
 
 check-python:
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python >= 3.11 is required, found " + sys.version' 
@@ -23,14 +45,14 @@ $(STAMP): pyproject.toml | check-python
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check -e '.[test,bench]'
 	touch $(STAMP)
 
-run: $(STAMP) system-deps
+run: $(STAMP) system-deps web
 	mkdir -p build
 	$(BIN)/xabsl compile examples/demo/agents.xabsl --ic build/demo.ic --json build/demo.json
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
-test: $(STAMP) system-deps lint
+test: $(STAMP) test-deps lint web web-test
 	$(BIN)/python -m pytest
 
 clean:

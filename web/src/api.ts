@@ -1,0 +1,128 @@
+/// REST calls under `/api` (docs/protocol.md, "REST"): same origin, token from the page address.
+import type { ServerDiagnostic } from "./xabsl/lint";
+
+/// The token of a server that requires one: `?token=` of the page address.
+export const token: string | null = new URLSearchParams(globalThis.location?.search ?? "").get("token");
+
+/// The websocket address on the page's origin.
+export function websocketUrl(): string {
+  const loc = globalThis.location;
+  const scheme = loc.protocol === "https:" ? "wss:" : "ws:";
+  return `${scheme}//${loc.host}/ws${token ? `?token=${encodeURIComponent(token)}` : ""}`;
+}
+
+export class ApiError extends Error {
+  constructor(
+    message: string,
+    readonly status: number,
+    readonly body: unknown,
+  ) {
+    super(message);
+  }
+}
+
+function headers(extra: Record<string, string> = {}): Record<string, string> {
+  const h: Record<string, string> = { ...extra };
+  if (token) h.Authorization = `Bearer ${token}`;
+  return h;
+}
+
+async function request<T>(method: string, path: string, body?: unknown, extra: Record<string, string> = {}): Promise<{ status: number; data: T }> {
+  const init: RequestInit = { method, headers: headers(body === undefined ? extra : { "Content-Type": "application/json", ...extra }) };
+  if (body !== undefined) init.body = JSON.stringify(body);
+  const response = await fetch(`api/${path}`, init);
+  const text = await response.text();
+  let data: unknown = text;
+  try {
+    data = text ? JSON.parse(text) : null;
+  } catch {
+    /* not JSON: keep the text */
+  }
+  if (!response.ok && ![409, 422].includes(response.status)) {
+    const detail = (data as { detail?: unknown })?.detail;
+    throw new ApiError(typeof detail === "string" ? detail : `${method} ${path}: HTTP ${response.status}`, response.status, data);
+  }
+  return { status: response.status, data: data as T };
+}
+
+export interface FileEntry {
+  path: string;
+  version: string;
+  size: number;
+  programs: string[];
+}
+
+export interface FileText {
+  path: string;
+  version: string;
+  text: string;
+}
+
+export interface SaveResult {
+  path: string;
+  version: string;
+  saved: boolean;
+  ok: boolean;
+  diagnostics: ServerDiagnostic[];
+  reloaded: string[];
+  detail?: string;
+}
+
+const encodePath = (path: string): string => path.split("/").map(encodeURIComponent).join("/");
+
+export async function listFiles(): Promise<FileEntry[]> {
+  return (await request<{ files: FileEntry[] }>("GET", "files")).data.files;
+}
+
+export async function readFile(path: string): Promise<FileText> {
+  return (await request<FileText>("GET", `files/${encodePath(path)}`)).data;
+}
+
+/// Save with `If-Match`: `conflict` carries the version on disk when someone else saved first.
+export async function writeFile(path: string, text: string, version: string): Promise<{ status: number; result: SaveResult; conflict: { version: string } | null }> {
+  const { status, data } = await request<SaveResult & { version: string }>("PUT", `files/${encodePath(path)}`, { text }, { "If-Match": `"${version}"` });
+  if (status === 409) return { status, result: data, conflict: { version: data?.version } };
+  return { status, result: data, conflict: null };
+}
+
+export async function createFile(path: string, text: string): Promise<{ status: number; result: SaveResult }> {
+  const { status, data } = await request<SaveResult>("POST", `files/${encodePath(path)}`, { text });
+  if (status === 409) throw new ApiError(`${path} exists already`, 409, data);
+  return { status, result: data };
+}
+
+export interface CompileResult {
+  ok: boolean;
+  diagnostics: ServerDiagnostic[];
+  programs?: unknown;
+}
+
+/// Compile with unsaved text for one file (nothing saved or swapped).
+export async function compile(path: string, text: string): Promise<CompileResult> {
+  const { data } = await request<CompileResult>("POST", "compile", { path, text });
+  return data;
+}
+
+const svgCache = new Map<string, Promise<string>>();
+
+/// An SVG of `/api/graph/...` (cached per address; the server caches by content hash too).
+export function graphSvg(program: string, option?: string | number, agent?: string): Promise<string> {
+  let path = `graph/${encodeURIComponent(program)}`;
+  if (option !== undefined) path += `/${encodeURIComponent(String(option))}`;
+  if (agent) path += `?agent=${encodeURIComponent(agent)}`;
+  let svg = svgCache.get(path);
+  if (!svg) {
+    svg = fetch(`api/${path}`, { headers: headers() }).then(async (r) => {
+      if (!r.ok) throw new ApiError(`graph: HTTP ${r.status} ${await r.text()}`, r.status, null);
+      return r.text();
+    });
+    svg.catch(() => svgCache.delete(path));
+    svgCache.set(path, svg);
+  }
+  return svg;
+}
+
+/// Forget cached SVGs (a hot reload changes graphs).
+export function clearGraphCache(): void {
+  svgCache.clear();
+}

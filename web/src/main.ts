@@ -1,0 +1,249 @@
+/// xabsl studio: wires the session, the connection and the panels, and runs the render loop.
+///
+/// Messages only update the session; one requestAnimationFrame loop draws the tick in view
+/// (the newest, or the one under the timeline cursor) in every visible panel, so a burst of
+/// frames costs one draw and a hidden panel costs nothing.
+import "./style.css";
+import { clearGraphCache, websocketUrl } from "./api";
+import { Connection } from "./connection";
+import { Layout } from "./layout";
+import { ActivationPanel } from "./panels/activation";
+import { EditorPanel } from "./panels/editor";
+import { FieldPanel } from "./panels/field";
+import { GraphPanel } from "./panels/graph";
+import { OptionView } from "./panels/optionview";
+import { PlotPanel } from "./panels/plot";
+import { SymbolsPanel } from "./panels/symbols";
+import { TeamStrip } from "./panels/teamstrip";
+import { TesterPanel } from "./panels/tester";
+import { TimelinePanel } from "./panels/timeline";
+import { TopBar } from "./panels/topbar";
+import { Session, type SessionEvent } from "./session";
+import { h, isTyping } from "./ui";
+
+const HISTORY_MS = 60_000;
+
+function main(): void {
+  const app = document.getElementById("app") as HTMLElement;
+  const session = new Session();
+  const layout = new Layout(app);
+
+  const connection = new Connection(
+    { url: websocketUrl(), rate: 30 },
+    {
+      hello: (hello) => {
+        if (hello.reason !== "connect" && hello.reason !== "resync") clearGraphCache();
+        session.applyHello(hello);
+        // Fill the timeline with what the server buffered before we came (or before a reload).
+        const t = hello.session.t;
+        void connection
+          .history(Math.max(0, t - HISTORY_MS), t, 1)
+          .then((frames) => session.applyHistory(frames))
+          .catch(() => undefined);
+      },
+      frame: (frame) => session.applyFrame(frame),
+      event: (event) => {
+        if (event.event === "file") editor.fileEvent(event);
+        else if (event.event === "compile") editor.compileEvent(event);
+      },
+      link: (state, detail) => topbar.setLink(state, detail),
+    },
+  );
+
+  // ------------------------------------------------------------------------------- panels
+  const openOption = (id: number): void => {
+    session.openOptionById(id);
+    center.activate("option");
+  };
+  const openBehavior = (id: number): void => {
+    const b = session.indexOf(session.selectedAgent)?.behaviorById.get(id);
+    if (b) {
+      tester.choose({ kind: "behavior", name: b.name });
+      right.activate("test");
+    }
+  };
+  const help = h(
+    "dialog#help",
+    {},
+    h("h2", {}, "xabsl studio"),
+    h(
+      "p",
+      {},
+      "Watch a team play, see which options and states each robot runs and why, edit the behavior and save to hot-reload it, and run any option by hand.",
+    ),
+    h(
+      "table",
+      {},
+      ...[
+        ["1 … 9, 0", "select agent"],
+        ["Space", "pause / resume"],
+        [".", "step one tick (pauses first)"],
+        ["← →  (in the timeline)", "step back / forward in time"],
+        ["L  or  End", "back to live"],
+        ["G / O / E", "option graph / option view / editor"],
+        ["A / S / X", "activation tree / symbols / test panel"],
+        ["/", "find an option in the graph"],
+        ["J", "jump to the active option"],
+        ["W", "why did the option decide this?"],
+        ["Ctrl+S", "save the file: compile and hot reload"],
+        ["F12, Ctrl+click", "go to definition"],
+        ["Shift+F12", "find references"],
+        ["T", "light / dark theme"],
+        ["?", "this help"],
+      ].map(([k, v]) => h("tr", {}, h("td", {}, h("kbd", {}, k as string)), h("td", {}, v as string))),
+    ),
+    h("form", { method: "dialog" }, h("button.primary", {}, "Close")),
+  );
+  document.body.append(help);
+
+  const topbar = new TopBar(session, connection, { toggleTheme: () => layout.toggleTheme(), help: () => help.showModal() });
+  const field = new FieldPanel(session);
+  const team = new TeamStrip(session);
+  const graph = new GraphPanel(session, openOption, openBehavior);
+  const plot = new PlotPanel(session);
+  const editor = new EditorPanel(session);
+  const tester = new TesterPanel(session, connection);
+  const optionView = new OptionView(session, connection, {
+    edit: (option) => {
+      center.activate("editor");
+      if (option.span) editor.openSpan(option.span);
+    },
+    test: (option) => {
+      tester.choose({ kind: "option", name: option.name });
+      right.activate("test");
+    },
+  });
+  const activation = new ActivationPanel(session, openOption);
+  const symbols = new SymbolsPanel(session, connection, plot);
+  const timeline = new TimelinePanel(session, openOption);
+
+  const rerender = new Set<SessionEvent>(["hello", "select", "cursor", "option", "history"]);
+  const forceAll = (): void => {
+    for (const e of rerender) pending.add(e);
+  };
+  const center = layout.tabs(
+    "center",
+    [
+      { name: "graph", label: "Option graph", key: "G", pane: graph.element },
+      { name: "option", label: "Option", key: "O", pane: optionView.element },
+      { name: "editor", label: "Editor", key: "E", pane: editor.element },
+    ],
+    forceAll,
+  );
+  const right = layout.tabs(
+    "right",
+    [
+      { name: "activation", label: "Activation", key: "A", pane: activation.element },
+      { name: "symbols", label: "Symbols", key: "S", pane: symbols.element },
+      { name: "test", label: "Test", key: "X", pane: tester.element },
+    ],
+    forceAll,
+  );
+
+  app.append(
+    topbar.element,
+    h(
+      "main.workspace",
+      {},
+      h("section.region.left", { "aria-label": "Field and team" }, h("div.field-wrap", {}, field.element), layout.splitter("field", "horizontal", 1, 120, 1200), team.element),
+      layout.splitter("left", "vertical", 1, 200, 1400),
+      h("section.region.center", { "aria-label": "Graphs and editor" }, center.element),
+      layout.splitter("right", "vertical", -1, 220, 1200),
+      h("section.region.right", { "aria-label": "Activation, symbols and test" }, right.element),
+    ),
+    layout.splitter("bottom", "horizontal", -1, 60, 900),
+    h(
+      "section.region.bottom",
+      { "aria-label": "Timeline and plot" },
+      timeline.element,
+      layout.splitter("plot", "vertical", -1, 160, 1600),
+      plot.element,
+    ),
+  );
+
+  // -------------------------------------------------------------------------- render loop
+  const pending = new Set<SessionEvent>();
+  let frameCount = 0;
+  let frameWindowStart = performance.now();
+  const loop = (): void => {
+    for (const e of session.takeChanges()) pending.add(e);
+    if (pending.size) {
+      const changes = new Set(pending);
+      pending.clear();
+      const started = performance.now();
+      topbar.render(changes);
+      field.render(changes);
+      team.render(changes);
+      if (center.isActive("graph")) graph.render(changes);
+      if (center.isActive("option")) optionView.render(changes);
+      if (center.isActive("editor")) editor.render(changes);
+      if (right.isActive("activation")) activation.render(changes);
+      if (right.isActive("symbols")) symbols.render(changes);
+      if (right.isActive("test")) tester.render(changes);
+      timeline.render(changes);
+      plot.render(changes);
+      stats.renderMs = stats.renderMs * 0.9 + (performance.now() - started) * 0.1;
+      frameCount++;
+    } else {
+      topbar.renderLink();
+    }
+    const now = performance.now();
+    if (now - frameWindowStart >= 1000) {
+      stats.drawsPerSecond = (frameCount * 1000) / (now - frameWindowStart);
+      frameCount = 0;
+      frameWindowStart = now;
+    }
+    requestAnimationFrame(loop);
+  };
+  const stats = { renderMs: 0, drawsPerSecond: 0 };
+  // For e2e tests and curious users: how fast the UI draws.
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats };
+  layout.onResize(forceAll);
+  window.addEventListener("resize", forceAll);
+
+  // ------------------------------------------------------------------------------ keyboard
+  document.addEventListener("keydown", (ev) => {
+    if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
+    if (isTyping(ev)) {
+      if (ev.key === "Escape") (document.activeElement as HTMLElement | null)?.blur();
+      return;
+    }
+    const key = ev.key;
+    const agents = session.agents;
+    if (/^[0-9]$/.test(key)) {
+      const i = key === "0" ? 9 : Number(key) - 1;
+      const agent = agents[i];
+      if (agent) session.selectAgent(agent.id);
+    } else if (key === " ") topbar.togglePause();
+    else if (key === ".") topbar.step();
+    else if (key === "l" || key === "L" || key === "End") session.setCursor(null);
+    else if (key === "g") center.activate("graph");
+    else if (key === "o") center.activate("option");
+    else if (key === "e") center.activate("editor");
+    else if (key === "a") right.activate("activation");
+    else if (key === "s") {
+      right.activate("symbols");
+      symbols.search.focus();
+    } else if (key === "x") right.activate("test");
+    else if (key === "/") {
+      center.activate("graph");
+      graph.search.focus();
+    } else if (key === "j") {
+      center.activate("graph");
+      graph.jump();
+    } else if (key === "w") {
+      center.activate("option");
+    } else if (key === "t") layout.toggleTheme();
+    else if (key === "?") help.showModal();
+    else if (key === "ArrowLeft" && !session.isLive) session.stepCursor(-1);
+    else if (key === "ArrowRight" && !session.isLive) session.stepCursor(1);
+    else return;
+    ev.preventDefault();
+  });
+
+  connection.start();
+  forceAll();
+  requestAnimationFrame(loop);
+}
+
+main();

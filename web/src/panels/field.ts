@@ -1,0 +1,231 @@
+/// The field: the world's static scene drawn once per size, robots and ball drawn per tick on a
+/// canvas (team colour, number, heading, role; the selected robot ringed). Click a robot to
+/// select it. Millimetres in the world frame, x along the field, y to the left.
+import type { AgentInfo, StaticScene, Tick } from "../protocol";
+import type { Session, SessionEvent } from "../session";
+import { h } from "../ui";
+import { roleOf } from "./roles";
+
+const FALLBACK_COLORS = ["#1f6fd1", "#d1341f", "#2a9d4b", "#b8860b"];
+
+export class FieldPanel {
+  readonly element: HTMLElement;
+  private readonly canvas: HTMLCanvasElement;
+  private readonly ctx: CanvasRenderingContext2D;
+  private background: HTMLCanvasElement | null = null;
+  private scale = 1;
+  private cx = 0;
+  private cy = 0;
+  private width = 0;
+  private height = 0;
+  private readonly caption: HTMLElement;
+
+  constructor(private readonly session: Session) {
+    this.canvas = h("canvas.field-canvas", { "aria-label": "Field: click a robot to select it", tabindex: 0 });
+    this.ctx = this.canvas.getContext("2d") as CanvasRenderingContext2D;
+    this.caption = h("div.field-caption");
+    this.element = h("div.panel.field-panel", {}, this.canvas, this.caption);
+    this.canvas.addEventListener("click", (ev) => this.click(ev));
+    new ResizeObserver(() => this.resize()).observe(this.element);
+  }
+
+  private resize(): void {
+    const rect = this.element.getBoundingClientRect();
+    const dpr = window.devicePixelRatio || 1;
+    this.width = Math.max(50, rect.width);
+    this.height = Math.max(50, rect.height);
+    this.canvas.width = Math.round(this.width * dpr);
+    this.canvas.height = Math.round(this.height * dpr);
+    this.canvas.style.width = `${this.width}px`;
+    this.canvas.style.height = `${this.height}px`;
+    this.ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    this.background = null;
+    this.draw();
+  }
+
+  private extent(scene: StaticScene | null): { w: number; h: number } {
+    const f = scene?.field;
+    if (!f) return { w: 10400, h: 7400 };
+    return { w: f.length + 2 * f.border, h: f.width + 2 * f.border };
+  }
+
+  private toScreen(x: number, y: number): [number, number] {
+    return [this.cx + x * this.scale, this.cy - y * this.scale];
+  }
+
+  private drawBackground(scene: StaticScene | null): HTMLCanvasElement {
+    const dpr = window.devicePixelRatio || 1;
+    const bg = document.createElement("canvas");
+    bg.width = this.canvas.width;
+    bg.height = this.canvas.height;
+    const g = bg.getContext("2d") as CanvasRenderingContext2D;
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    const { w, h: hh } = this.extent(scene);
+    this.scale = Math.min(this.width / w, this.height / hh) * 0.98;
+    this.cx = this.width / 2;
+    this.cy = this.height / 2;
+    const style = getComputedStyle(document.documentElement);
+    g.fillStyle = style.getPropertyValue("--field-bg").trim() || "#2f7d32";
+    g.fillRect(this.cx - (w / 2) * this.scale, this.cy - (hh / 2) * this.scale, w * this.scale, hh * this.scale);
+    g.strokeStyle = "rgba(255,255,255,0.9)";
+    g.lineWidth = Math.max(1, (scene?.field?.line_width ?? 50) * this.scale);
+    for (const [x1, y1, x2, y2] of (scene?.lines ?? []) as number[][]) {
+      const [a, b] = this.toScreen(x1 ?? 0, y1 ?? 0);
+      const [c, d] = this.toScreen(x2 ?? 0, y2 ?? 0);
+      g.beginPath();
+      g.moveTo(a, b);
+      g.lineTo(c, d);
+      g.stroke();
+    }
+    for (const [x, y, r] of (scene?.circles ?? []) as number[][]) {
+      const [a, b] = this.toScreen(x ?? 0, y ?? 0);
+      g.beginPath();
+      g.arc(a, b, (r ?? 0) * this.scale, 0, 2 * Math.PI);
+      g.stroke();
+    }
+    g.fillStyle = "rgba(255,255,255,0.9)";
+    for (const [x, y] of (scene?.marks ?? []) as number[][]) {
+      const [a, b] = this.toScreen(x ?? 0, y ?? 0);
+      g.fillRect(a - 2, b - 2, 4, 4);
+    }
+    for (const goal of scene?.goals ?? []) {
+      g.strokeStyle = "rgba(255,255,255,0.55)";
+      g.lineWidth = 1.5;
+      g.beginPath();
+      goal.net.forEach(([x, y], i) => {
+        const [a, b] = this.toScreen(x ?? 0, y ?? 0);
+        if (i === 0) g.moveTo(a, b);
+        else g.lineTo(a, b);
+      });
+      g.stroke();
+      g.fillStyle = "#f5f5f5";
+      for (const [x, y, r] of goal.posts) {
+        const [a, b] = this.toScreen(x ?? 0, y ?? 0);
+        g.beginPath();
+        g.arc(a, b, Math.max(2, (r ?? 50) * this.scale), 0, 2 * Math.PI);
+        g.fill();
+      }
+    }
+    g.strokeStyle = "rgba(0,0,0,0.35)";
+    g.lineWidth = 2;
+    for (const [x1, y1, x2, y2] of (scene?.walls ?? []) as number[][]) {
+      const [a, b] = this.toScreen(x1 ?? 0, y1 ?? 0);
+      const [c, d] = this.toScreen(x2 ?? 0, y2 ?? 0);
+      g.beginPath();
+      g.moveTo(a, b);
+      g.lineTo(c, d);
+      g.stroke();
+    }
+    return bg;
+  }
+
+  private teamColor(agent: AgentInfo | undefined): string {
+    const teams = this.session.scene?.teams ?? [];
+    const i = teams.findIndex((t) => t.name === agent?.team);
+    return teams[i]?.color ?? FALLBACK_COLORS[Math.max(0, i) % FALLBACK_COLORS.length] ?? "#888";
+  }
+
+  render(changes: Set<SessionEvent>): void {
+    if (changes.has("hello")) this.background = null;
+    this.draw();
+  }
+
+  private draw(): void {
+    const ctx = this.ctx;
+    const session = this.session;
+    if (!this.background) this.background = this.drawBackground(session.scene);
+    ctx.save();
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.clearRect(0, 0, this.canvas.width, this.canvas.height);
+    ctx.drawImage(this.background, 0, 0);
+    ctx.restore();
+    const tick = session.view;
+    if (!tick?.scene) {
+      this.caption.textContent = session.hello ? "waiting for the first frame…" : "";
+      return;
+    }
+    this.drawDynamic(tick);
+  }
+
+  private drawDynamic(tick: Tick): void {
+    const ctx = this.ctx;
+    const scene = tick.scene;
+    const session = this.session;
+    const radius = Math.max(6, (session.scene?.robot_radius ?? 150) * this.scale);
+    const robots = scene?.robots ?? [];
+    ctx.font = `600 ${Math.max(9, Math.round(radius * 1.05))}px system-ui, sans-serif`;
+    ctx.textAlign = "center";
+    ctx.textBaseline = "middle";
+    robots.forEach(([x, y, heading], i) => {
+      const agent = session.agents[i];
+      const state = tick.agents.find((a) => a.id === (agent?.id ?? i));
+      const [sx, sy] = this.toScreen(x, y);
+      const selected = agent?.id === session.selectedAgent;
+      if (selected) {
+        ctx.beginPath();
+        ctx.arc(sx, sy, radius + 5, 0, 2 * Math.PI);
+        ctx.strokeStyle = "#ffd54a";
+        ctx.lineWidth = 3;
+        ctx.stroke();
+      }
+      ctx.beginPath();
+      ctx.arc(sx, sy, radius, 0, 2 * Math.PI);
+      ctx.fillStyle = this.teamColor(agent);
+      ctx.fill();
+      ctx.lineWidth = 1.5;
+      ctx.strokeStyle = state?.fault ? "#ff2d2d" : "rgba(0,0,0,0.6)";
+      ctx.stroke();
+      const a = (heading * Math.PI) / 180;
+      ctx.beginPath();
+      ctx.moveTo(sx, sy);
+      ctx.lineTo(sx + Math.cos(a) * radius * 1.6, sy - Math.sin(a) * radius * 1.6);
+      ctx.strokeStyle = "#fff";
+      ctx.lineWidth = 2;
+      ctx.stroke();
+      ctx.fillStyle = "#fff";
+      ctx.fillText(String(agent?.number ?? i + 1), sx, sy + 0.5);
+      const role = agent ? roleOf(session, agent.id, state ?? null) : null;
+      const tag = [role, state?.forced ? "forced" : null, state?.fault ? "FAULT" : null].filter((s) => s).join(" · ");
+      if (tag) {
+        ctx.font = `500 ${Math.max(9, Math.round(radius * 0.8))}px system-ui, sans-serif`;
+        ctx.fillStyle = state?.fault ? "#ffb3b3" : "rgba(255,255,255,0.92)";
+        ctx.fillText(tag, sx, sy + radius + Math.max(8, radius * 0.9));
+        ctx.font = `600 ${Math.max(9, Math.round(radius * 1.05))}px system-ui, sans-serif`;
+      }
+    });
+    if (scene?.ball) {
+      const [bx, by] = this.toScreen(scene.ball[0], scene.ball[1]);
+      ctx.beginPath();
+      ctx.arc(bx, by, Math.max(4, (session.scene?.ball_radius ?? 50) * this.scale), 0, 2 * Math.PI);
+      ctx.fillStyle = "#ff8c1a";
+      ctx.fill();
+      ctx.strokeStyle = "#222";
+      ctx.lineWidth = 1;
+      ctx.stroke();
+    }
+    this.caption.textContent = "";
+  }
+
+  /// The agent id of the robot nearest to a canvas point, within reach.
+  robotAt(px: number, py: number): number | null {
+    const robots = this.session.view?.scene?.robots ?? [];
+    const radius = Math.max(6, (this.session.scene?.robot_radius ?? 150) * this.scale);
+    let best: number | null = null;
+    let bestD = (radius * 2) ** 2;
+    robots.forEach(([x, y], i) => {
+      const [sx, sy] = this.toScreen(x, y);
+      const d = (sx - px) ** 2 + (sy - py) ** 2;
+      if (d < bestD) {
+        bestD = d;
+        best = this.session.agents[i]?.id ?? i;
+      }
+    });
+    return best;
+  }
+
+  private click(ev: MouseEvent): void {
+    const rect = this.canvas.getBoundingClientRect();
+    const id = this.robotAt(ev.clientX - rect.left, ev.clientY - rect.top);
+    if (id !== null) this.session.selectAgent(id);
+  }
+}

@@ -1,0 +1,148 @@
+/// The option graph of the selected agent (server SVG) with the live activation path: active
+/// options, basic behaviors and the calls between them carry the class `active`; nothing is laid
+/// out on a tick. Search (/) marks matching options, Enter opens the first; J jumps to the
+/// deepest active option; a click on an option opens it in the option view.
+import { graphSvg } from "../api";
+import { pathParents } from "../protocol";
+import type { Session, SessionEvent } from "../session";
+import { h } from "../ui";
+import { SvgView } from "./svgview";
+
+export class GraphPanel {
+  readonly element: HTMLElement;
+  readonly search: HTMLInputElement;
+  private readonly view = new SvgView("Option graph: drag to pan, wheel to zoom");
+  private readonly status: HTMLElement;
+  private key = "";
+  private loading = "";
+  private deepest: string | null = null;
+  private lastShape = "";
+
+  constructor(
+    private readonly session: Session,
+    private readonly openOption: (id: number) => void,
+    private readonly openBehavior: (id: number) => void,
+  ) {
+    this.search = h("input.search", { type: "search", placeholder: "Find option…  (/)", "aria-label": "Find option" });
+    this.search.addEventListener("input", () => this.mark());
+    this.search.addEventListener("keydown", (ev) => {
+      if (ev.key === "Enter") {
+        const first = this.matches()[0];
+        if (first) {
+          this.view.centerOn(first);
+          this.openOption(Number(first.slice("option_".length)));
+        }
+      } else if (ev.key === "Escape") {
+        this.search.value = "";
+        this.mark();
+        this.view.element.focus();
+      }
+    });
+    this.status = h("span.muted");
+    const toolbar = h(
+      "div.toolbar",
+      {},
+      this.search,
+      h("button", { title: "Jump to the active option (J)", onclick: () => this.jump() }, "Jump to active"),
+      h("button", { title: "Fit (F)", onclick: () => this.view.fit() }, "Fit"),
+      h("button", { title: "Zoom in (+)", onclick: () => this.view.zoomBy(1.25) }, "+"),
+      h("button", { title: "Zoom out (−)", onclick: () => this.view.zoomBy(0.8) }, "−"),
+      this.status,
+    );
+    this.element = h("div.panel.graph-panel", {}, toolbar, this.view.element);
+    this.view.onClick = (id) => {
+      if (id.startsWith("option_")) this.openOption(Number(id.slice(7)));
+      else if (id.startsWith("behavior_")) this.openBehavior(Number(id.slice(9)));
+    };
+  }
+
+  private matches(): string[] {
+    const q = this.search.value.trim().toLowerCase();
+    if (!q) return [];
+    const index = this.session.indexOf(this.session.selectedAgent);
+    const out: string[] = [];
+    for (const o of index?.description.options ?? []) if (o.name.toLowerCase().includes(q) && this.view.has(`option_${o.id}`)) out.push(`option_${o.id}`);
+    return out;
+  }
+
+  private mark(): void {
+    const m = this.matches();
+    this.view.setClasses("match", m);
+    this.view.element.classList.toggle("searching", this.search.value.trim() !== "");
+    this.status.textContent = this.search.value.trim() ? `${m.length} match${m.length === 1 ? "" : "es"}` : "";
+  }
+
+  /// Centre the deepest active option.
+  jump(): void {
+    if (this.deepest) this.view.centerOn(this.deepest);
+  }
+
+  /// The XABSL agent whose option graph to show: the one whose root the robot runs.
+  private graphKey(): { program: string; agent: string | undefined } | null {
+    const session = this.session;
+    const program = session.programOf(session.selectedAgent);
+    const index = session.indexOf(session.selectedAgent);
+    if (!program || !index) return null;
+    const root = session.agentInView()?.path[0];
+    const rootName = root?.kind === "option" ? index.optionById.get(root.option)?.name : undefined;
+    const agents = index.description.agents;
+    const agent = agents.find((a) => a.root === rootName) ?? agents[0];
+    return { program, agent: agent?.name };
+  }
+
+  render(changes: Set<SessionEvent>): void {
+    const key = this.graphKey();
+    const k = key ? `${key.program}|${key.agent ?? ""}|${this.session.hello?.generation ?? 0}` : "";
+    if (k !== this.key && k !== this.loading) {
+      if (!key) {
+        this.key = k;
+        this.view.clear(this.session.hello ? "This agent has no XABSL behavior." : "Connecting…");
+      } else {
+        this.loading = k;
+        graphSvg(key.program, undefined, key.agent)
+          .then((svg) => {
+            if (this.loading !== k) return;
+            this.loading = "";
+            this.key = k;
+            this.lastShape = "";
+            if (!this.view.show(svg)) this.view.clear("The server sent an unreadable graph.");
+            this.mark();
+            this.highlight(true);
+          })
+          .catch((error: Error) => {
+            if (this.loading !== k) return;
+            this.loading = "";
+            this.key = k;
+            this.view.clear(`No option graph: ${error.message}`);
+          });
+      }
+    }
+    this.highlight(changes.has("select") || changes.has("cursor"));
+  }
+
+  private highlight(force: boolean): void {
+    const agent = this.session.agentInView();
+    const path = agent?.path ?? [];
+    const shape = agent?.shape ?? "";
+    if (!force && shape === this.lastShape) return;
+    this.lastShape = shape;
+    const ids: string[] = [];
+    const parents = pathParents(path);
+    let deepest: string | null = null;
+    let deepestDepth = -1;
+    path.forEach((n, i) => {
+      const id = n.kind === "option" ? `option_${n.option}` : `behavior_${n.behavior}`;
+      ids.push(id);
+      if (n.kind === "option" && n.depth > deepestDepth) {
+        deepest = id;
+        deepestDepth = n.depth;
+      }
+      const parent = path[parents[i] ?? -1];
+      if (parent?.kind === "option") ids.push(`call_${parent.option}_${n.kind === "option" ? `o${n.option}` : `b${n.behavior}`}`);
+    });
+    this.deepest = deepest;
+    this.view.setClasses("active", ids);
+    const root = path[0];
+    this.view.setClasses("root", root ? [root.kind === "option" ? `option_${root.option}` : `behavior_${root.behavior}`] : []);
+  }
+}

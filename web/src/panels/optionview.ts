@@ -1,0 +1,218 @@
+/// The option view: the state machine of one option (server SVG) with the active state and the
+/// transition that fired last highlighted, and "why": the decision leaf of this tick with the
+/// conditions on its path, their branch, and their values re-evaluated by the server (`explain`).
+import { graphSvg } from "../api";
+import type { Connection } from "../connection";
+import { type DescriptionIndex, leafPath, type Option, rangeText } from "../description";
+import type { Explanation, OptionNode } from "../protocol";
+import type { Session, SessionEvent } from "../session";
+import { formatMs, formatValue, h, setText } from "../ui";
+import { SvgView } from "./svgview";
+
+export class OptionView {
+  readonly element: HTMLElement;
+  private readonly view = new SvgView("State machine: drag to pan, wheel to zoom");
+  private readonly title: HTMLElement;
+  private readonly picker: HTMLSelectElement;
+  private readonly info: HTMLElement;
+  private readonly why: HTMLElement;
+  private readonly doc: HTMLElement;
+  private key = "";
+  private loading = "";
+  private explainKey = "";
+  private explainAt = 0;
+  private explanation: Explanation | null = null;
+  private explaining = false;
+  private lastWhy = "";
+
+  constructor(
+    private readonly session: Session,
+    private readonly connection: Connection,
+    private readonly actions: { edit(option: Option): void; test(option: Option): void },
+  ) {
+    this.title = h("strong.option-title");
+    this.picker = h("select", { "aria-label": "Option", title: "Open another option" });
+    this.picker.addEventListener("change", () => {
+      const v = this.picker.value;
+      this.session.openOptionById(v === "" ? null : Number(v));
+    });
+    this.doc = h("div.option-doc.muted");
+    this.info = h("div.option-info");
+    this.why = h("div.why", { "aria-live": "polite" });
+    const toolbar = h(
+      "div.toolbar",
+      {},
+      this.title,
+      this.picker,
+      h("button", { title: "Show the source of this option (E)", onclick: () => this.current() && this.actions.edit(this.current() as Option) }, "Edit source"),
+      h("button", { title: "Run this option on the selected agent", onclick: () => this.current() && this.actions.test(this.current() as Option) }, "Test…"),
+      h("button", { title: "Ask the engine again why (W)", onclick: () => this.explain(true) }, "Why?"),
+      h("button", { title: "Fit", onclick: () => this.view.fit() }, "Fit"),
+    );
+    const side = h("div.option-side", {}, this.doc, this.info, this.why);
+    this.element = h("div.panel.option-panel", {}, toolbar, h("div.option-body", {}, this.view.element, side));
+    this.view.onClick = (id) => {
+      const m = /^state_(\d+)$/.exec(id);
+      const option = this.current();
+      if (m && option) {
+        const state = option.states[Number(m[1])];
+        if (state?.span) this.actions.edit({ ...option, span: state.span });
+      }
+    };
+  }
+
+  /// The option shown: the one opened, else the root option of the selected agent.
+  current(): Option | null {
+    const session = this.session;
+    const index = session.indexOf(session.selectedAgent);
+    if (!index) return null;
+    if (session.openOption !== null) return index.optionById.get(session.openOption) ?? null;
+    const root = session.agentInView()?.path.find((n) => n.kind === "option") as OptionNode | undefined;
+    return root ? (index.optionById.get(root.option) ?? null) : (index.optionByName.get(index.description.agents[0]?.root ?? "") ?? null);
+  }
+
+  private node(option: Option): OptionNode | null {
+    const agent = this.session.agentInView();
+    return (agent?.path.find((n) => n.kind === "option" && n.option === option.id) as OptionNode | undefined) ?? null;
+  }
+
+  render(changes: Set<SessionEvent>): void {
+    const session = this.session;
+    const index = session.indexOf(session.selectedAgent);
+    const option = this.current();
+    const program = session.programOf(session.selectedAgent);
+    if (changes.has("hello") || changes.has("select") || this.picker.options.length === 0) this.fillPicker(index);
+    const wanted = session.openOption === null ? "" : String(session.openOption);
+    if (this.picker.value !== wanted) this.picker.value = wanted;
+    const k = option && program ? `${program}|${option.id}|${session.hello?.generation ?? 0}` : "";
+    if (k !== this.key && k !== this.loading) {
+      this.explanation = null;
+      if (!option || !program) {
+        this.key = k;
+        this.view.clear(session.hello ? "No option to show." : "Connecting…");
+      } else {
+        this.loading = k;
+        graphSvg(program, option.id)
+          .then((svg) => {
+            if (this.loading !== k) return;
+            this.loading = "";
+            this.key = k;
+            if (!this.view.show(svg)) this.view.clear("The server sent an unreadable state machine.");
+            this.highlight(option);
+          })
+          .catch((error: Error) => {
+            if (this.loading !== k) return;
+            this.loading = "";
+            this.key = k;
+            this.view.clear(`No state machine: ${error.message}`);
+          });
+      }
+    }
+    setText(this.title, option ? option.name : "Option");
+    setText(this.doc, option?.doc ?? "");
+    if (option) {
+      this.highlight(option);
+      this.renderInfo(option, index);
+      this.renderWhy(option, index);
+      this.explain(false);
+    }
+  }
+
+  private fillPicker(index: DescriptionIndex | null): void {
+    const options = [...(index?.description.options ?? [])].sort((a, b) => a.name.localeCompare(b.name));
+    this.picker.replaceChildren(h("option", { value: "" }, "(follow the root option)"), ...options.map((o) => h("option", { value: o.id }, o.name)));
+  }
+
+  private highlight(option: Option): void {
+    const node = this.node(option);
+    this.view.setClasses("active", node ? [`state_${node.state}`] : []);
+    const last = this.session.transitions.get(this.session.selectedAgent)?.get(option.id);
+    const fresh = last && this.session.isLive;
+    this.view.setClasses("fired", fresh ? [`leaf_${last.from}_${last.leaf}`] : node && node.decidedIn !== node.state ? [`leaf_${node.decidedIn}_${node.leaf}`] : []);
+    this.view.setClasses("previous", fresh ? [`state_${last.from}`] : []);
+  }
+
+  private renderInfo(option: Option, index: DescriptionIndex | null): void {
+    const node = this.node(option);
+    const lines: string[] = [];
+    if (!node) lines.push(`Not active on ${this.session.agentInfo(this.session.selectedAgent)?.name ?? "this agent"} ${this.session.isLive ? "now" : "at this moment"}.`);
+    else {
+      const state = option.states[node.state];
+      lines.push(`state ${state?.name ?? node.state} for ${formatMs(node.stateTime)} · option active ${formatMs(node.optionTime)}`);
+      option.params.forEach((p, i) => lines.push(`@${p.short_name} = ${formatValue(node.params[i], p.type, p.enum, index)} ${rangeText(null, p.unit)}`.trim()));
+    }
+    const last = this.session.transitions.get(this.session.selectedAgent)?.get(option.id);
+    if (last && this.session.isLive) {
+      const t = this.session.view?.t ?? last.t;
+      lines.push(`last transition ${option.states[last.from]?.name} → ${option.states[last.to]?.name}, ${formatMs(Math.max(0, t - last.t))} ago`);
+    }
+    const text = lines.join("\n");
+    if (this.info.textContent !== text) this.info.textContent = text;
+  }
+
+  /// Why the decision of this tick took its leaf: the chain of conditions from the description
+  /// (branch taken), with the server's values when an explanation for this leaf is at hand.
+  private renderWhy(option: Option, index: DescriptionIndex | null): void {
+    const node = this.node(option);
+    if (!node || node.leaf < 0) {
+      if (this.lastWhy !== "none") {
+        this.lastWhy = "none";
+        this.why.replaceChildren(h("div.muted", {}, node ? "This option has not decided yet." : ""));
+      }
+      return;
+    }
+    const decided = option.states[node.decidedIn];
+    const target = option.states[node.state];
+    const ex = this.explanation && this.explanation.option === option.id && this.explanation.leaf === node.leaf && this.explanation.decided_in === node.decidedIn ? this.explanation : null;
+    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${ex ? JSON.stringify(ex.conditions.map((c) => c.value)) : ""}`;
+    if (key === this.lastWhy) return;
+    this.lastWhy = key;
+    const path = decided ? leafPath(decided.decision, node.leaf) : null;
+    const rows = (path ?? []).map(({ node: ifNode, taken }, i) => {
+      const live = ex?.conditions[i];
+      const value = live ? formatValue(typeof live.value === "string" ? null : live.value) : "";
+      return h(
+        "li",
+        { class: taken ? "cond taken" : "cond not-taken", title: ifNode.doc ?? "" },
+        h("span.branch", {}, taken ? "if" : "else of"),
+        h("code", {}, ifNode.if),
+        live ? h("span.value", { class: `value ${String(live.value)}` }, value) : null,
+        ifNode.doc ? h("div.cond-doc.muted", {}, ifNode.doc) : null,
+      );
+    });
+    const stays = node.decidedIn === node.state;
+    this.why.replaceChildren(
+      h("div.why-head", {}, h("strong", {}, "Decision of this tick: "), `${decided?.name ?? node.decidedIn} `, h("span.arrow", {}, stays ? "stays" : `→ ${target?.name ?? node.state}`), h("span.muted", {}, ` (leaf ${node.leaf})`)),
+      rows.length ? h("ol.conditions", {}, ...rows) : h("div.muted", {}, "No condition: the decision always takes this leaf."),
+      h("div.muted.small", {}, ex ? "Values re-evaluated by the engine just now." : this.session.isLive ? "Asking the engine for values…" : "Scrubbed back: values are shown only for the live tick."),
+    );
+    void index;
+  }
+
+  /// Ask the server to explain the current decision (when the leaf changes, else once a second).
+  private explain(force: boolean): void {
+    const session = this.session;
+    const option = this.current();
+    if (!option || !session.isLive || this.explaining || this.element.closest("[hidden]")) return;
+    const node = this.node(option);
+    if (!node || node.leaf < 0) return;
+    const key = `${session.selectedAgent}|${option.id}|${node.decidedIn}|${node.leaf}`;
+    const now = performance.now();
+    if (!force && key === this.explainKey && now - this.explainAt < 1000) return;
+    this.explainKey = key;
+    this.explainAt = now;
+    this.explaining = true;
+    this.connection
+      .command<Explanation>("explain", { agent: session.selectedAgent, option: option.id })
+      .then((ex) => {
+        this.explanation = ex;
+      })
+      .catch(() => {
+        this.explanation = null;
+      })
+      .finally(() => {
+        this.explaining = false;
+        this.lastWhy = "";
+      });
+  }
+}

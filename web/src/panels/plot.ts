@@ -1,0 +1,162 @@
+/// Plots of pinned symbols over the last N seconds of buffered ticks (uPlot), several series,
+/// with the timeline cursor drawn as a vertical line. Enum and boolean values plot as their
+/// numbers (element index, 0/1). Redrawn at most ~15 times a second.
+import uPlot from "uplot";
+import "uplot/dist/uPlot.min.css";
+import type { Session, SessionEvent } from "../session";
+import { h } from "../ui";
+
+export interface Pin {
+  agent: number;
+  kind: "input" | "output";
+  id: number;
+}
+
+const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#4db6ac", "#f06292"];
+const KEY = "xabsl-studio.pins.v1";
+
+export class PlotPanel {
+  readonly element: HTMLElement;
+  private readonly host: HTMLElement;
+  private readonly legend: HTMLElement;
+  private readonly seconds: HTMLSelectElement;
+  private plot: uPlot | null = null;
+  private pins: Pin[] = [];
+  private plotKey = "";
+  private lastDraw = 0;
+
+  constructor(private readonly session: Session) {
+    this.host = h("div.plot-host");
+    this.legend = h("div.plot-legend");
+    this.seconds = h("select", { "aria-label": "Plot window", title: "Seconds shown" }, ...[10, 20, 30, 60].map((s) => h("option", { value: s }, `${s} s`)));
+    this.seconds.value = "20";
+    this.seconds.addEventListener("change", () => this.draw(true));
+    this.element = h("div.panel.plot-panel", {}, h("div.toolbar", {}, h("strong", {}, "Plot"), this.seconds, this.legend), this.host);
+    try {
+      const saved = JSON.parse(localStorage.getItem(KEY) ?? "[]") as Pin[];
+      if (Array.isArray(saved)) this.pins = saved.filter((p) => typeof p.agent === "number" && typeof p.id === "number");
+    } catch {
+      this.pins = [];
+    }
+    new ResizeObserver(() => this.resize()).observe(this.host);
+  }
+
+  has(agent: number, kind: Pin["kind"], id: number): boolean {
+    return this.pins.some((p) => p.agent === agent && p.kind === kind && p.id === id);
+  }
+
+  toggle(agent: number, kind: Pin["kind"], id: number): void {
+    if (this.has(agent, kind, id)) this.pins = this.pins.filter((p) => !(p.agent === agent && p.kind === kind && p.id === id));
+    else this.pins.push({ agent, kind, id });
+    try {
+      localStorage.setItem(KEY, JSON.stringify(this.pins));
+    } catch {
+      /* not remembered */
+    }
+    this.draw(true);
+  }
+
+  private label(p: Pin): string {
+    const s = this.session;
+    const index = s.indexOf(p.agent);
+    const list = p.kind === "input" ? index?.description.inputs : index?.description.outputs;
+    const name = list?.find((x) => x.id === p.id)?.name ?? `${p.kind} ${p.id}`;
+    return `${s.agentInfo(p.agent)?.name ?? p.agent}: ${name}`;
+  }
+
+  private resize(): void {
+    const rect = this.host.getBoundingClientRect();
+    if (this.plot && rect.width > 0 && rect.height > 0) this.plot.setSize({ width: rect.width, height: rect.height });
+  }
+
+  render(changes: Set<SessionEvent>): void {
+    const force = changes.has("hello") || changes.has("cursor") || changes.has("history");
+    this.draw(force);
+  }
+
+  private build(): void {
+    this.plot?.destroy();
+    this.plot = null;
+    const rect = this.host.getBoundingClientRect();
+    const style = getComputedStyle(document.documentElement);
+    const fg = style.getPropertyValue("--muted").trim() || "#999";
+    const grid = style.getPropertyValue("--grid").trim() || "rgba(128,128,128,0.2)";
+    this.legend.replaceChildren(
+      ...this.pins.map((p, i) =>
+        h(
+          "button.legend-item",
+          { title: "Unpin", onclick: () => this.toggle(p.agent, p.kind, p.id) },
+          h("span.swatch", { style: `background:${COLORS[i % COLORS.length]}` }),
+          this.label(p),
+          " ×",
+        ),
+      ),
+    );
+    if (!this.pins.length) {
+      this.host.replaceChildren(h("div.empty", {}, "Pin symbols with 📈 in the Symbols panel to plot them here."));
+      return;
+    }
+    this.host.replaceChildren();
+    const opts: uPlot.Options = {
+      width: Math.max(100, rect.width),
+      height: Math.max(60, rect.height),
+      legend: { show: false },
+      cursor: { drag: { x: false, y: false } },
+      scales: { x: { time: false } },
+      axes: [
+        { stroke: fg, grid: { stroke: grid }, ticks: { stroke: grid }, values: (_u, vals) => vals.map((v) => `${v.toFixed(1)}s`) },
+        { stroke: fg, grid: { stroke: grid }, ticks: { stroke: grid }, size: 56 },
+      ],
+      series: [{}, ...this.pins.map((p, i) => ({ label: this.label(p), stroke: COLORS[i % COLORS.length] as string, width: 1.5, points: { show: false } }))],
+      hooks: {
+        draw: [
+          (u: uPlot) => {
+            const cursor = this.session.cursor;
+            if (cursor === null) return;
+            const x = u.valToPos(cursor / 1000, "x", true);
+            const ctx = u.ctx;
+            ctx.save();
+            ctx.strokeStyle = "#ffd54a";
+            ctx.lineWidth = 2;
+            ctx.beginPath();
+            ctx.moveTo(x, u.bbox.top);
+            ctx.lineTo(x, u.bbox.top + u.bbox.height);
+            ctx.stroke();
+            ctx.restore();
+          },
+        ],
+      },
+    };
+    this.plot = new uPlot(opts, this.data(), this.host);
+  }
+
+  private data(): uPlot.AlignedData {
+    const newest = this.session.buffer.newest;
+    const window = Number(this.seconds.value) * 1000;
+    const ticks = newest ? this.session.buffer.range(newest.t - window, newest.t) : [];
+    const xs = ticks.map((t) => t.t / 1000);
+    const series = this.pins.map((p) =>
+      ticks.map((t) => {
+        const agent = t.agents.find((a) => a.id === p.agent);
+        const v = (p.kind === "input" ? agent?.inputs : agent?.outputs)?.[p.id];
+        return v === undefined ? null : typeof v === "boolean" ? (v ? 1 : 0) : v;
+      }),
+    );
+    return [xs, ...series] as uPlot.AlignedData;
+  }
+
+  private draw(force: boolean): void {
+    if (this.element.closest("[hidden]")) return;
+    const now = performance.now();
+    const key = `${this.session.hello?.generation}|${document.documentElement.dataset.theme}|${JSON.stringify(this.pins)}`;
+    if (key !== this.plotKey) {
+      this.plotKey = key;
+      this.build();
+      this.lastDraw = now;
+      return;
+    }
+    if (!force && now - this.lastDraw < 66) return;
+    this.lastDraw = now;
+    this.plot?.setData(this.data());
+  }
+}

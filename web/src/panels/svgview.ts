@@ -1,0 +1,178 @@
+/// A pan-and-zoom viewport for a server-rendered graphviz SVG, with highlighting by CSS class on
+/// element ids. The SVG is laid out once by the server; ticks only toggle classes (`setClasses`)
+/// and never touch geometry.
+import { h, parseSvg } from "../ui";
+
+export class SvgView {
+  readonly element: HTMLElement;
+  svg: SVGSVGElement | null = null;
+  private readonly stage: HTMLElement;
+  private x = 0;
+  private y = 0;
+  private zoom = 1;
+  private width = 0;
+  private height = 0;
+  private readonly ids = new Map<string, Element>();
+  /// class name -> ids currently carrying it.
+  private readonly marked = new Map<string, Set<string>>();
+  onClick: ((id: string, ev: MouseEvent) => void) | null = null;
+
+  constructor(label: string) {
+    this.stage = h("div.svg-stage");
+    this.element = h("div.svg-view", { tabindex: 0, "aria-label": label }, this.stage);
+    this.element.addEventListener("wheel", (ev) => this.wheel(ev), { passive: false });
+    this.element.addEventListener("pointerdown", (ev) => this.drag(ev));
+    this.element.addEventListener("click", (ev) => {
+      const target = (ev.target as Element).closest("g[id]");
+      if (target && this.onClick && !this.element.classList.contains("panned")) this.onClick(target.id, ev);
+    });
+    this.element.addEventListener("keydown", (ev) => {
+      const step = 60;
+      const moves: Record<string, [number, number]> = { ArrowLeft: [step, 0], ArrowRight: [-step, 0], ArrowUp: [0, step], ArrowDown: [0, -step] };
+      const m = moves[ev.key];
+      if (m) {
+        ev.preventDefault();
+        this.x += m[0];
+        this.y += m[1];
+        this.apply();
+      } else if (ev.key === "+" || ev.key === "=") this.zoomBy(1.25);
+      else if (ev.key === "-") this.zoomBy(0.8);
+      else if (ev.key === "f") this.fit();
+    });
+  }
+
+  /// Show a new SVG (text from the server); returns false when it cannot be read.
+  show(text: string): boolean {
+    const svg = parseSvg(text);
+    if (!svg) return false;
+    this.svg = svg;
+    this.ids.clear();
+    this.marked.clear();
+    for (const el of svg.querySelectorAll("[id]")) this.ids.set(el.id, el);
+    const w = svg.viewBox?.baseVal?.width || parseFloat(svg.getAttribute("width") ?? "0") || 400;
+    const hh = svg.viewBox?.baseVal?.height || parseFloat(svg.getAttribute("height") ?? "0") || 300;
+    this.width = w;
+    this.height = hh;
+    svg.setAttribute("width", String(w));
+    svg.setAttribute("height", String(hh));
+    // Graphviz puts a <title> in every group: browsers show them as tooltips, which is welcome.
+    this.stage.replaceChildren(svg);
+    this.fit();
+    return true;
+  }
+
+  clear(message = ""): void {
+    this.svg = null;
+    this.ids.clear();
+    this.marked.clear();
+    this.stage.replaceChildren(h("div.empty", {}, message));
+    this.x = 0;
+    this.y = 0;
+    this.zoom = 1;
+    this.apply();
+  }
+
+  has(id: string): boolean {
+    return this.ids.has(id);
+  }
+
+  elementById(id: string): Element | undefined {
+    return this.ids.get(id);
+  }
+
+  allIds(): IterableIterator<string> {
+    return this.ids.keys();
+  }
+
+  /// Make exactly `ids` carry class `name` (diffing against the previous call).
+  setClasses(name: string, ids: Iterable<string>): void {
+    const next = new Set<string>();
+    for (const id of ids) if (this.ids.has(id)) next.add(id);
+    const prev = this.marked.get(name) ?? new Set<string>();
+    for (const id of prev) if (!next.has(id)) this.ids.get(id)?.classList.remove(name);
+    for (const id of next) if (!prev.has(id)) this.ids.get(id)?.classList.add(name);
+    this.marked.set(name, next);
+  }
+
+  private apply(): void {
+    this.stage.style.transform = `translate(${this.x}px, ${this.y}px) scale(${this.zoom})`;
+  }
+
+  fit(): void {
+    const rect = this.element.getBoundingClientRect();
+    if (!this.width || !rect.width) {
+      requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit());
+      return;
+    }
+    this.zoom = Math.min(2, Math.min(rect.width / this.width, rect.height / this.height) * 0.95);
+    this.x = (rect.width - this.width * this.zoom) / 2;
+    this.y = (rect.height - this.height * this.zoom) / 2;
+    this.apply();
+  }
+
+  zoomBy(factor: number, cx?: number, cy?: number): void {
+    const rect = this.element.getBoundingClientRect();
+    const px = cx ?? rect.width / 2;
+    const py = cy ?? rect.height / 2;
+    const zoom = Math.max(0.05, Math.min(8, this.zoom * factor));
+    this.x = px - ((px - this.x) * zoom) / this.zoom;
+    this.y = py - ((py - this.y) * zoom) / this.zoom;
+    this.zoom = zoom;
+    this.apply();
+  }
+
+  /// Centre the element `id` in the view (zooming in to a readable size if needed).
+  centerOn(id: string): void {
+    const el = this.ids.get(id) as SVGGraphicsElement | undefined;
+    if (!el || !this.svg) return;
+    const rect = this.element.getBoundingClientRect();
+    const box = el.getBoundingClientRect();
+    const stageBox = this.stage.getBoundingClientRect();
+    // Element centre in unscaled SVG pixels.
+    const ux = (box.left + box.width / 2 - stageBox.left) / this.zoom;
+    const uy = (box.top + box.height / 2 - stageBox.top) / this.zoom;
+    if (this.zoom < 0.8) this.zoom = 1;
+    this.x = rect.width / 2 - ux * this.zoom;
+    this.y = rect.height / 2 - uy * this.zoom;
+    this.apply();
+  }
+
+  private wheel(ev: WheelEvent): void {
+    ev.preventDefault();
+    const rect = this.element.getBoundingClientRect();
+    this.zoomBy(Math.exp(-ev.deltaY * 0.0015), ev.clientX - rect.left, ev.clientY - rect.top);
+  }
+
+  private drag(ev: PointerEvent): void {
+    if (ev.button !== 0) return;
+    const sx = ev.clientX;
+    const sy = ev.clientY;
+    const x0 = this.x;
+    const y0 = this.y;
+    let moved = false;
+    this.element.classList.remove("panned");
+    const move = (e: PointerEvent): void => {
+      const dx = e.clientX - sx;
+      const dy = e.clientY - sy;
+      if (!moved && Math.abs(dx) + Math.abs(dy) > 4) {
+        moved = true;
+        this.element.setPointerCapture(ev.pointerId);
+        this.element.classList.add("panned", "panning");
+      }
+      if (moved) {
+        this.x = x0 + dx;
+        this.y = y0 + dy;
+        this.apply();
+      }
+    };
+    const up = (): void => {
+      this.element.classList.remove("panning");
+      this.element.removeEventListener("pointermove", move);
+      this.element.removeEventListener("pointerup", up);
+      // "panned" stays set through the click that follows a drag, then clears.
+      setTimeout(() => this.element.classList.remove("panned"), 0);
+    };
+    this.element.addEventListener("pointermove", move);
+    this.element.addEventListener("pointerup", up);
+  }
+}

@@ -1,0 +1,175 @@
+/// The test panel: pick an option or basic behavior, fill a parameter form generated from its
+/// declaration (types, ranges, units, enum choices), run it as the root of the selected agent
+/// (`force_option` / `force_behavior`), watch it, release. The simulation controls (pause, step,
+/// speed, reset) sit in the top bar and work from here too.
+import type { Connection } from "../connection";
+import { type Parameter, parseRange, rangeText } from "../description";
+import type { Session, SessionEvent } from "../session";
+import { h, setText, toast } from "../ui";
+
+type Target = { kind: "option" | "behavior"; name: string };
+
+export class TesterPanel {
+  readonly element: HTMLElement;
+  private readonly picker: HTMLSelectElement;
+  private readonly form: HTMLFormElement;
+  private readonly state: HTMLElement;
+  private readonly doc: HTMLElement;
+  private key = "";
+  private controls: Array<{ param: Parameter; control: HTMLInputElement | HTMLSelectElement }> = [];
+
+  constructor(
+    private readonly session: Session,
+    private readonly connection: Connection,
+  ) {
+    this.picker = h("select#test-target", { "aria-label": "Option or basic behavior to run" });
+    this.picker.addEventListener("change", () => this.buildForm());
+    this.form = h("form.param-form", { "aria-label": "Parameters" });
+    this.form.addEventListener("submit", (ev) => {
+      ev.preventDefault();
+      this.run();
+    });
+    this.state = h("div.test-state");
+    this.doc = h("div.muted.small");
+    this.element = h(
+      "div.panel.tester-panel",
+      {},
+      h("label.field-label", { for: "test-target" }, "Run as root of the selected agent"),
+      this.picker,
+      this.doc,
+      this.form,
+      h(
+        "div.toolbar",
+        {},
+        h("button.primary#test-run", { title: "Force it as the root (Ctrl+Enter)", onclick: () => this.run() }, "▶ Run on agent"),
+        h("button#test-release", { title: "Back to the agent's own root", onclick: () => this.release() }, "Release"),
+        h("button", { title: "Restart every option of this agent and clear a fault", onclick: () => this.resetAgent() }, "Reset agent"),
+      ),
+      this.state,
+    );
+    this.element.addEventListener("keydown", (ev) => {
+      if (ev.key === "Enter" && (ev.ctrlKey || ev.metaKey)) this.run();
+    });
+  }
+
+  /// Preselect an option or basic behavior (from the graph or the option view).
+  choose(target: Target): void {
+    this.fillPicker();
+    this.picker.value = `${target.kind}:${target.name}`;
+    this.buildForm();
+  }
+
+  private target(): Target | null {
+    const [kind, ...rest] = this.picker.value.split(":");
+    const name = rest.join(":");
+    return kind === "option" || kind === "behavior" ? { kind, name } : null;
+  }
+
+  private fillPicker(): void {
+    const index = this.session.indexOf(this.session.selectedAgent);
+    const key = `${this.session.hello?.generation}|${this.session.programOf(this.session.selectedAgent)}`;
+    if (key === this.key) return;
+    this.key = key;
+    const previous = this.picker.value;
+    const options = [...(index?.description.options ?? [])].sort((a, b) => a.name.localeCompare(b.name));
+    const behaviors = [...(index?.description.behaviors ?? [])].sort((a, b) => a.name.localeCompare(b.name));
+    this.picker.replaceChildren(
+      h("optgroup", { label: "Options" }, ...options.map((o) => h("option", { value: `option:${o.name}` }, o.name))),
+      h("optgroup", { label: "Basic behaviors" }, ...behaviors.map((b) => h("option", { value: `behavior:${b.name}` }, b.name))),
+    );
+    if ([...this.picker.options].some((o) => o.value === previous)) this.picker.value = previous;
+    this.buildForm();
+  }
+
+  private buildForm(): void {
+    const index = this.session.indexOf(this.session.selectedAgent);
+    const target = this.target();
+    const decl = target?.kind === "option" ? index?.optionByName.get(target.name) : target ? index?.behaviorByName.get(target.name) : undefined;
+    setText(this.doc, decl?.doc ?? "");
+    this.controls = [];
+    const rows: HTMLElement[] = [];
+    for (const param of decl?.params ?? []) {
+      let control: HTMLInputElement | HTMLSelectElement;
+      const id = `param-${param.short_name.replace(/\W/g, "_")}`;
+      if (param.type === "boolean") {
+        control = h("input", { type: "checkbox", id, name: param.short_name });
+      } else if (param.type === "enum") {
+        const elements = index?.enumByName.get(param.enum ?? "")?.elements ?? [];
+        control = h("select", { id, name: param.short_name }, ...elements.map((e, i) => h("option", { value: i }, e)));
+      } else {
+        const range = parseRange(param.range);
+        control = h("input", {
+          type: "number",
+          step: "any",
+          id,
+          name: param.short_name,
+          value: range.min !== undefined && range.min > 0 ? range.min : 0,
+          min: range.min,
+          max: range.max,
+        });
+      }
+      this.controls.push({ param, control });
+      rows.push(
+        h(
+          "div.param-row",
+          { title: param.doc ?? "" },
+          h("label", { for: id }, param.type === "boolean" ? param.short_name : `${param.short_name}`),
+          control,
+          h("span.unit", {}, rangeText(param.range, param.unit)),
+          param.doc ? h("div.muted.small", {}, param.doc) : null,
+        ),
+      );
+    }
+    if (!rows.length) rows.push(h("div.muted", {}, target ? "No parameters." : "Nothing to run: the agent has no XABSL behavior."));
+    this.form.replaceChildren(...rows);
+  }
+
+  private params(): Record<string, number | boolean> {
+    const out: Record<string, number | boolean> = {};
+    for (const { param, control } of this.controls) {
+      if (param.type === "boolean") out[param.short_name] = (control as HTMLInputElement).checked;
+      else out[param.short_name] = Number(control.value);
+    }
+    return out;
+  }
+
+  run(): void {
+    const target = this.target();
+    const agent = this.session.selectedAgent;
+    if (!target) return;
+    const op = target.kind === "option" ? "force_option" : "force_behavior";
+    this.connection
+      .command(op, { agent, [target.kind]: target.name, params: this.params() })
+      .then(() => toast(`${target.name} runs as the root of ${this.session.agentInfo(agent)?.name}`, "ok"))
+      .catch((e: Error) => toast(`Could not run ${target.name}: ${e.message}`, "error"));
+  }
+
+  release(): void {
+    const agent = this.session.selectedAgent;
+    this.connection
+      .command("release", { agent })
+      .then(() => toast(`${this.session.agentInfo(agent)?.name} runs its own root again`, "ok"))
+      .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
+  }
+
+  private resetAgent(): void {
+    const agent = this.session.selectedAgent;
+    this.connection.command("reset_agent", { agent }).catch((e: Error) => toast(`Reset failed: ${e.message}`, "error"));
+  }
+
+  render(changes: Set<SessionEvent>): void {
+    if (changes.has("hello") || changes.has("select") || !this.picker.options.length) this.fillPicker();
+    const agent = this.session.live?.agents.find((a) => a.id === this.session.selectedAgent);
+    const index = this.session.indexOf(this.session.selectedAgent);
+    const name = this.session.agentInfo(this.session.selectedAgent)?.name ?? "";
+    let text = `${name}: runs its own root`;
+    if (agent?.forced) {
+      const [kind, id] = agent.forced;
+      const forced = kind === 0 ? index?.optionById.get(id)?.name : index?.behaviorById.get(id)?.name;
+      text = `${name}: forced to ${kind === 0 ? "option" : "basic behavior"} ${forced ?? id} — Release to go back`;
+    }
+    if (agent?.fault) text += ` · fault: ${agent.fault.message}`;
+    setText(this.state, text);
+    this.state.classList.toggle("forced", !!agent?.forced);
+  }
+}

@@ -1,0 +1,119 @@
+/// The timeline model: which option was active in which state, and when, over buffered ticks.
+///
+/// Pure functions from ticks to rows of segments, so the canvas only draws. A segment is a run
+/// of consecutive buffered ticks in which an option (row) was active in one state (segment
+/// label); it ends where the next tick starts, so adjacent segments touch.
+import type { DescriptionIndex } from "./description";
+import type { Tick } from "./protocol";
+
+export interface Segment {
+  t0: number;
+  t1: number;
+  /// State id (option rows), behavior id (behavior rows), or a key of the label (team rows).
+  key: number;
+  label: string;
+}
+
+export interface TimelineRow {
+  kind: "option" | "behavior" | "agent";
+  /// Option id, behavior id, or agent id.
+  id: number;
+  label: string;
+  depth: number;
+  segments: Segment[];
+}
+
+function extend(row: TimelineRow, t0: number, t1: number, key: number, label: string, continuing: boolean): void {
+  const last = row.segments[row.segments.length - 1];
+  if (continuing && last && last.key === key && last.label === label && last.t1 >= t0) last.t1 = t1;
+  else row.segments.push({ t0, t1, key, label });
+}
+
+/// End of tick `i`: the start of the next one, or one typical tick later for the newest.
+function tickEnd(ticks: readonly Tick[], i: number): number {
+  const next = ticks[i + 1];
+  if (next) return next.t;
+  const tick = ticks[i] as Tick;
+  const prev = ticks[i - 1];
+  return tick.t + (prev ? Math.max(1, tick.t - prev.t) : 25);
+}
+
+/// One row per option (segments per state) and per basic behavior the agent ran in `ticks`.
+///
+/// Rows are ordered by the shallowest depth the option ran at, then by first appearance, so the
+/// root comes first and the chart reads like the option graph from top to bottom.
+export function buildAgentTimeline(ticks: readonly Tick[], agentId: number, index: DescriptionIndex | null): TimelineRow[] {
+  const rows = new Map<string, TimelineRow & { first: number }>();
+  const activeBefore = new Set<string>();
+  ticks.forEach((tick, i) => {
+    const agent = tick.agents.find((a) => a.id === agentId);
+    const t1 = tickEnd(ticks, i);
+    const activeNow = new Set<string>();
+    for (const node of agent?.path ?? []) {
+      const key = node.kind === "option" ? `o${node.option}` : `b${node.behavior}`;
+      let row = rows.get(key);
+      if (!row) {
+        const label =
+          node.kind === "option"
+            ? (index?.optionById.get(node.option)?.name ?? `option ${node.option}`)
+            : (index?.behaviorById.get(node.behavior)?.name ?? `behavior ${node.behavior}`);
+        row = { kind: node.kind, id: node.kind === "option" ? node.option : node.behavior, label, depth: node.depth, segments: [], first: i };
+        rows.set(key, row);
+      }
+      row.depth = Math.min(row.depth, node.depth);
+      if (node.kind === "option") {
+        const option = index?.optionById.get(node.option);
+        const stateName = option?.states[node.state]?.name ?? `state ${node.state}`;
+        extend(row, tick.t, t1, node.state, stateName, activeBefore.has(key));
+      } else {
+        extend(row, tick.t, t1, node.behavior, row.label, activeBefore.has(key));
+      }
+      activeNow.add(key);
+    }
+    activeBefore.clear();
+    for (const k of activeNow) activeBefore.add(k);
+  });
+  return [...rows.values()]
+    .sort((a, b) => a.depth - b.depth || a.first - b.first)
+    .map(({ first: _first, ...row }) => row);
+}
+
+/// One row per agent: segments labelled `root option/state` of its root (or the basic behavior).
+export function buildTeamTimeline(
+  ticks: readonly Tick[],
+  agents: ReadonlyArray<{ id: number; name: string }>,
+  indexOf: (agentId: number) => DescriptionIndex | null,
+): TimelineRow[] {
+  const rows = agents.map<TimelineRow>((a) => ({ kind: "agent", id: a.id, label: a.name, depth: 0, segments: [] }));
+  const byId = new Map(rows.map((r) => [r.id, r]));
+  const labels = new Map<string, number>();
+  ticks.forEach((tick, i) => {
+    const t1 = tickEnd(ticks, i);
+    for (const agent of tick.agents) {
+      const row = byId.get(agent.id);
+      const root = agent.path[0];
+      if (!row || !root) continue;
+      const index = indexOf(agent.id);
+      let label: string;
+      if (root.kind === "option") {
+        const option = index?.optionById.get(root.option);
+        label = `${option?.name ?? root.option}/${option?.states[root.state]?.name ?? root.state}`;
+      } else {
+        label = index?.behaviorById.get(root.behavior)?.name ?? `behavior ${root.behavior}`;
+      }
+      let key = labels.get(label);
+      if (key === undefined) {
+        key = labels.size;
+        labels.set(label, key);
+      }
+      const last = row.segments[row.segments.length - 1];
+      extend(row, tick.t, t1, key, label, !!last && last.t1 >= tick.t);
+    }
+  });
+  return rows;
+}
+
+/// A stable colour for a segment key (state id or label key): hue spread by the golden angle.
+export function segmentHue(key: number): number {
+  return Math.round((key * 137.508 + 200) % 360);
+}
