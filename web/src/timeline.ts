@@ -40,8 +40,9 @@ function tickEnd(ticks: readonly Tick[], i: number): number {
 
 /// One row per option (segments per state) and per basic behavior the agent ran in `ticks`.
 ///
-/// Rows are ordered by the shallowest depth the option ran at, then by first appearance, so the
-/// root comes first and the chart reads like the option graph from top to bottom.
+/// Rows are ordered by the shallowest depth the option ran at (options before basic behaviors of
+/// the same depth), then by first appearance, so the root comes first and the chart reads like
+/// the option graph from top to bottom.
 export function buildAgentTimeline(ticks: readonly Tick[], agentId: number, index: DescriptionIndex | null): TimelineRow[] {
   const rows = new Map<string, TimelineRow & { first: number }>();
   const activeBefore = new Set<string>();
@@ -74,7 +75,7 @@ export function buildAgentTimeline(ticks: readonly Tick[], agentId: number, inde
     for (const k of activeNow) activeBefore.add(k);
   });
   return [...rows.values()]
-    .sort((a, b) => a.depth - b.depth || a.first - b.first)
+    .sort((a, b) => a.depth - b.depth || (a.kind === b.kind ? 0 : a.kind === "option" ? -1 : 1) || a.first - b.first)
     .map(({ first: _first, ...row }) => row);
 }
 

@@ -43,12 +43,17 @@ export function formatValue(value: Value | undefined | null, type?: ValueType, e
   if (value === undefined || value === null) return "–";
   if (type === "enum" || (enumName && typeof value === "number")) {
     const elements = enumName ? index?.enumByName.get(enumName)?.elements : undefined;
-    if (elements && typeof value === "number") return value >= 0 && value < elements.length ? (elements[value] as string) : "?";
+    if (elements && typeof value === "number") return value >= 0 && value < elements.length ? shortElement(elements[value] as string, enumName) : "?";
   }
   if (typeof value === "boolean") return value ? "true" : "false";
   if (type === "boolean") return value ? "true" : "false";
   if (Number.isInteger(value)) return String(value);
   return String(Math.round(value * 1000) / 1000);
+}
+
+/// An enum element without its enumeration's prefix (`game.state.playing` -> `playing`).
+export function shortElement(element: string, enumName: string | null | undefined): string {
+  return enumName && element.startsWith(`${enumName}.`) ? element.slice(enumName.length + 1) : element;
 }
 
 /// Milliseconds as seconds: "12.3 s", or "850 ms" below one second.

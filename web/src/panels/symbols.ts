@@ -5,7 +5,7 @@ import type { Connection } from "../connection";
 import type { DescriptionIndex, InputSymbol, OutputSymbol } from "../description";
 import { rangeText } from "../description";
 import type { Session, SessionEvent } from "../session";
-import { formatValue, h, setText, toast, toggleClass } from "../ui";
+import { formatValue, h, setText, shortElement, toast, toggleClass } from "../ui";
 import type { PlotPanel } from "./plot";
 
 interface SymbolRow {
@@ -109,7 +109,7 @@ export class SymbolsPanel {
       control.value = current ? "true" : "false";
     } else if (symbol.type === "enum") {
       const elements = index?.enumByName.get(symbol.enum ?? "")?.elements ?? [];
-      control = h("select", {}, ...elements.map((e, i) => h("option", { value: i }, e)));
+      control = h("select", {}, ...elements.map((e, i) => h("option", { value: i }, shortElement(e, symbol.enum))));
       control.value = String(typeof current === "number" ? current : 0);
     } else {
       control = h("input", { type: "number", step: "any", value: typeof current === "number" ? current : 0 });

@@ -5,7 +5,7 @@
 import type { Connection } from "../connection";
 import { type Parameter, parseRange, rangeText } from "../description";
 import type { Session, SessionEvent } from "../session";
-import { h, setText, toast } from "../ui";
+import { h, setText, shortElement, toast } from "../ui";
 
 type Target = { kind: "option" | "behavior"; name: string };
 
@@ -95,7 +95,7 @@ export class TesterPanel {
         control = h("input", { type: "checkbox", id, name: param.short_name });
       } else if (param.type === "enum") {
         const elements = index?.enumByName.get(param.enum ?? "")?.elements ?? [];
-        control = h("select", { id, name: param.short_name }, ...elements.map((e, i) => h("option", { value: i }, e)));
+        control = h("select", { id, name: param.short_name }, ...elements.map((e, i) => h("option", { value: i }, shortElement(e, param.enum))));
       } else {
         const range = parseRange(param.range);
         control = h("input", {

@@ -163,7 +163,7 @@ class Completer {
   enumElements(enumName: string): Completion[] {
     const e = this.index?.enumByName.get(enumName);
     return (e?.elements ?? []).map((el) => ({
-      label: el,
+      label: el.startsWith(`${enumName}.`) ? el.slice(enumName.length + 1) : el,
       type: "enum",
       detail: `${enumName}`,
       info: info(e?.doc ?? null),
@@ -236,7 +236,7 @@ class Completer {
     if (typed.startsWith("@")) return result(this.optionParams(text));
 
     const call = openCall(before);
-    if (call) {
+    if (call && this.calleeParams(call.callee)) {
       const argPart = call.argText.split(",").pop() ?? "";
       if (/^\s*$/.test(argPart)) return result(this.paramNames(call.callee, call.argText));
       const value = argPart.match(new RegExp(`^\\s*(${IDENT})\\s*=\\s*$`));
