@@ -11,7 +11,7 @@ export interface LayoutState {
 }
 
 const DEFAULTS: LayoutState = {
-  sizes: { left: 420, right: 380, bottom: 220, plot: 420, field: 320 },
+  sizes: { left: 420, right: 380, bottom: 270, plot: 420, field: 320 },
   tabs: {},
   theme: "dark",
 };

@@ -108,6 +108,7 @@ export class GraphPanel {
             if (!this.view.show(svg)) this.view.clear("The server sent an unreadable graph.");
             this.mark();
             this.highlight(true);
+            this.view.focusIfTiny(this.deepest);
           })
           .catch((error: Error) => {
             if (this.loading !== k) return;

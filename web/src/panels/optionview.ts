@@ -99,6 +99,8 @@ export class OptionView {
             this.key = k;
             if (!this.view.show(svg)) this.view.clear("The server sent an unreadable state machine.");
             this.highlight(option);
+            const node = this.node(option);
+            this.view.focusIfTiny(node ? `state_${node.state}` : null);
           })
           .catch((error: Error) => {
             if (this.loading !== k) return;

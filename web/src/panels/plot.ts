@@ -93,7 +93,7 @@ export class PlotPanel {
       ),
     );
     if (!this.pins.length) {
-      this.host.replaceChildren(h("div.empty", {}, "Pin symbols with 📈 in the Symbols panel to plot them here."));
+      this.host.replaceChildren(h("div.empty", {}, "Pin symbols with “plot” in the Symbols panel to plot them here."));
       return;
     }
     this.host.replaceChildren();

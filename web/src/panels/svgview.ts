@@ -121,6 +121,11 @@ export class SvgView {
     this.apply();
   }
 
+  /// After `fit`: when the whole graph is too small to read, centre `id` at a readable zoom.
+  focusIfTiny(id: string | null): void {
+    if (id && this.zoom < 0.55) requestAnimationFrame(() => this.centerOn(id));
+  }
+
   /// Centre the element `id` in the view (zooming in to a readable size if needed).
   centerOn(id: string): void {
     const el = this.ids.get(id) as SVGGraphicsElement | undefined;

@@ -44,12 +44,12 @@ export class SymbolsPanel {
       for (const symbol of symbols) {
         if (kind === "input" && (symbol as InputSymbol).params.length) continue; // functions are not streamed
         const value = h("span.value");
-        const pin = h("button.icon", { title: "Pin to the plot (P)", "aria-label": `pin ${symbol.name}` }, "📈");
+        const pin = h("button.icon", { title: "Pin to the plot (P)", "aria-label": `pin ${symbol.name}` }, "plot");
         pin.addEventListener("click", () => this.plot.toggle(this.session.selectedAgent, kind, symbol.id));
         const facts = [symbol.type === "enum" ? `enum ${symbol.enum}` : symbol.type === "boolean" ? "bool" : "", rangeText(symbol.range, symbol.unit)].filter((x) => x).join(" · ");
         const override =
           kind === "input"
-            ? h("button.icon", { title: "Override this input", "aria-label": `override ${symbol.name}`, onclick: () => this.editOverride(row) }, "✎")
+            ? h("button.icon", { title: "Override this input", "aria-label": `override ${symbol.name}`, onclick: () => this.editOverride(row) }, "set…")
             : null;
         const el = h(
           "div.symbol-row",

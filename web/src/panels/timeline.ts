@@ -80,17 +80,18 @@ export class TimelinePanel {
 
   private clickLabel(y: number): void {
     let top = AXIS_H + GAP;
-    for (const row of this.team) {
-      if (y >= top && y < top + TEAM_ROW) return this.session.selectAgent(row.id);
-      top += TEAM_ROW;
-    }
-    top += GAP;
     for (const row of this.rows) {
       if (y >= top && y < top + OPTION_ROW) {
         if (row.kind === "option") this.openOption(row.id);
         return;
       }
       top += OPTION_ROW;
+    }
+    if (!this.rows.length) top += OPTION_ROW;
+    top += GAP;
+    for (const row of this.team) {
+      if (y >= top && y < top + TEAM_ROW) return this.session.selectAgent(row.id);
+      top += TEAM_ROW;
     }
   }
 
@@ -152,9 +153,6 @@ export class TimelinePanel {
       ctx.stroke();
     }
     let top = AXIS_H;
-    ctx.fillStyle = fg;
-    ctx.fillText("Team (root option/state)", 4, top + GAP / 2);
-    top += GAP;
     const drawRow = (row: TimelineRow, y: number, h: number, label: string, indent: number, selected: boolean): void => {
       ctx.fillStyle = selected ? (dark ? "rgba(255,213,74,0.15)" : "rgba(255,193,7,0.2)") : "transparent";
       ctx.fillRect(0, y, width, h);
@@ -174,10 +172,6 @@ export class TimelinePanel {
         }
       }
     };
-    for (const row of this.team) {
-      drawRow(row, top, TEAM_ROW, row.label, 0, row.id === session.selectedAgent);
-      top += TEAM_ROW;
-    }
     ctx.fillStyle = fg;
     ctx.fillText(`${session.agentInfo(session.selectedAgent)?.name ?? ""}: options and their states`, 4, top + GAP / 2);
     top += GAP;
@@ -189,6 +183,14 @@ export class TimelinePanel {
     for (const row of this.rows) {
       drawRow(row, top, OPTION_ROW, row.kind === "behavior" ? `● ${row.label}` : row.label, row.depth * 8, row.kind === "option" && row.id === openOption);
       top += OPTION_ROW;
+    }
+    if (!this.rows.length) top += OPTION_ROW;
+    ctx.fillStyle = fg;
+    ctx.fillText("Team (root option/state)", 4, top + GAP / 2);
+    top += GAP;
+    for (const row of this.team) {
+      drawRow(row, top, TEAM_ROW, row.label, 0, row.id === session.selectedAgent);
+      top += TEAM_ROW;
     }
     const cursor = session.cursor;
     if (cursor !== null) {

@@ -23,7 +23,7 @@ export class TopBar {
   ) {
     this.agentPicker = h("select#agent-picker", { "aria-label": "Agent", title: "Selected agent (1..9, 0)" });
     this.agentPicker.addEventListener("change", () => session.selectAgent(Number(this.agentPicker.value)));
-    this.pauseButton = h("button#pause", { title: "Pause / resume the simulation (Space)", onclick: () => this.togglePause() }, "⏸ Pause");
+    this.pauseButton = h("button#pause", { title: "Pause / resume the simulation (Space)", onclick: () => this.togglePause() }, "❚❚ Pause");
     this.speed = h("select#speed", { "aria-label": "Speed", title: "Simulation speed" }, ...[0.25, 0.5, 1, 2, 4].map((s) => h("option", { value: s }, `${s}×`)));
     this.speed.value = "1";
     this.speed.addEventListener("change", () => {
@@ -46,9 +46,9 @@ export class TopBar {
         "div.group",
         { role: "group", "aria-label": "Simulation" },
         this.pauseButton,
-        h("button#step", { title: "Run one tick while paused (.)", onclick: () => this.step() }, "⏭ Step"),
+        h("button#step", { title: "Run one tick while paused (.)", onclick: () => this.step() }, "▶❚ Step"),
         this.speed,
-        h("button#reset", { title: "Restart the match from time 0", onclick: () => this.reset() }, "⟲ Reset"),
+        h("button#reset", { title: "Restart the match from time 0", onclick: () => this.reset() }, "↺ Reset"),
       ),
       this.clock,
       h("span.spacer"),
@@ -68,7 +68,7 @@ export class TopBar {
 
   private setPaused(paused: boolean): void {
     this.paused = paused;
-    this.pauseButton.textContent = paused ? "▶ Resume" : "⏸ Pause";
+    this.pauseButton.textContent = paused ? "▶ Resume" : "❚❚ Pause";
     this.pauseButton.classList.toggle("on", paused);
   }
 
