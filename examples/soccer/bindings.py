@@ -127,6 +127,8 @@ class SoccerSymbols:
         self._opponents_at = -1
         self._opponents: list[tuple[float, float]] = []
         self._team_at = -1
+        self._rank_key: tuple[int, float] = (-1, 0.0)
+        self._rank = 0.0
         self.striker_known = False
         self.striker_x = self.striker_y = 0.0
         self.pass_available = False
@@ -176,9 +178,12 @@ class SoccerSymbols:
 
         A teammate is better with a smaller published time, or the same time and a smaller
         number, so that exactly one robot gets rank 0 when all know the same values. Goalies and
-        silent teammates (no message for ``MESSAGE_TIMEOUT_MS``) do not count.
+        silent teammates (no message for ``MESSAGE_TIMEOUT_MS``) do not count. Behaviors ask
+        several times per tick with the same time, so the last answer is cached.
         """
         wm = self.wm
+        if self._rank_key == (wm.time_ms, time):
+            return self._rank
         oldest = wm.time_ms - MESSAGE_TIMEOUT_MS
         me = wm.number
         better = 0
@@ -188,7 +193,9 @@ class SoccerSymbols:
             other = message.payload.get("time_to_ball", NO_TIME_TO_BALL)
             if other < time or (other == time and message.sender < me):
                 better += 1
-        return float(better)
+        self._rank_key = (wm.time_ms, time)
+        self._rank = float(better)
+        return self._rank
 
     def _team(self) -> None:
         """Compute the team queries once per tick: striker, pass target, team ball."""

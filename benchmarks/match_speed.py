@@ -1,0 +1,96 @@
+"""How fast does a whole XABSL match run? 10 simulated minutes of 5 vs 5, headless.
+
+Both teams are XABSL behaviors run by the engine: the example team (31 options) at home, the
+chase team (2 options) away, as ``xabsl run examples/soccer`` plays them but without statistics
+or activation recording. Prints wall and CPU time, the real-time factor (goal: >= 100x on a
+2-core machine), the share of each phase of the host loop (``run_headless``'s phase times), and
+the engine's cost per agent tick split by team. ``--profile`` adds a cProfile of the engine phase
+alone (the functions where the engine's ticks spend their time).
+
+Usage: ``.venv/bin/python benchmarks/match_speed.py [--seconds 600] [--seed 1] [--profile]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import platform
+import pstats
+import time
+
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, run_headless
+from examples.soccer.run import build_world
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=600.0, help="simulated seconds (default 600)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--profile", action="store_true", help="also profile the engine phase (slower run)")
+    args = parser.parse_args()
+
+    # Halves long enough that the match does not end before the simulated time does.
+    world = build_world(args.seed, half_duration_s=args.seconds / 2)
+    cpu_start = time.process_time()
+    stats = run_headless(world, args.seconds, stop_when_finished=False)
+    cpu = time.process_time() - cpu_start
+
+    agent_ticks = stats.ticks * len(world.agents)
+    phases = stats.phases
+    print(f"XABSL match, 5 vs 5 (example team vs chase), seed {args.seed}, python {platform.python_version()}")
+    print(f"rates: physics {DEFAULT_PHYSICS_HZ} Hz, behavior {DEFAULT_BEHAVIOR_HZ} Hz; "
+          f"{stats.ticks} ticks, {stats.physics_steps} physics steps")
+    print(f"simulated {stats.sim_seconds:.1f} s in {stats.wall_seconds:.2f} s wall ({cpu:.2f} s cpu)")
+    print(f"real-time factor: {stats.real_time_factor:.0f}x wall, {stats.sim_seconds / cpu:.0f}x cpu")
+    for name, seconds in (("engine (XABSL)", phases.engine), ("physics", phases.physics),
+                          ("perception", phases.perception), ("actuation", phases.actuation)):
+        share = seconds / phases.total if phases.total else 0.0
+        print(f"  {name:<16} {seconds:6.2f} s  {100 * share:5.1f} %")
+    print(f"engine per agent tick: {1e6 * phases.engine / agent_ticks:.1f} us (both teams)")
+    status = world.status()
+    print(f"score {status['teams'][0]} {status['score'][0]} : {status['score'][1]} {status['teams'][1]}")
+
+    # Engine cost per team: tick each team's controllers alone for a while on a fresh match.
+    world = build_world(args.seed, half_duration_s=args.seconds / 2)
+    loop = BehaviorLoop(world)
+    for _ in range(40 * 30):  # into PLAYING
+        loop.tick()
+    per_team = [0.0, 0.0]
+    ticks = 40 * 60
+    for _ in range(ticks):
+        now = loop.now_ms
+        for agent in world.agents:
+            agent.sense(now)
+        for team in (0, 1):
+            t0 = time.perf_counter()
+            for agent in world.agents[5 * team:5 * team + 5]:
+                agent.controller.execute(now)
+            per_team[team] += time.perf_counter() - t0
+        for agent in world.agents:
+            agent.act(now)
+        for _ in range(DEFAULT_PHYSICS_HZ // DEFAULT_BEHAVIOR_HZ):
+            world.step(1 / DEFAULT_PHYSICS_HZ)
+        loop.ticks += 1
+    for team, name in ((0, "example team (31 options)"), (1, "chase team (2 options)")):
+        print(f"  {name:<28} {1e6 * per_team[team] / (5 * ticks):5.1f} us per agent tick")
+
+    if args.profile:
+        profiler = cProfile.Profile()
+        for _ in range(ticks):
+            now = loop.now_ms
+            for agent in world.agents:
+                agent.sense(now)
+            profiler.enable()
+            for agent in world.agents:
+                agent.controller.execute(now)
+            profiler.disable()
+            for agent in world.agents:
+                agent.act(now)
+            for _ in range(DEFAULT_PHYSICS_HZ // DEFAULT_BEHAVIOR_HZ):
+                world.step(1 / DEFAULT_PHYSICS_HZ)
+            loop.ticks += 1
+        pstats.Stats(profiler).sort_stats("tottime").print_stats(25)
+
+
+if __name__ == "__main__":
+    main()
