@@ -8,7 +8,8 @@ precedence table of §1.3, either with as few parentheses as the grammar needs o
 parentheses around every subexpression. The properties:
 
 * a generated set compiles without errors, and compiling it twice gives the same IC and the
-  same diagnostics; permuting the include lines of the agents file does not change the IC;
+  same diagnostics (also in other processes with other hash seeds); permuting the include
+  lines of the agents file does not change the IC;
 * the IC does not depend on redundant parentheses (the IC has none, and ``&&``/``||`` chains
   are flattened through parentheses, §3.3);
 * mutated sources (generated sets and the conformance kit's behavior sets) never make
@@ -21,9 +22,13 @@ Examples are derandomized so CI runs are reproducible.
 
 from __future__ import annotations
 
+import json
+import os
 import random
 import re
 import shutil
+import subprocess
+import sys
 import tempfile
 import time
 from collections.abc import Iterator, Sequence
@@ -732,6 +737,40 @@ def test_mutated_generated_sets_give_diagnostics_not_exceptions(
 ) -> None:
     files = {name: text.encode("utf-8") for name, text in generated.render().items()}
     check_mutant(files, rnd)
+
+
+def fingerprints_for_seeds(count: int) -> str:
+    """JSON of the fingerprints of ``count`` generated sets (every other one mutated) and the kit.
+
+    Run in a subprocess by the hash-seed test below, hence plain ``random.Random`` seeds.
+    """
+    results: dict[str, tuple[str | None, list[str]]] = {}
+    for seed in range(count):
+        rnd = random.Random(seed)
+        generated = Generator(rnd, options=rnd.randint(1, 6)).generate()
+        files = {name: text.encode("utf-8") for name, text in generated.render().items()}
+        if seed % 2:
+            name = rnd.choice(sorted(files))
+            files[name] = mutate(files[name], rnd)
+        with behavior_folder(files) as root:
+            results[f"generated-{seed}"] = fingerprint(compile_folder(root))
+    for name, kit_files in KIT_SETS.items():
+        with behavior_folder(kit_files) as root:
+            results[name] = fingerprint(compile_folder(root))
+    return json.dumps(results, sort_keys=True)
+
+
+def test_output_does_not_depend_on_the_hash_seed() -> None:
+    """Compiling twice in one process cannot see set-iteration order; other hash seeds can."""
+    expected = fingerprints_for_seeds(20)
+    root = Path(__file__).resolve().parents[2]
+    for hash_seed in ("1", "12345"):
+        script = "from tests.lang.test_properties import fingerprints_for_seeds as f; print(f(20))"
+        result = subprocess.run(
+            [sys.executable, "-c", script], cwd=root, env={**os.environ, "PYTHONHASHSEED": hash_seed},
+            capture_output=True, text=True, check=True,
+        )
+        assert result.stdout.strip() == expected, f"PYTHONHASHSEED={hash_seed} changes the output"
 
 
 # --------------------------------------------------------------------------------------------
