@@ -23,7 +23,7 @@ export class SvgView {
     this.element.addEventListener("wheel", (ev) => this.wheel(ev), { passive: false });
     this.element.addEventListener("pointerdown", (ev) => this.drag(ev));
     this.element.addEventListener("click", (ev) => {
-      const target = (ev.target as Element).closest("g[id]");
+      const target = (ev.target as Element).closest("g.node[id], g.edge[id]");
       if (target && this.onClick && !this.element.classList.contains("panned")) this.onClick(target.id, ev);
     });
     this.element.addEventListener("keydown", (ev) => {

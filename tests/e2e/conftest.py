@@ -1,0 +1,149 @@
+"""Fixtures for the studio's end-to-end tests: a real ``xabsl serve`` and Debian's chromium.
+
+The server runs as a subprocess of the real command line on a free loopback port, serving the
+built UI (``web/dist``, made by ``make web``) and a private copy of the soccer behaviors, so the
+tests may break and fix files. The browser is Debian's ``/usr/bin/chromium`` driven by Playwright
+for Python (never a downloaded browser), headless, with a fresh user-data directory.
+
+Without chromium or a built UI these tests skip with the reason; ``make test`` provides both.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+CHROMIUM = Path("/usr/bin/chromium")
+WEB_DIST = REPO / "web" / "dist"
+SCREENSHOTS = REPO / "docs" / "screenshots"
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class StudioServer:
+    """``xabsl serve`` on a soccer copy, started, stopped and restarted on one port."""
+
+    def __init__(self, example: Path, port: int, log: Path) -> None:
+        self.example = example
+        self.port = port
+        self.log = log
+        self.process: subprocess.Popen[bytes] | None = None
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.port}/"
+
+    def start(self) -> None:
+        xabsl = Path(sys.executable).with_name("xabsl")
+        command = [str(xabsl), "serve", str(self.example), "--port", str(self.port), "--web-dist", str(WEB_DIST)]
+        with self.log.open("ab") as log:
+            self.process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"xabsl serve exited: {self.log.read_text(errors='replace')}")
+            try:
+                with urllib.request.urlopen(self.url + "api/status", timeout=2) as response:
+                    if response.status == 200:
+                        return
+            except OSError:
+                time.sleep(0.2)
+        raise RuntimeError("xabsl serve did not answer within 60 s")
+
+    def stop(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(timeout=5)
+        self.process = None
+
+    def restart(self) -> None:
+        self.stop()
+        self.start()
+
+
+@pytest.fixture(scope="module")
+def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
+    if not CHROMIUM.exists():
+        pytest.skip("Debian chromium is not installed (make test-deps installs it)")
+    if not (WEB_DIST / "index.html").is_file():
+        pytest.skip("the web UI is not built (make web builds it)")
+    root = tmp_path_factory.mktemp("studio")
+    example = root / "soccer"
+    example.mkdir()
+    for name in ("behavior", "chase"):
+        shutil.copytree(REPO / "examples" / "soccer" / name, example / name)
+    # load_example recognises the soccer example by its world module next to the behaviors;
+    # the world's code itself comes from the installed package.
+    (example / "world.py").write_text('"""Marker: the soccer world lives in examples.soccer.world."""\n')
+    server = StudioServer(example, free_port(), root / "serve.log")
+    server.start()
+    yield server
+    server.stop()
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
+    if not CHROMIUM.exists():
+        pytest.skip("Debian chromium is not installed (make test-deps installs it)")
+    from playwright.sync_api import sync_playwright
+
+    profile = tmp_path_factory.mktemp("chromium-profile")
+    os.environ.setdefault("PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD", "1")
+    with sync_playwright() as p:
+        context = p.chromium.launch_persistent_context(
+            str(profile),
+            executable_path=str(CHROMIUM),
+            headless=True,
+            args=CHROMIUM_ARGS,
+            viewport={"width": 1600, "height": 1000},
+        )
+        yield context
+        context.close()
+
+
+@pytest.fixture
+def page(browser: Any, studio: StudioServer) -> Iterator[Any]:
+    """A fresh tab on the studio, live (the first frames have arrived)."""
+    tab = browser.new_page()
+    errors: list[str] = []
+    tab.on("pageerror", lambda error: errors.append(str(error)))
+    tab.goto(studio.url)
+    tab.wait_for_function("() => window.xabslStudio && window.xabslStudio.session.buffer.length > 5", timeout=30000)
+    yield tab
+    tab.close()
+    assert not errors, f"uncaught errors in the page: {errors}"
+
+
+def screenshot(page: Any, name: str) -> None:
+    """Save a screenshot of the whole window into docs/screenshots/NAME.png."""
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SCREENSHOTS / f"{name}.png"))
