@@ -55,7 +55,8 @@ export interface Structure {
 export interface StaticScene {
   kind: string;
   units?: Record<string, string>;
-  field?: { length: number; width: number; border: number; line_width: number };
+  /// Soccer: `{length, width, border, line_width}`; simpler worlds: `{x: [lo, hi], y: [lo, hi]}`.
+  field?: { length?: number; width?: number; border?: number; line_width?: number; x?: number[]; y?: number[] };
   lines?: number[][];
   circles?: number[][];
   marks?: number[][];

@@ -43,10 +43,20 @@ export class FieldPanel {
     this.draw();
   }
 
-  private extent(scene: StaticScene | null): { w: number; h: number } {
-    const f = scene?.field;
-    if (!f) return { w: 10400, h: 7400 };
-    return { w: f.length + 2 * f.border, h: f.width + 2 * f.border };
+  /// The world rectangle to show: the soccer field with its border, or a plain `{x: [lo, hi],
+  /// y: [lo, hi]}` field of a simpler world.
+  private bounds(scene: StaticScene | null): { x0: number; x1: number; y0: number; y1: number } {
+    const f = scene?.field as Record<string, unknown> | undefined;
+    if (f && Array.isArray(f.x) && Array.isArray(f.y)) {
+      const [x0, x1] = f.x as number[];
+      const [y0, y1] = f.y as number[];
+      const m = 0.05 * Math.max((x1 ?? 0) - (x0 ?? 0), 1);
+      return { x0: (x0 ?? 0) - m, x1: (x1 ?? 0) + m, y0: (y0 ?? 0) - m, y1: (y1 ?? 0) + m };
+    }
+    const length = typeof f?.length === "number" ? f.length : 9000;
+    const width = typeof f?.width === "number" ? f.width : 6000;
+    const border = typeof f?.border === "number" ? f.border : 700;
+    return { x0: -length / 2 - border, x1: length / 2 + border, y0: -width / 2 - border, y1: width / 2 + border };
   }
 
   private toScreen(x: number, y: number): [number, number] {
@@ -60,15 +70,18 @@ export class FieldPanel {
     bg.height = this.canvas.height;
     const g = bg.getContext("2d") as CanvasRenderingContext2D;
     g.setTransform(dpr, 0, 0, dpr, 0, 0);
-    const { w, h: hh } = this.extent(scene);
+    const b = this.bounds(scene);
+    const w = b.x1 - b.x0;
+    const hh = b.y1 - b.y0;
     this.scale = Math.min(this.width / w, this.height / hh) * 0.98;
-    this.cx = this.width / 2;
-    this.cy = this.height / 2;
+    this.cx = this.width / 2 - ((b.x0 + b.x1) / 2) * this.scale;
+    this.cy = this.height / 2 + ((b.y0 + b.y1) / 2) * this.scale;
     const style = getComputedStyle(document.documentElement);
     g.fillStyle = style.getPropertyValue("--field-bg").trim() || "#2f7d32";
-    g.fillRect(this.cx - (w / 2) * this.scale, this.cy - (hh / 2) * this.scale, w * this.scale, hh * this.scale);
+    const [left, top] = this.toScreen(b.x0, b.y1);
+    g.fillRect(left, top, w * this.scale, hh * this.scale);
     g.strokeStyle = "rgba(255,255,255,0.9)";
-    g.lineWidth = Math.max(1, (scene?.field?.line_width ?? 50) * this.scale);
+    g.lineWidth = Math.max(1, ((scene?.field as { line_width?: number } | undefined)?.line_width ?? 50) * this.scale);
     for (const [x1, y1, x2, y2] of (scene?.lines ?? []) as number[][]) {
       const [a, b] = this.toScreen(x1 ?? 0, y1 ?? 0);
       const [c, d] = this.toScreen(x2 ?? 0, y2 ?? 0);
