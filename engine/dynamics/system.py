@@ -28,19 +28,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 
 import numpy as np
 
 from engine.dynamics.model import DDModel, ModelError
 
-_minimum = np.minimum
-_maximum = np.maximum
 
-
-@dataclass(frozen=True, slots=True)
 class TickRecord:
-    """Everything one tick computed, for the debugger (arrays are fresh, never mutated later).
+    """Everything one tick computed, for the debugger (§4.3 items 1, 2 and 5).
+
+    The tick keeps its numbers as Python lists and hands out a fresh numpy array on every
+    attribute access, so a record is never changed by later ticks and the headless loop pays for
+    arrays only when somebody looks (the errands speed target, §4.4).
 
     Attributes:
         t: simulation time after the tick (s).
@@ -52,55 +51,74 @@ class TickRecord:
         d_oct: per operator with s > 0, dt·s·c·(Z − α) per behavior.
         d_noise: σ·√dt·ξ per behavior.
         switches: s_OP after this tick's switch update (the values the OCTs used).
-        pair_targets: m*_i per (behavior, actuator) target pair of the model (``targets`` is the
-            behavior × actuator matrix, NaN where a behavior has no target, built on demand).
-        pair_contributions: α_i·λ_im·(m*_i − m) per target pair (1/s); ``contributions`` is the
-            matrix, built on demand.
+        pair_targets: m*_i per (behavior, actuator) target pair of the model.
+        pair_contributions: α_i·λ_im·(m*_i − m) per target pair (1/s).
+        targets: behavior × actuator matrix of m*_i (NaN where a behavior has no target).
+        contributions: behavior × actuator matrix of α_i·λ_im·(m*_i − m) (1/s).
         decay: per actuator, −decay·m (1/s).
         actuators: actuator values after commit.
         slow: slow variables after commit.
         model: the model, for names and the pair layout.
-
-    The matrices are properties rather than fields because building them costs more than the
-    rest of the record, and the headless loop rarely looks at them (errands speed target, §4.4).
     """
 
-    t: float
-    dt: float
-    features: np.ndarray
-    u: np.ndarray
-    T: np.ndarray
-    alpha: np.ndarray
-    d_relax: np.ndarray
-    d_oct: Mapping[str, np.ndarray]
-    d_noise: np.ndarray
-    switches: Mapping[str, float]
-    pair_targets: np.ndarray
-    pair_contributions: np.ndarray
-    decay: np.ndarray
-    actuators: np.ndarray
-    slow: np.ndarray
-    model: DDModel
+    __slots__ = ("_T", "_act", "_alpha", "_contrib", "_d_noise", "_d_oct", "_d_relax", "_decay", "_features",
+                 "_slow", "_tgt", "_u", "dt", "model", "switches", "t")  # fmt: skip
+
+    def __init__(
+        self,
+        t: float,
+        dt: float,
+        model: DDModel,
+        lists: tuple[list[float], ...],
+        d_oct: Mapping[str, list[float]],
+        switches: Mapping[str, float],
+    ) -> None:
+        self.t = t
+        self.dt = dt
+        self.model = model
+        self.switches = switches
+        self._d_oct = d_oct
+        (self._features, self._u, self._T, self._alpha, self._d_relax, self._d_noise, self._tgt, self._contrib,
+         self._decay, self._act, self._slow) = lists  # fmt: skip
+
+    features = property(lambda self: np.array(self._features))
+    u = property(lambda self: np.array(self._u))
+    T = property(lambda self: np.array(self._T))
+    alpha = property(lambda self: np.array(self._alpha))
+    d_relax = property(lambda self: np.array(self._d_relax))
+    d_noise = property(lambda self: np.array(self._d_noise))
+    pair_targets = property(lambda self: np.array(self._tgt))
+    pair_contributions = property(lambda self: np.array(self._contrib))
+    decay = property(lambda self: np.array(self._decay))
+    actuators = property(lambda self: np.array(self._act))
+    slow = property(lambda self: np.array(self._slow))
+
+    @property
+    def d_oct(self) -> dict[str, np.ndarray]:
+        return {op: np.array(v) for op, v in self._d_oct.items()}
 
     @property
     def targets(self) -> np.ndarray:
-        """Behavior × actuator matrix of m*_i (NaN where a behavior has no target)."""
         m = self.model
         tmat = np.full((m.n, len(m.actuators)), np.nan)
-        tmat[m.pair_behavior, m.pair_actuator] = self.pair_targets
+        tmat[m.pair_behavior, m.pair_actuator] = self._tgt
         return tmat
 
     @property
     def contributions(self) -> np.ndarray:
-        """Behavior × actuator matrix of α_i·λ_im·(m*_i − m) (1/s)."""
         m = self.model
         cmat = np.zeros((m.n, len(m.actuators)))
-        cmat[m.pair_behavior, m.pair_actuator] = self.pair_contributions
+        cmat[m.pair_behavior, m.pair_actuator] = self._contrib
         return cmat
+
+    def dominant_index(self) -> int:
+        """Index of the behavior with the largest activation (ties: first in model order)."""
+        a = self._alpha
+        return a.index(max(a))
 
     def dominant(self, behaviors: tuple[str, ...]) -> str:
         """The behavior with the largest activation (ties: first in model order)."""
-        return behaviors[int(np.argmax(self.alpha))]
+        return behaviors[self.dominant_index()]
 
 
 class DDSystem:
@@ -121,7 +139,34 @@ class DDSystem:
         self.noise = float(noise)
         self._sensor_index = {s: i for i, s in enumerate(model.sensors)}
         self._alpha_names = tuple(f"alpha.{b}" for b in model.behaviors)
+        self._compile()
         self.reset(seed)
+
+    def _compile(self) -> None:
+        """Generate the tick's arithmetic as one straight-line Python function of floats.
+
+        With 8 behaviors and 6 actuators one numpy call costs more than the arithmetic it does,
+        so :meth:`step` runs a function generated from the model once (like the model's own
+        evaluator): every parameter is a literal, the sparse rows of B and W keep only their
+        non-zero entries, and nothing loops. :meth:`flow` keeps the vectorised numpy form, and
+        the tests check that the two agree.
+        """
+        m = self.model
+        self.kernel_source = _kernel_source(m)
+        namespace: dict[str, Callable[..., tuple[list[float], ...]]] = {"tanh": math.tanh}
+        # The source holds only numbers from the model and fixed names: nothing user-written runs.
+        exec(compile(self.kernel_source, f"<dd-kernel:{m.name}>", "exec"), namespace)
+        self._kernel = namespace["_kernel"]
+        self._sigma = m.sigma.tolist()
+        self._zeros = [0.0] * m.n
+        self._cz: dict[str, tuple[list[float], list[float]]] = {}
+
+    def _couplings(self, op: str) -> tuple[list[float], list[float]]:
+        hit = self._cz.get(op)
+        if hit is None:
+            c, z = self.model.couplings(op)
+            hit = self._cz[op] = (c.tolist(), z.tolist())
+        return hit
 
     # -- state --
 
@@ -130,9 +175,9 @@ class DDSystem:
         m = self.model
         self.rng = np.random.default_rng(seed)
         self.t = 0.0
-        self.alpha = m.alpha_init.copy()
-        self.slow = m.slow_init.copy()
-        self.act = m.act_init.copy()
+        self._a: list[float] = m.alpha_init.tolist()
+        self._v: list[float] = m.slow_init.tolist()
+        self._m: list[float] = m.act_init.tolist()
         self.s: dict[str, float] = {}
         self.sigma_op: dict[str, float] = {}
         self.pinned: dict[str, float] = {}
@@ -160,21 +205,48 @@ class DDSystem:
         self.s[operator] = float(value)
 
     @property
+    def alpha(self) -> np.ndarray:
+        """Activations α (a fresh array; assign an array to set them)."""
+        return np.array(self._a)
+
+    @alpha.setter
+    def alpha(self, value: np.ndarray) -> None:
+        self._a = np.asarray(value, dtype=float).tolist()
+
+    @property
+    def act(self) -> np.ndarray:
+        """Actuator values (a fresh array; assign an array to set them)."""
+        return np.array(self._m)
+
+    @act.setter
+    def act(self, value: np.ndarray) -> None:
+        self._m = np.asarray(value, dtype=float).tolist()
+
+    @property
+    def slow(self) -> np.ndarray:
+        """Slow variables (a fresh array; assign an array to set them)."""
+        return np.array(self._v)
+
+    @slow.setter
+    def slow(self, value: np.ndarray) -> None:
+        self._v = np.asarray(value, dtype=float).tolist()
+
+    @property
     def alphas(self) -> dict[str, float]:
         """Activations by behavior name."""
-        return dict(zip(self.model.behaviors, self.alpha.tolist(), strict=True))
+        return dict(zip(self.model.behaviors, self._a, strict=True))
 
     @property
     def actuators(self) -> dict[str, float]:
         """Actuator values by name (what the world applies, §4.1 step 7)."""
-        return dict(zip(self.model.actuators, self.act.tolist(), strict=True))
+        return dict(zip(self.model.actuators, self._m, strict=True))
 
     def signals(self, sensors: Mapping[str, float] | None = None) -> dict[str, float]:
         """Signal snapshot for fact derivation: sensors, slow variables, ``alpha.<b>``, actuators, ``s.<op>``."""
         out: dict[str, float] = dict(sensors) if sensors is not None else {}
-        out.update(zip(self.model.slow, self.slow.tolist(), strict=True))
-        out.update(zip(self._alpha_names, self.alpha.tolist(), strict=True))
-        out.update(zip(self.model.actuators, self.act.tolist(), strict=True))
+        out.update(zip(self.model.slow, self._v, strict=True))
+        out.update(zip(self._alpha_names, self._a, strict=True))
+        out.update(zip(self.model.actuators, self._m, strict=True))
         out.update({f"s.{op}": v for op, v in self.s.items()})
         return out
 
@@ -237,51 +309,33 @@ class DDSystem:
             else:
                 self.s[op] = s
 
-        # 2. one snapshot for all increments.
-        alpha, act, slow = self.alpha, self.act, self.slow
-        feats, tgts, rates = m.evaluate(sv, slow.tolist(), alpha.tolist())
-        f, u, T = self._drive(feats, alpha)
-        d_relax = h * m.lam * (T - alpha)
-        d_oct: dict[str, np.ndarray] = {}
+        # 2.–3. one snapshot for all increments (PDL semantics: every Δ reads the same α, m, v),
+        # then the commit with clipping; all of it in the generated kernel except the OCTs.
+        alpha, act, slow = self._a, self._m, self._v
+        feats, tgts, rates = m.evaluate(sv, slow, alpha)
+        d_oct: dict[str, list[float]] = {}
+        oct_sum = self._zeros
         for op, s in self.s.items():
             if s > 0.0:
-                c, z = m.couplings(op)
-                d_oct[op] = h * s * c * (z - alpha)
-        xi = self.rng.standard_normal(m.n + len(m.slow))
+                c, z = self._couplings(op)
+                hs = h * s
+                d = d_oct[op] = [hs * ci * (zi - ai) for ci, zi, ai in zip(c, z, alpha, strict=True)]
+                oct_sum = d if oct_sum is self._zeros else [a + b for a, b in zip(oct_sum, d, strict=True)]
+        xi = self.rng.standard_normal(len(alpha) + len(slow)).tolist()
         sq = math.sqrt(h) * self.noise
-        d_noise = m.sigma * sq * xi[: m.n]
-        tgt, contrib = self._actuator_rates(tgts, alpha, act)
-        decay = -m.act_decay * act
-        d_act = h * (decay + np.bincount(m.pair_actuator, contrib, minlength=len(m.actuators)))
-        d_slow = h * np.asarray(rates, dtype=float) + m.slow_sigma * sq * xi[m.n :]
-
-        # 3. commit.
-        d_alpha = d_relax + d_noise
-        for d in d_oct.values():
-            d_alpha = d_alpha + d
-        # np.minimum(np.maximum(x, lo), hi) is np.clip's definition, without its dispatch overhead.
-        self.alpha = _minimum(_maximum(alpha + d_alpha, 0.0), 1.0)
-        self.act = _minimum(_maximum(act + d_act, m.act_lo), m.act_hi)
-        self.slow = _minimum(_maximum(slow + d_slow, m.slow_lo), m.slow_hi)
+        u, T, d_relax, d_noise, contrib, decay, new_alpha, new_act, new_slow = self._kernel(
+            feats + alpha, alpha, act, slow, tgts, rates, xi, h, sq, oct_sum
+        )
+        self._a, self._m, self._v = new_alpha, new_act, new_slow
         self.t += h
 
         self.last = TickRecord(
-            t=self.t,
-            dt=h,
-            features=f,
-            u=u,
-            T=T,
-            alpha=self.alpha,
-            d_relax=d_relax,
-            d_oct=d_oct,
-            d_noise=d_noise,
-            switches=dict(self.s),
-            pair_targets=tgt,
-            pair_contributions=contrib,
-            decay=decay,
-            actuators=self.act,
-            slow=self.slow,
-            model=m,
+            self.t,
+            h,
+            m,
+            (feats, u, T, new_alpha, d_relax, d_noise, tgts, contrib, decay, new_act, new_slow),
+            d_oct,
+            dict(self.s),
         )
         return self.last
 
@@ -317,3 +371,60 @@ class DDSystem:
             return np.concatenate([da, np.asarray(rates, dtype=float), dm])
 
         return rhs
+
+
+def _kernel_source(m: DDModel) -> str:
+    """Python source of ``_kernel`` for model ``m`` (see :meth:`DDSystem._compile`).
+
+    ``_kernel(x, A, M, V, G, R, xi, h, sq, O)`` takes the drive inputs x = [s, α], activations A,
+    actuators M, slow variables V, pair targets G, slow rates R, the noise draws ξ, the tick h,
+    √h·noise and the summed OCT increments O; it returns u, T, dt·λ(T − α), σ√h·ξ, the pair
+    contributions, the actuator decay terms and the committed α, actuators and slow variables.
+    """
+    nf, n = len(m.features), m.n
+
+    def num(v: float) -> str:
+        return repr(float(v))
+
+    def clamp(target: str, expr: str, lo: float, hi: float) -> list[str]:
+        # Conditional expressions rather than min/max calls: a builtin call costs more here.
+        lines = [f"{target} = {expr}"]
+        if math.isfinite(lo):
+            lines.append(f"if {target} < {num(lo)}: {target} = {num(lo)}")
+        if math.isfinite(hi):
+            lines.append(f"if {target} > {num(hi)}: {target} = {num(hi)}")
+        return lines
+
+    body = []
+    for i in range(n):
+        terms = [num(m.bias[i])]
+        terms += [f"{num(m.B[i, j])} * x[{j}]" for j in range(nf) if m.B[i, j] != 0.0]
+        terms += [f"{num(m.W[i, j])} * x[{nf + j}]" for j in range(n) if m.W[i, j] != 0.0]
+        body.append(f"u{i} = {' + '.join(terms)}")
+        # the logistic S(k(u − θ)) as ½(1 + tanh(k(u − θ)/2)): no exp overflow for steep k
+        body.append(f"T{i} = 0.5 * (1.0 + tanh({num(0.5 * m.k[i])} * (u{i} - {num(m.theta[i])})))")
+        body.append(f"r{i} = h * {num(m.lam[i])} * (T{i} - A[{i}])")
+        body.append(f"n{i} = {num(m.sigma[i])} * sq * xi[{i}]")
+        body.append(f"v = A[{i}] + (r{i} + n{i} + O[{i}])")
+        body.append(f"a{i} = 0.0 if v < 0.0 else (1.0 if v > 1.0 else v)")
+    pairs = list(zip(m.pair_behavior.tolist(), m.pair_actuator.tolist(), m.pair_rate.tolist(), strict=True))
+    for p, (b, a, rate) in enumerate(pairs):
+        body.append(f"c{p} = A[{b}] * {num(rate)} * (G[{p}] - M[{a}])")
+    na = len(m.actuators)
+    for a in range(na):
+        pushed = " + ".join(f"c{p}" for p, (_, pa, _) in enumerate(pairs) if pa == a) or "0.0"
+        body.append(f"k{a} = {num(-m.act_decay[a])} * M[{a}]")
+        body += clamp(f"m{a}", f"M[{a}] + h * (k{a} + ({pushed}))", m.act_lo[a], m.act_hi[a])
+    nv = len(m.slow)
+    for v in range(nv):
+        update = f"V[{v}] + (h * R[{v}] + {num(m.slow_sigma[v])} * sq * xi[{n + v}])"
+        body += clamp(f"w{v}", update, m.slow_lo[v], m.slow_hi[v])
+
+    def seq(prefix: str, count: int) -> str:
+        return "[" + ", ".join(f"{prefix}{i}" for i in range(count)) + "]"
+
+    outs = [seq("u", n), seq("T", n), seq("r", n), seq("n", n), seq("c", len(pairs)), seq("k", na),
+            seq("a", n), seq("m", na), seq("w", nv)]  # fmt: skip
+    lines = ["def _kernel(x, A, M, V, G, R, xi, h, sq, O):", *("    " + line for line in body)]
+    lines.append("    return (" + ", ".join(outs) + ")")
+    return "\n".join(lines) + "\n"

@@ -111,6 +111,50 @@ class Term:
         return label, float(src.get(self.signal, math.nan))
 
 
+#: A compiled condition: (this tick's signals, last tick's signals, facts at tick start) -> holds.
+Check = Callable[[Mapping[str, float], Mapping[str, float], frozenset[Fact]], bool]
+
+
+def _compile_term(term: Term) -> Check:
+    """A closure equivalent to ``term.holds`` without the per-call dispatch on the term's kind."""
+    if term.fact is not None:
+        fact, negated = term.fact, term.negated
+        return lambda now, before, facts: (fact in facts) != negated
+    assert term.signal is not None
+    sig, value, op = term.signal, term.value, _OPS[term.op]
+    if term.prev:
+
+        def prev_holds(now: Mapping[str, float], before: Mapping[str, float], facts: frozenset[Fact]) -> bool:
+            v = before.get(sig)
+            return False if v is None else op(float(v), value)  # first tick: no history, no edge
+
+        return prev_holds
+
+    def holds(now: Mapping[str, float], before: Mapping[str, float], facts: frozenset[Fact]) -> bool:
+        try:
+            v = now[sig]
+        except KeyError:
+            return term.holds(now, before, facts)  # raises the FactRuleError that names the signal
+        return op(float(v), value)
+
+    return holds
+
+
+def compile_condition(terms: Sequence[Term]) -> Check:
+    """All ``terms`` hold (an empty condition holds), as one callable; evaluation stops at the first false term."""
+    checks = tuple(_compile_term(t) for t in terms)
+    if len(checks) == 1:
+        return checks[0]
+
+    def all_hold(now: Mapping[str, float], before: Mapping[str, float], facts: frozenset[Fact]) -> bool:
+        for check in checks:  # noqa: SIM110 - a plain loop is cheaper than all() over a generator here
+            if not check(now, before, facts):
+                return False
+        return True
+
+    return all_hold
+
+
 def _terms(spec: Iterable[str | Term]) -> tuple[Term, ...]:
     return tuple(t if isinstance(t, Term) else Term.parse(t) for t in spec)
 
@@ -235,10 +279,16 @@ class FactDeriver:
     events: list[FactEvent] = field(default_factory=list)
     _state: dict[int, _RuleState] = field(default_factory=dict, repr=False)
     _prev: Mapping[str, float] = field(default_factory=dict, repr=False)
+    _checks: list[tuple[Check, Check, Check]] = field(default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
         self.facts = frozenset(self.facts)
         self._state = {i: _RuleState() for i in range(len(self.rules))}
+        # Compiled once: the deriver runs every control tick (50 Hz) with a dozen rules.
+        self._checks = [
+            (compile_condition(r.set_when), compile_condition(r.veto_when), compile_condition(r.clear_when))
+            for r in self.rules
+        ]
         seen: dict[Fact, str] = {}
         for r in self.rules:
             if r.fact in seen:
@@ -283,12 +333,14 @@ class FactDeriver:
                     phase = "implied" if other in rule.clears else "exclusive"
                     new.append(FactEvent(t, other, False, {"rule": rule.name, "phase": phase, "by": rule.fact}))
 
+        states = self._state
         for i, rule in enumerate(self.rules):
-            st = self._state[i]
-            set_ok = all(term.holds(signals, before, f0) for term in rule.set_when)
+            st = states[i]
+            set_check, veto_check, clear_check = self._checks[i]
+            set_ok = set_check(signals, before, f0)
             if rule.fact in f0:
                 st.set_since = None
-                clear_ok = bool(rule.clear_when) and all(term.holds(signals, before, f0) for term in rule.clear_when)
+                clear_ok = bool(rule.clear_when) and clear_check(signals, before, f0)
                 if not clear_ok:
                     st.clear_since = None
                     continue
@@ -302,7 +354,7 @@ class FactDeriver:
                 continue
             st.clear_since = None
             if st.tentative_since is not None:
-                if rule.veto_when and all(term.holds(signals, before, f0) for term in rule.veto_when):
+                if rule.veto_when and veto_check(signals, before, f0):
                     st.tentative_since = None
                     new.append(FactEvent(t, rule.fact, False, cause(rule, "retracted", rule.veto_when, None)))
                 elif t - st.tentative_since + _EPS >= rule.confirm_for:

@@ -33,7 +33,7 @@ The gripper takes o when ``g_o > 0.5`` and o is within 0.3 m and ±0.6 rad; it l
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import pymunk
@@ -165,6 +165,14 @@ class Arena:
         self.v = 0.0
         self.omega = 0.0
         self.time = 0.0
+        #: Bumped whenever an item is grabbed, released, teleported or removed: lets the truth
+        #: of object facts be cached between such events instead of recomputed every tick.
+        self.item_version = 0
+        self._beacon_list = [(name, "φ_" + name, "δ_" + name, x, y) for name, (x, y) in self.beacons.items()]
+        #: ("at-robot x", x position, y position) per beacon, for the truth of At(robot, x).
+        self.beacon_facts = [(f"at-robot {name}", x, y) for name, (x, y) in self.beacons.items()]
+        self._item_list = [("γ_" + name, "ψ_" + name, it) for name, it in self.items.items()]
+        self._drive_pending = True
 
     # -- construction ---------------------------------------------------------------------------
 
@@ -204,12 +212,14 @@ class Arena:
         it.x, it.y, it.held, it.present = float(x), float(y), False, True
         assert it.body is not None
         it.body.position = (x, y)
+        self.item_version += 1
 
     def remove(self, item: str) -> None:
         """Take ``item`` out of the world (it can no longer be seen or grabbed)."""
         it = self.items[item]
         it.held = False
         it.present = False
+        self.item_version += 1
 
     def block(self, box: Box) -> None:
         """Add an obstacle (for example across the path between two beacons)."""
@@ -247,33 +257,39 @@ class Arena:
         """Fill ``out`` with this instant's sensor values (the DD model's sensor names)."""
         g = self.geom
         body = self.robot
-        p = body.position
-        x, y, h = p.x, p.y, body.angle
+        x, y = body.position
+        h = body.angle
         query = self.space.segment_query_first
         r0, r1 = g.radius, g.radius + g.ray_range
-        for key, side in (("o_l", 1.0), ("o_r", -1.0)):
-            a = h + side * g.ray_angle
-            ca, sa = math.cos(a), math.sin(a)
-            hit = query((x + r0 * ca, y + r0 * sa), (x + r1 * ca, y + r1 * sa), 0.0, _RAY_FILTER)
-            out[key] = 0.0 if hit is None else 1.0 - hit.alpha
-        near = g.near
-        for name, (bx, by) in self.beacons.items():
+        a = h + g.ray_angle
+        ca, sa = math.cos(a), math.sin(a)
+        hit = query((x + r0 * ca, y + r0 * sa), (x + r1 * ca, y + r1 * sa), 0.0, _RAY_FILTER)
+        out["o_l"] = 0.0 if hit is None else 1.0 - hit.alpha
+        a = h - g.ray_angle
+        ca, sa = math.cos(a), math.sin(a)
+        hit = query((x + r0 * ca, y + r0 * sa), (x + r1 * ca, y + r1 * sa), 0.0, _RAY_FILTER)
+        out["o_r"] = 0.0 if hit is None else 1.0 - hit.alpha
+        near2 = g.near * g.near
+        atan2, pi = math.atan2, math.pi
+        for _, phi, delta, bx, by in self._beacon_list:
             dx, dy = bx - x, by - y
-            out["φ_" + name] = wrap(math.atan2(dy, dx) - h) / math.pi
-            out["δ_" + name] = 1.0 if dx * dx + dy * dy < near * near else 0.0
-        for name, it in self.items.items():
+            out[phi] = ((atan2(dy, dx) - h + pi) % _TWO_PI - pi) / pi
+            out[delta] = 1.0 if dx * dx + dy * dy < near2 else 0.0
+        far, cone = g.detect_far, g.detect_angle
+        for gamma_key, psi_key, it in self._item_list:
             gamma = psi = 0.0
             if it.present and not it.held:
                 dx, dy = it.x - x, it.y - y
-                d = math.hypot(dx, dy)
-                bearing = wrap(math.atan2(dy, dx) - h)
-                if d < g.detect_far and abs(bearing) <= g.detect_angle:
-                    gamma = min(1.0, (g.detect_far - d) / g.detect_span)
-                    psi = bearing / math.pi
-            out["γ_" + name] = gamma
-            out["ψ_" + name] = psi
-        v = body.velocity
-        out["speed"] = min(1.0, math.hypot(v.x, v.y))
+                d2 = dx * dx + dy * dy
+                if d2 < far * far:
+                    bearing = (atan2(dy, dx) - h + pi) % _TWO_PI - pi
+                    if -cone <= bearing <= cone:
+                        gamma = min(1.0, (far - math.sqrt(d2)) / g.detect_span)
+                        psi = bearing / pi
+            out[gamma_key] = gamma
+            out[psi_key] = psi
+        vx, vy = body.velocity
+        out["speed"] = min(1.0, math.hypot(vx, vy))
         return out
 
     # -- acting --------------------------------------------------------------------------------
@@ -284,36 +300,44 @@ class Arena:
         vl, vr = m_l * g.v_max, m_r * g.v_max
         self.v = 0.5 * (vl + vr)
         self.omega = (vr - vl) / g.axle
+        self._drive_pending = True
 
-    def grip(self, grip: Mapping[str, float], drop: Mapping[str, float]) -> list[tuple[str, str]]:
-        """Apply gripper commands; return the (item, "grabbed"/"released") changes."""
-        g = self.geom
-        changes: list[tuple[str, str]] = []
-        x, y, h = self.pose()
-        for name, it in self.items.items():
-            if not it.present:
-                continue
-            if it.held:
-                if drop.get(name, 0.0) > 0.5:
-                    it.held = False
-                    it.x, it.y = self.gripper_point()
-                    changes.append((name, "released"))
-            elif grip.get(name, 0.0) > 0.5:
-                dx, dy = it.x - x, it.y - y
-                if dx * dx + dy * dy <= g.grab_distance**2 and abs(wrap(math.atan2(dy, dx) - h)) <= g.detect_angle:
-                    it.held = True
-                    changes.append((name, "grabbed"))
-        return changes
+    def grip(self, name: str, grip: float, drop: float) -> str | None:
+        """Apply one gripper's commands; return ``"grabbed"``, ``"released"`` or None."""
+        it = self.items[name]
+        if not it.present:
+            return None
+        if it.held:
+            if drop > 0.5:
+                it.held = False
+                it.x, it.y = self.gripper_point()
+                assert it.body is not None
+                it.body.position = (it.x, it.y)
+                self.item_version += 1
+                return "released"
+        elif grip > 0.5:
+            g = self.geom
+            x, y, h = self.pose()
+            dx, dy = it.x - x, it.y - y
+            if dx * dx + dy * dy <= g.grab_distance**2 and abs(wrap(math.atan2(dy, dx) - h)) <= g.detect_angle:
+                it.held = True
+                self.item_version += 1
+                return "grabbed"
+        return None
 
     def step(self, dt: float) -> None:
         """Advance physics by ``dt``: the wheels set the body's velocity, contacts correct it."""
         body = self.robot
-        h = body.angle
-        body.velocity = (self.v * math.cos(h), self.v * math.sin(h))
-        body.angular_velocity = self.omega
+        if self._drive_pending:
+            # The wheels set the velocity once per command; within the tick's substeps contacts
+            # may change it (sliding along a wall), which is what wheels on a floor do too.
+            h = body.angle
+            body.velocity = (self.v * math.cos(h), self.v * math.sin(h))
+            body.angular_velocity = self.omega
+            self._drive_pending = False
         self.space.step(dt)
         self.time += dt
-        held = [it for it in self.items.values() if it.held]
+        held = [it for it in self.items.values() if it.held] if self.item_version else ()
         if held:
             gx, gy = self.gripper_point()
             for it in held:
@@ -339,8 +363,3 @@ class Arena:
 
     def object_scene(self) -> dict[str, list[object]]:
         return {n: [round(it.x, 4), round(it.y, 4), it.held, it.present] for n, it in self.items.items()}
-
-
-def nearest(points: Sequence[tuple[float, float]], x: float, y: float) -> int:
-    """Index of the point closest to (x, y)."""
-    return min(range(len(points)), key=lambda i: (points[i][0] - x) ** 2 + (points[i][1] - y) ** 2)

@@ -75,12 +75,17 @@ def evidence_signals(signals: dict[str, float], items: Iterable[str]) -> None:
 
 def truth_facts(arena: Arena) -> frozenset[Fact]:
     """The fluent facts that really hold in the arena now."""
-    out: list[Fact] = []
-    x, y, _ = arena.pose()
+    return frozenset(_robot_truth(arena) + _object_truth(arena))
+
+
+def _robot_truth(arena: Arena) -> list[Fact]:
+    x, y = arena.robot.position
     near2 = arena.geom.near**2
-    for name, (bx, by) in arena.beacons.items():
-        if (bx - x) ** 2 + (by - y) ** 2 < near2:
-            out.append(f"at-robot {name}")
+    return [f for f, bx, by in arena.beacon_facts if (bx - x) ** 2 + (by - y) ** 2 < near2]
+
+
+def _object_truth(arena: Arena) -> list[Fact]:
+    out: list[Fact] = []
     r2 = LOCATION_RADIUS**2
     for o, it in arena.items.items():
         if not it.present:
@@ -91,7 +96,33 @@ def truth_facts(arena: Arena) -> frozenset[Fact]:
         for name, (bx, by) in arena.beacons.items():
             if (bx - it.x) ** 2 + (by - it.y) ** 2 < r2:
                 out.append(f"at {o} {name}")
-    return frozenset(out)
+    return out
+
+
+class Truth:
+    """:func:`truth_facts` for every tick, cheaply.
+
+    Objects only move while held (then the fact is Has-Robot wherever they are) or when grabbed,
+    released, teleported or removed, which bump ``arena.item_version``; so the object facts are
+    recomputed on those events only, and the robot's location each tick.
+    """
+
+    def __init__(self, arena: Arena) -> None:
+        self.arena = arena
+        self._version = -1
+        self._objects: list[Fact] = []
+        self._last: tuple[tuple[str, ...], frozenset[Fact]] = ((), frozenset())
+
+    def __call__(self) -> frozenset[Fact]:
+        arena = self.arena
+        if arena.item_version != self._version:
+            self._version = arena.item_version
+            self._objects = _object_truth(arena)
+            self._last = ((), frozenset())
+        robot = tuple(_robot_truth(arena))
+        if robot != self._last[0] or not self._last[1]:
+            self._last = (robot, frozenset((*robot, *self._objects)))
+        return self._last[1]
 
 
 @dataclass

@@ -49,7 +49,7 @@ from engine.planning.strips import Fact, Task, load_task
 from engine.runtime import BasicBehavior, Bindings, Engine
 from engine.types import Kind, Ms
 from examples.errands.arena import Arena, ArenaLayout, Box
-from examples.errands.facts import Agreement, evidence_signals, fact_rules, truth_facts
+from examples.errands.facts import Agreement, Truth, evidence_signals, fact_rules, truth_facts
 from examples.errands.plan import PlanBoard
 
 HERE = Path(__file__).resolve().parent
@@ -238,6 +238,13 @@ class ErrandsWorld:
             "plan.last_failure": 0,
         }
         self.operator: str | None = None
+        self._op_key: tuple[int, int, int, int] = (0, 0, 0, 0)
+        self._truth = Truth(self.arena)
+        self._truth_before: frozenset[Fact] = frozenset()
+        self._items_seen = 0
+        x0, y0, _ = self.arena.pose()
+        self.record.positions.append((0.0, x0, y0))
+        self._last_sample = 0.0
         self._dominant = -1
         self._held_before: set[str] = set()
         self._at_before: set[str] = set()
@@ -364,50 +371,53 @@ class ErrandsWorld:
         return self.record.completed_at is not None
 
     def _sense(self) -> None:
-        self.t = self.ticks * self.dt
+        t = self.t = self.ticks * self.dt
         for hook in self.sense_hooks:
             hook(self)
         sensors = self.arena.sense(self.sensors)
         signals = self.dd.signals(sensors)
         evidence_signals(signals, ITEMS)
         self.signals = signals
-        self.tick_events = self.deriver.update(self.t, signals)
-        self.facts = self.deriver.facts
+        events = self.tick_events = self.deriver.update(t, signals)
+        facts = self.facts = self.deriver.facts
         self._next = None
-        truth = truth_facts(self.arena)
-        self.truth = truth
-        self.agreement.update(self.t, self.facts, truth)
-        for ev in self.tick_events:
-            if ev.value and ev.fact.startswith("has-robot ") and ev.fact not in truth:
-                self.record.false_has_robot.append((self.t, ev.fact))
+        truth = self.truth = self._truth()
+        self.agreement.update(t, facts, truth)
+        if events:
+            for ev in events:
+                if ev.value and ev.fact.startswith("has-robot ") and ev.fact not in truth:
+                    self.record.false_has_robot.append((t, ev.fact))
 
     def _act(self) -> None:
         rec = self.record
-        op = self._operator()
-        if op != self.operator:
-            self.dd.set_current_operator(op)
-            self.operator = op
-            if op is not None:
-                rec.started.append(op)
-        mon = (self.out["plan.status"], op, self.out["plan.last_failure"])
+        out = self.out
+        key = (out["plan.op"], out["plan.op.from"], out["plan.op.loc"], out["plan.op.obj"])
+        if key != self._op_key:
+            self._op_key = key
+            op = self._operator()
+            if op != self.operator:
+                self.dd.set_current_operator(op)
+                self.operator = op
+                if op is not None:
+                    rec.started.append(op)
+        op = self.operator
+        mon = (out["plan.status"], op, out["plan.last_failure"])
         if mon != self._monitor_seen:
             self._monitor_seen = mon
             rec.monitor.append((round(self.t, 3), STATUSES[mon[0]], op, REASONS[mon[2]]))
         tick = self.dd.step(self.sensors)
-        act = self.dd.act.tolist()
-        names = self.dd.model.actuators
-        a = dict(zip(names, act, strict=True))
+        a = self.dd.actuators
         arena = self.arena
         arena.drive(a["m_l"], a["m_r"])
-        for item, change in arena.grip({o: a["g_" + o] for o in ITEMS}, {o: a["d_" + o] for o in ITEMS}):
-            if change == "grabbed":
+        for o in ITEMS:
+            if arena.grip(o, a["g_" + o], a["d_" + o]) == "grabbed":
                 rec.ever_held = True
-            del item
         # Bookkeeping for the claims: cheap scalar work only.
-        on = sum(1 for v in tick.switches.values() if v >= 0.5)
-        if on > rec.max_switches_on:
-            rec.max_switches_on = on
-        dom = int(np.argmax(tick.alpha))
+        if tick.switches:
+            on = sum(1 for v in tick.switches.values() if v >= 0.5)
+            if on > rec.max_switches_on:
+                rec.max_switches_on = on
+        dom = tick.dominant_index()
         if dom != self._dominant:
             if self._dominant >= 0:
                 rec.dominant_switches += 1
@@ -415,21 +425,28 @@ class ErrandsWorld:
         if dom == self._roam:
             rec.roam_dominant_ticks += 1
         rec.ticks += 1
-        at_now = {f[9:] for f in self.truth if f.startswith("at-robot ")}
-        for x in sorted(at_now - self._at_before):
-            rec.arrivals.append(x)
-        self._at_before = at_now
+        truth = self.truth
+        if truth is not self._truth_before:
+            at_now = {f[9:] for f in truth if f.startswith("at-robot ")}
+            rec.arrivals.extend(sorted(at_now - self._at_before))
+            self._at_before = at_now
+            self._truth_before = truth
         self.ticks += 1
 
     def step(self, dt: float) -> None:
         """Advance physics by ``dt`` seconds (the loop calls this after act)."""
-        self.arena.step(dt)
+        arena = self.arena
+        arena.step(dt)
         rec = self.record
-        if rec.completed_at is None and self._delivered():
-            rec.completed_at = round(self.arena.time, 6)
-        if not rec.positions or self.arena.time - rec.positions[-1][0] >= 1.0 - 1e-9:
-            x, y, _ = self.arena.pose()
-            rec.positions.append((round(self.arena.time, 6), x, y))
+        if arena.item_version != self._items_seen:
+            # Objects only come to rest somewhere through a release or a teleport.
+            self._items_seen = arena.item_version
+            if rec.completed_at is None and self._delivered():
+                rec.completed_at = round(arena.time, 6)
+        if arena.time - self._last_sample >= 1.0 - 1e-9:
+            self._last_sample = arena.time
+            x, y, _ = arena.pose()
+            rec.positions.append((round(arena.time, 6), x, y))
 
     def _delivered(self) -> bool:
         ax, ay = self.arena.beacons["a"]
