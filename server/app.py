@@ -19,15 +19,16 @@ import logging
 from collections.abc import AsyncIterator, Iterator
 from contextlib import asynccontextmanager
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import orjson
-from fastapi import FastAPI, Header, HTTPException, Query, Request, Response, WebSocket
+from fastapi import APIRouter, Depends, FastAPI, Header, HTTPException, Query, Request, Response, WebSocket
 from fastapi.responses import HTMLResponse, JSONResponse, StreamingResponse
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, Field
 
 from engine.emit.dot import GraphvizMissing
+from engine.ir.model import Program
 from server import frames
 from server.clients import Client, Hub
 from server.files import BehaviorFiles, FileError
@@ -214,6 +215,217 @@ def _history_message(command_id: Any, index: int, last: bool, chunk: list[bytes]
         orjson.dumps(command_id), index, b"true" if last else b"false", b",".join(chunk))
 
 
+def _studio(request: Request) -> Studio:
+    studio: Studio = request.app.state.studio
+    return studio
+
+
+# Handlers are module-level functions that find their Studio through the request: FastAPI caches
+# endpoint callables globally, so closures over a session would keep every session (and its
+# world) alive for the life of the process.
+StudioDep = Annotated[Studio, Depends(_studio)]
+router = APIRouter()
+
+
+@router.websocket("/ws")
+async def websocket(ws: WebSocket) -> None:
+    studio: Studio = ws.app.state.studio
+    assert studio.hub is not None, "the app's lifespan did not run"
+    await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
+
+
+# -- session --------------------------------------------------------------------------------------
+
+
+@router.get("/api/status", tags=["session"])
+async def status(studio: StudioDep) -> dict[str, Any]:
+    """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
+    session = studio.session
+    result: dict[str, Any] = await asyncio.wrap_future(session.submit(session.status))
+    result["clients"] = studio.hub.stats() if studio.hub is not None else {}
+    result["token_required"] = studio.policy.token is not None
+    result["version"] = VERSION
+    return result
+
+
+@router.get("/api/structure", tags=["session"])
+async def structure(studio: StudioDep) -> Response:
+    """The ``structure`` of the current hello (programs JSON and agents)."""
+    return Response(studio.session.generation.structure_bytes, media_type="application/json")
+
+
+@router.post("/api/command", tags=["session"])
+async def command(studio: StudioDep, body: dict[str, Any]) -> JSONResponse:
+    """A websocket command over REST (``{"op": "pause"}``); answers the reply."""
+    try:
+        parsed = parse_command(body)
+    except ProtocolError as error:
+        return JSONResponse({"type": "reply", "id": body.get("id"), "ok": False, "error": str(error),
+                             "detail": str(error)}, status_code=400)
+    ok, result, error = await studio.run_command(parsed, None)
+    payload: dict[str, Any] = {"type": "reply", "id": parsed.id, "ok": ok}
+    if result is not None:
+        payload["result"] = result
+    if error is not None:
+        payload["error"] = error
+        payload["detail"] = error
+    return JSONResponse(payload, status_code=200 if ok else (422 if parsed.op is Op.RELOAD else 400))
+
+
+@router.get("/api/log", tags=["session"])
+async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(2**62)) -> StreamingResponse:
+    """The ring buffer between behavior times t0 and t1 as JSON lines, with names."""
+    if t1 < t0:
+        raise HTTPException(400, "t1 must not be before t0")
+    session = studio.session
+    encoded = frames.history(session.ring, t0, t1)
+    return StreamingResponse(_log_lines(encoded, session.generation), media_type="application/x-ndjson")
+
+
+# -- files ------------------------------------------------------------------------------------------
+
+
+@router.get("/api/files", tags=["files"])
+async def list_files(studio: StudioDep) -> dict[str, Any]:
+    """Every behavior file: path, version, size, the behaviors it belongs to."""
+    listed = await asyncio.to_thread(studio.files.list)
+    for item in listed:
+        item["programs"] = studio.programs_of(item["path"])
+    return {"files": listed}
+
+
+@router.get("/api/files/{path:path}", tags=["files"])
+async def read_file(studio: StudioDep, path: str) -> JSONResponse:
+    """A file's text and version (also as ETag)."""
+    text, version = await asyncio.to_thread(studio.files.read, path)
+    return JSONResponse({"path": path, "version": version, "text": text}, headers={"ETag": f'"{version}"'})
+
+
+@router.put("/api/files/{path:path}", tags=["files"])
+async def write_file(studio: StudioDep, path: str, body: FileBody,
+                     if_match: str | None = Header(default=None)) -> Response:
+    """Replace a file (If-Match: its version); compile; hot-swap when clean, else 422."""
+    expected = _etag(if_match) or body.version
+    async with studio.write_lock:
+        version = await asyncio.to_thread(studio.files.write, path, body.text, expected)
+        return await studio.after_write([path], version, 200)
+
+
+@router.post("/api/files/{path:path}", tags=["files"])
+async def create_file(studio: StudioDep, path: str, body: FileBody) -> Response:
+    """Create a file (409 if it exists); compile the behaviors it belongs to."""
+    async with studio.write_lock:
+        version = await asyncio.to_thread(studio.files.create, path, body.text)
+        return await studio.after_write([path], version, 201)
+
+
+@router.patch("/api/files/{path:path}", tags=["files"])
+async def rename_file(studio: StudioDep, path: str, body: RenameBody,
+                      if_match: str | None = Header(default=None)) -> Response:
+    """Rename a file to ``body.path`` (409 if that exists)."""
+    async with studio.write_lock:
+        version = await asyncio.to_thread(studio.files.rename, path, body.path, _etag(if_match))
+        return await studio.after_write([path, body.path], version, 200, deleted=path)
+
+
+@router.delete("/api/files/{path:path}", tags=["files"])
+async def delete_file(studio: StudioDep, path: str, if_match: str | None = Header(default=None)) -> Response:
+    """Delete a file; compile the behaviors it belonged to."""
+    async with studio.write_lock:
+        await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
+        return await studio.after_write([path], None, 200, deleted=path)
+
+
+@router.post("/api/compile", tags=["files"])
+async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
+    """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
+    real = studio.files.resolve(body.path, must_exist=False)
+    keys = studio.programs_of(body.path)
+    diagnostics: list[dict[str, Any]] = []
+    ok = True
+    for key in keys:
+        compilation = await asyncio.to_thread(studio.session.compile, key, {str(real): body.text})
+        ok = ok and compilation.ok
+        diagnostics.extend(dict(d.as_dict(), program=key) for d in compilation.diagnostics)
+    return {"ok": ok, "diagnostics": diagnostics, "programs": keys}
+
+
+# -- graphs ------------------------------------------------------------------------------------------
+
+
+def _running(studio: Studio, key: str) -> Program:
+    state = studio.session.programs.get(key)
+    if state is None or state.running is None:
+        raise HTTPException(404, f"no running behavior {key!r}")
+    return state.running
+
+
+async def _svg(studio: Studio, request: Request, dot: str) -> Response:
+    try:
+        svg, etag = await asyncio.to_thread(studio.graphs.svg, dot)
+    except GraphvizMissing as error:
+        raise HTTPException(503, str(error)) from None
+    if _etag(request.headers.get("if-none-match")) == etag:
+        return Response(status_code=304, headers={"ETag": f'"{etag}"'})
+    return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
+
+
+@router.get("/api/graph/{program}", tags=["graphs"])
+async def graph(studio: StudioDep, request: Request, program: str, agent: str | None = None) -> Response:
+    """The option graph below an XABSL agent's root option (SVG)."""
+    try:
+        dot = option_graph_dot(_running(studio, program), agent)
+    except GraphError as error:
+        raise HTTPException(404, str(error)) from None
+    return await _svg(studio, request, dot)
+
+
+@router.get("/api/graph/{program}/{option}", tags=["graphs"])
+async def option_graph(studio: StudioDep, request: Request, program: str, option: str) -> Response:
+    """The state machine of one option (SVG)."""
+    try:
+        dot = state_machine_dot(_running(studio, program), option)
+    except GraphError as error:
+        raise HTTPException(404, str(error)) from None
+    return await _svg(studio, request, dot)
+
+
+async def _file_error(request: Request, error: Exception) -> JSONResponse:
+    assert isinstance(error, FileError)
+    return JSONResponse({"detail": error.message, **error.extra}, status_code=error.status)
+
+
+async def _command_error(request: Request, error: Exception) -> JSONResponse:
+    return JSONResponse({"detail": str(error)}, status_code=400)
+
+
+async def _no_ui(request: Request) -> HTMLResponse:
+    return HTMLResponse(_NO_UI)
+
+
+@asynccontextmanager
+async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
+    studio: Studio = app.state.studio
+    session = studio.session
+    hub = Hub(session, asyncio.get_running_loop())
+    hub.token_required = studio.policy.token is not None
+    studio.hub = hub
+    session.notify = hub.on_entry
+    if not session.running:
+        session.start()
+    try:
+        yield
+    finally:
+        await hub.close_all()
+        session.notify = _ignore
+        session.stop()
+        studio.hub = None
+
+
+def _ignore(entry: frames.Entry) -> None:
+    return None
+
+
 def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist: Path | None = WEB_DIST) -> FastAPI:
     """The studio app for a session (not started yet: the app's lifespan starts and stops it).
 
@@ -223,23 +435,6 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
         web_dist: the built web UI, served at ``/`` (a help page when missing).
     """
     policy = policy or SecurityPolicy(token=None)
-    studio = Studio(session, policy)
-
-    @asynccontextmanager
-    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        hub = Hub(session, asyncio.get_running_loop())
-        hub.token_required = policy.token is not None
-        studio.hub = hub
-        session.notify = hub.on_entry
-        if not session.running:
-            session.start()
-        try:
-            yield
-        finally:
-            await hub.close_all()
-            session.notify = lambda entry: None
-            session.stop()
-
     app = FastAPI(
         title="xabsl studio",
         version=str(VERSION),
@@ -247,172 +442,17 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
         openapi_url="/api/openapi.json",
         docs_url="/api/docs",
         redoc_url=None,
-        lifespan=lifespan,
+        lifespan=_lifespan,
     )
-    app.state.studio = studio
+    app.state.studio = Studio(session, policy)
     app.add_middleware(SecurityMiddleware, policy=policy)
-
-    @app.exception_handler(FileError)
-    async def file_error(request: Request, error: FileError) -> JSONResponse:
-        return JSONResponse({"detail": error.message, **error.extra}, status_code=error.status)
-
-    @app.exception_handler(CommandError)
-    async def command_error(request: Request, error: CommandError) -> JSONResponse:
-        return JSONResponse({"detail": str(error)}, status_code=400)
-
-    # -- websocket ------------------------------------------------------------------------------
-
-    @app.websocket("/ws")
-    async def websocket(ws: WebSocket) -> None:
-        assert studio.hub is not None, "the app's lifespan did not run"
-        await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
-
-    # -- session ----------------------------------------------------------------------------------
-
-    @app.get("/api/status", tags=["session"])
-    async def status() -> dict[str, Any]:
-        """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
-        result: dict[str, Any] = await asyncio.wrap_future(session.submit(session.status))
-        result["clients"] = studio.hub.stats() if studio.hub is not None else {}
-        result["token_required"] = policy.token is not None
-        result["version"] = VERSION
-        return result
-
-    @app.get("/api/structure", tags=["session"])
-    async def structure() -> Response:
-        """The ``structure`` of the current hello (programs JSON and agents)."""
-        return Response(session.generation.structure_bytes, media_type="application/json")
-
-    @app.post("/api/command", tags=["session"])
-    async def command(body: dict[str, Any]) -> JSONResponse:
-        """A websocket command over REST (``{"op": "pause"}``); answers the reply."""
-        try:
-            parsed = parse_command(body)
-        except ProtocolError as error:
-            return JSONResponse({"type": "reply", "id": body.get("id"), "ok": False, "error": str(error),
-                                 "detail": str(error)}, status_code=400)
-        ok, result, error = await studio.run_command(parsed, None)
-        payload: dict[str, Any] = {"type": "reply", "id": parsed.id, "ok": ok}
-        if result is not None:
-            payload["result"] = result
-        if error is not None:
-            payload["error"] = error
-            payload["detail"] = error
-        return JSONResponse(payload, status_code=200 if ok else (422 if parsed.op is Op.RELOAD else 400))
-
-    @app.get("/api/log", tags=["session"])
-    async def activation_log(t0: int = Query(0), t1: int = Query(2**62)) -> StreamingResponse:
-        """The ring buffer between behavior times t0 and t1 as JSON lines, with names."""
-        if t1 < t0:
-            raise HTTPException(400, "t1 must not be before t0")
-        gen = session.generation
-        encoded = frames.history(session.ring, t0, t1)
-        return StreamingResponse(_log_lines(encoded, gen), media_type="application/x-ndjson")
-
-    # -- files ------------------------------------------------------------------------------------------
-
-    @app.get("/api/files", tags=["files"])
-    async def list_files() -> dict[str, Any]:
-        """Every behavior file: path, version, size, the behaviors it belongs to."""
-        listed = await asyncio.to_thread(studio.files.list)
-        for item in listed:
-            item["programs"] = studio.programs_of(item["path"])
-        return {"files": listed}
-
-    @app.get("/api/files/{path:path}", tags=["files"])
-    async def read_file(path: str) -> JSONResponse:
-        """A file's text and version (also as ETag)."""
-        text, version = await asyncio.to_thread(studio.files.read, path)
-        return JSONResponse({"path": path, "version": version, "text": text}, headers={"ETag": f'"{version}"'})
-
-    @app.put("/api/files/{path:path}", tags=["files"])
-    async def write_file(path: str, body: FileBody, if_match: str | None = Header(default=None)) -> Response:
-        """Replace a file (If-Match: its version); compile; hot-swap when clean, else 422."""
-        expected = _etag(if_match) or body.version
-        async with studio.write_lock:
-            version = await asyncio.to_thread(studio.files.write, path, body.text, expected)
-            return await studio.after_write([path], version, 200)
-
-    @app.post("/api/files/{path:path}", tags=["files"])
-    async def create_file(path: str, body: FileBody) -> Response:
-        """Create a file (409 if it exists); compile the behaviors it belongs to."""
-        async with studio.write_lock:
-            version = await asyncio.to_thread(studio.files.create, path, body.text)
-            return await studio.after_write([path], version, 201)
-
-    @app.patch("/api/files/{path:path}", tags=["files"])
-    async def rename_file(path: str, body: RenameBody, if_match: str | None = Header(default=None)) -> Response:
-        """Rename a file to ``body.path`` (409 if that exists)."""
-        async with studio.write_lock:
-            version = await asyncio.to_thread(studio.files.rename, path, body.path, _etag(if_match))
-            return await studio.after_write([path, body.path], version, 200, deleted=path)
-
-    @app.delete("/api/files/{path:path}", tags=["files"])
-    async def delete_file(path: str, if_match: str | None = Header(default=None)) -> Response:
-        """Delete a file; compile the behaviors it belonged to."""
-        async with studio.write_lock:
-            await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
-            return await studio.after_write([path], None, 200, deleted=path)
-
-    @app.post("/api/compile", tags=["files"])
-    async def compile_text(body: CompileBody) -> dict[str, Any]:
-        """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
-        studio.files.check_syntax(body.path)
-        real = studio.files.resolve(body.path, must_exist=False)
-        keys = studio.programs_of(body.path)
-        diagnostics: list[dict[str, Any]] = []
-        ok = True
-        for key in keys:
-            compilation = await asyncio.to_thread(session.compile, key, {str(real): body.text})
-            ok = ok and compilation.ok
-            diagnostics.extend(dict(d.as_dict(), program=key) for d in compilation.diagnostics)
-        return {"ok": ok, "diagnostics": diagnostics, "programs": keys}
-
-    # -- graphs ----------------------------------------------------------------------------------------
-
-    def _program(key: str) -> Any:
-        state = session.programs.get(key)
-        if state is None or state.running is None:
-            raise HTTPException(404, f"no running behavior {key!r}")
-        return state.running
-
-    async def _svg(request: Request, dot: str) -> Response:
-        try:
-            svg, etag = await asyncio.to_thread(studio.graphs.svg, dot)
-        except GraphvizMissing as error:
-            raise HTTPException(503, str(error)) from None
-        if _etag(request.headers.get("if-none-match")) == etag:
-            return Response(status_code=304, headers={"ETag": f'"{etag}"'})
-        return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
-
-    @app.get("/api/graph/{program}", tags=["graphs"])
-    async def graph(request: Request, program: str, agent: str | None = None) -> Response:
-        """The option graph below an XABSL agent's root option (SVG)."""
-        try:
-            dot = option_graph_dot(_program(program), agent)
-        except GraphError as error:
-            raise HTTPException(404, str(error)) from None
-        return await _svg(request, dot)
-
-    @app.get("/api/graph/{program}/{option}", tags=["graphs"])
-    async def option_graph(request: Request, program: str, option: str) -> Response:
-        """The state machine of one option (SVG)."""
-        try:
-            dot = state_machine_dot(_program(program), option)
-        except GraphError as error:
-            raise HTTPException(404, str(error)) from None
-        return await _svg(request, dot)
-
-    # -- the web UI ------------------------------------------------------------------------------------
-
+    app.add_exception_handler(FileError, _file_error)
+    app.add_exception_handler(CommandError, _command_error)
+    app.include_router(router)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")
     else:
-
-        @app.get("/", include_in_schema=False)
-        async def no_ui() -> HTMLResponse:
-            return HTMLResponse(_NO_UI)
-
+        app.add_api_route("/", _no_ui, methods=["GET"], include_in_schema=False)
     return app
 
 

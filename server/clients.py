@@ -104,7 +104,7 @@ class Client:
 
     def due(self, entry: Entry, ticks_per_second: float) -> bool:
         """Whether ``entry`` falls on this client's schedule (see the module docstring)."""
-        if entry.gen.number != self.last_gen:
+        if entry.gen.number != self.last_gen or ticks_per_second <= 0.0:
             return True
         ratio = self.rate / ticks_per_second
         if ratio >= 1.0:
@@ -264,7 +264,8 @@ class Hub:
         entry = self.session.ring.latest
         if entry is None:
             return
-        ticks_per_second = self.session.behavior_hz * self.session.speed
+        # While paused, frames come only from step, reset and reload: every client wants each.
+        ticks_per_second = 0.0 if self.session.paused else self.session.behavior_hz * self.session.speed
         for client in self.clients.values():
             if client.state is ClientState.LIVE and client.due(entry, ticks_per_second):
                 client.offer(entry)
