@@ -165,6 +165,28 @@ def test_force_an_option_with_a_parameter_and_see_it_at_the_root(page: Any) -> N
     wait_until(page, f"() => !{first_row}.textContent.includes('go_to_position')")
 
 
+CLEAR = "behavior/options/clear_ball.xabsl"
+
+
+def test_a_conflicting_save_is_shown_never_overwritten_silently(page: Any, studio: StudioServer) -> None:
+    original = (studio.example / CLEAR).read_text()
+    page.keyboard.press("e")
+    page.locator(f".file-tree [data-path='{CLEAR}']").click()
+    wait_until(page, "() => document.querySelector('.editor-host .cm-content').textContent.includes('clear_ball')")
+    mine = "// my change\n" + original
+    replace_editor_text(page, mine)
+    # Someone else saves the file meanwhile (another editor on the same folder).
+    theirs = "// their change\n" + original
+    (studio.example / CLEAR).write_text(theirs)
+    page.keyboard.press("Control+s")
+    page.locator(".banner", has_text="Conflict").wait_for()
+    assert (studio.example / CLEAR).read_text() == theirs
+    page.locator(".banner button", has_text="Overwrite theirs with mine").click()
+    page.locator(".toast.ok", has_text="Saved behavior/options/clear_ball.xabsl").wait_for()
+    assert (studio.example / CLEAR).read_text() == mine
+    assert page.locator(".banner").is_hidden()
+
+
 def test_scrub_the_timeline_and_back_to_live(page: Any) -> None:
     page.wait_for_timeout(1500)
     canvas = page.locator(".timeline-canvas")
