@@ -65,7 +65,7 @@ def option_source(i: int) -> str:
             f"      else stay;\n    }}\n"
             f"    action {{\n      ticks = ticks + 1;\n      {action}\n    }}\n  }}\n"
         )
-    return f"/** Generated option {i}. */\noption o{i} {{\n  float @speed \"mm/s\";\n" + "".join(states) + "}\n"
+    return f'/** Generated option {i}. */\noption o{i} {{\n  float @speed "mm/s";\n' + "".join(states) + "}\n"
 
 
 def write_behavior(folder: Path) -> None:
@@ -106,8 +106,16 @@ def main() -> None:
         with sync_playwright() as p:
             browser = p.chromium.launch(
                 executable_path="/usr/bin/chromium",
-                args=["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                      "--disable-background-networking", "--disable-component-update", "--disable-sync"],
+                args=[
+                    "--headless",
+                    "--no-sandbox",
+                    "--disable-gpu",
+                    "--disable-quic",
+                    "--no-first-run",
+                    "--disable-background-networking",
+                    "--disable-component-update",
+                    "--disable-sync",
+                ],
             )
             page = browser.new_page(viewport={"width": 1600, "height": 1000})
             page.goto(f"http://127.0.0.1:{port}/")
@@ -128,8 +136,10 @@ def main() -> None:
         render = sum(s["renderMs"] for s in samples) / len(samples)
         frames = sum(s["fps"] for s in samples) / len(samples)
         print(f"{OPTIONS} options, {AGENTS} agents, activation path of {depth} nodes")
-        print(f"frames received: {frames:.1f}/s; UI draws: {draws:.1f}/s; {render:.2f} ms per draw "
-              f"(budget at 30 fps: 33 ms, ratio {33.3 / max(render, 0.01):.0f}x)")
+        print(
+            f"frames received: {frames:.1f}/s; UI draws: {draws:.1f}/s; {render:.2f} ms per draw "
+            f"(budget at 30 fps: 33 ms, ratio {33.3 / max(render, 0.01):.0f}x)"
+        )
     finally:
         shutil.rmtree(root, ignore_errors=True)
 
