@@ -140,6 +140,16 @@ function main(): void {
     forceAll,
   );
 
+  const HINT_KEY = "xabsl-studio.hint-dismissed";
+  const hint = h(
+    "div.hint",
+    { role: "note" },
+    h("strong", {}, "Start here: "),
+    "click a robot (or press 1–9) · the graph lights up what it runs · click an option to see ",
+    h("em", {}, "why"),
+    " it decided · E edits, Ctrl+S hot-reloads · X runs an option by hand · drag the timeline to go back, L for live · ? for all keys",
+    h("button.icon", { title: "Hide this hint", "aria-label": "hide hint", onclick: () => { hint.remove(); localStorage.setItem(HINT_KEY, "1"); } }, "×"),
+  );
   app.append(
     topbar.element,
     h(
@@ -160,6 +170,8 @@ function main(): void {
       plot.element,
     ),
   );
+
+  if (!localStorage.getItem(HINT_KEY)) topbar.element.after(hint);
 
   // -------------------------------------------------------------------------- render loop
   const pending = new Set<SessionEvent>();
