@@ -210,6 +210,7 @@ class ErrandsWorld:
         self.seed = int(seed)
         self.with_plan = plan
         self.dt = float(dt)
+        physics_rate(self.dt)  # reject a tick the loop cannot run before building anything
         self.arena = Arena(layout)
         self.dd = DDSystem(_model(str(model_path), self.dt), seed=self.seed, dt=self.dt, noise=noise)
         self.behaviors = self.dd.model.behaviors
