@@ -21,6 +21,9 @@ One behavior tick follows doc §4.1 inside the host loop's sense / execute / act
     step     0 pymunk physics (2 × 10 ms per 20 ms tick by default)
 
 ``plan=False`` selects the XABSL agent ``reactive`` (no operator ever), for the no-plan claims.
+The monitor's symbols and basic behaviors are bound in :mod:`examples.errands.bindings`; the
+host side of the plan (queue, next executable operator, replanning) is
+:class:`examples.errands.plan.PlanBoard`.
 
 Ground truth (the arena) and what the robot believes (derived facts) are kept apart; the world
 compares them every tick (:class:`examples.errands.facts.Agreement`) and counts what the §4.4
@@ -31,7 +34,7 @@ claims need (:class:`RunRecord`). Perturbation hooks for tests and the studio: `
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
@@ -43,12 +46,21 @@ import numpy as np
 from engine.dynamics.model import DDModel, load_model
 from engine.dynamics.system import DDSystem
 from engine.host import RunStats, Scene, run_headless
-from engine.ir.model import Parameter, Program
+from engine.ir.model import Program
 from engine.planning.facts import FactDeriver, FactEvent
 from engine.planning.strips import Fact, Task, load_task
-from engine.runtime import BasicBehavior, Bindings, Engine
-from engine.types import Kind, Ms
+from engine.runtime import Engine
+from engine.types import Ms
 from examples.errands.arena import Arena, ArenaLayout, Box
+from examples.errands.bindings import (
+    ITEMS,
+    LOCATIONS,
+    PDDL_SCHEMA,
+    REASONS,
+    SCHEMAS,
+    STATUSES,
+    monitor_bindings,
+)
 from examples.errands.facts import Agreement, Truth, evidence_signals, fact_rules, truth_facts
 from examples.errands.plan import PlanBoard
 
@@ -57,24 +69,6 @@ MODEL_PATH = HERE / "model" / "errands_dd.json"
 DOMAIN_PATH = HERE / "pddl" / "domain.pddl"
 PROBLEM_PATH = HERE / "pddl" / "problem.pddl"
 AGENTS_PATH = HERE / "behavior" / "agents.xabsl"
-
-#: Host values of the XABSL enumerations (element order of behavior/symbols.xabsl).
-LOCATIONS = ("a", "b", "c")
-ITEMS = ("book", "mug")
-SCHEMAS = ("none", "go_to", "load", "unload")
-STATUSES = ("idle", "executing", "replanning", "done", "failed")
-REASONS = (
-    "none",
-    "start",
-    "op_timeout",
-    "precondition_lost",
-    "nothing_executable",
-    "extend",
-    "no_plan",
-    "replan_limit",
-)
-#: XABSL schema element -> PDDL action name.
-_PDDL_SCHEMA = {"go_to": "goto", "load": "load", "unload": "unload"}
 
 #: Where objects count as delivered for claim 15: released within this distance of beacon a.
 DELIVERY_RADIUS = 0.9
@@ -154,34 +148,6 @@ class ErrandsAgent:
         self._world._act()
 
 
-class _PlanFromFacts(BasicBehavior):
-    """``plan_from_facts(reason)``: GRAPHPLAN from the derived facts, once per activation."""
-
-    name = "plan_from_facts"
-    parameters = (Parameter("reason", Kind.ENUM, "plan_reason"),)
-
-    def __init__(self, world: ErrandsWorld) -> None:
-        super().__init__()
-        self.world = world
-
-    def execute(self) -> None:
-        if self.time_of_execution == 0:
-            self.world._plan(REASONS[int(self.param("reason"))])
-
-
-class _CompleteOperator(BasicBehavior):
-    """``complete_operator()``: mark the monitor's operator done on the plan board."""
-
-    name = "complete_operator"
-
-    def __init__(self, world: ErrandsWorld) -> None:
-        super().__init__()
-        self.world = world
-
-    def execute(self) -> None:
-        self.world._complete()
-
-
 class ErrandsWorld:
     """The errands robot in its arena; implements ``engine.host.World``.
 
@@ -250,68 +216,14 @@ class ErrandsWorld:
         self._held_before: set[str] = set()
         self._at_before: set[str] = set()
         self._monitor_seen: tuple[int, str | None, int] = (-1, None, -1)
-        self.engine = Engine(self._bindings(), _program(str(agents_path)), agent_name="robot")
+        self.engine = Engine(monitor_bindings(self), _program(str(agents_path)), agent_name="robot")
         self.engine.select_agent("planner" if plan else "reactive")
         self._agents = (ErrandsAgent(self, self.engine),)
         self.sense_hooks: list[Callable[[ErrandsWorld], None]] = []
 
     # -- XABSL bindings -----------------------------------------------------------------------------
 
-    def _bindings(self) -> Bindings:
-        b = Bindings()
-        for name, elements in (
-            ("location", LOCATIONS),
-            ("item", ITEMS),
-            ("op_schema", SCHEMAS),
-            ("plan_status", STATUSES),
-            ("plan_reason", REASONS),
-        ):
-            b.enum(name, list(elements))
-        at_robot = [f"at-robot {x}" for x in LOCATIONS]
-        has_robot = [f"has-robot {o}" for o in ITEMS]
-        at = [[f"at {o} {x}" for x in LOCATIONS] for o in ITEMS]
-        b.input(
-            "fact.at_robot",
-            Kind.BOOLEAN,
-            lambda loc: at_robot[loc] in self.facts,
-            params=[Parameter("loc", Kind.ENUM, "location")],
-        )
-        b.input(
-            "fact.has_robot",
-            Kind.BOOLEAN,
-            lambda obj: has_robot[obj] in self.facts,
-            params=[Parameter("obj", Kind.ENUM, "item")],
-        )
-        b.input(
-            "fact.at",
-            Kind.BOOLEAN,
-            lambda obj, loc: at[obj][loc] in self.facts,
-            params=[Parameter("obj", Kind.ENUM, "item"), Parameter("loc", Kind.ENUM, "location")],
-        )
-        b.input("plan.next.schema", Kind.ENUM, lambda: self._next_op()[0], enum="op_schema")
-        b.input("plan.next.from", Kind.ENUM, lambda: self._next_op()[1], enum="location")
-        b.input("plan.next.loc", Kind.ENUM, lambda: self._next_op()[2], enum="location")
-        b.input("plan.next.obj", Kind.ENUM, lambda: self._next_op()[3], enum="item")
-        b.input("plan.goal_holds", Kind.BOOLEAN, lambda: self.board.goal_holds(self.facts))
-        b.input("plan.solved", Kind.BOOLEAN, lambda: self.board.solved)
-        b.input("plan.can_extend", Kind.BOOLEAN, lambda: self.board.can_extend(self.facts))
-        b.input("plan.replans", Kind.DECIMAL, lambda: float(self.board.replans))
-        out = self.out
-        enums = {
-            "plan.op": "op_schema",
-            "plan.op.from": "location",
-            "plan.op.loc": "location",
-            "plan.op.obj": "item",
-            "plan.status": "plan_status",
-            "plan.last_failure": "plan_reason",
-        }
-        for name, enum in enums.items():
-            b.output(name, Kind.ENUM, enum=enum, setter=_setter(out, name), getter=_getter(out, name))
-        b.behavior(_PlanFromFacts(self))
-        b.behavior(_CompleteOperator(self))
-        return b
-
-    def _next_op(self) -> tuple[int, int, int, int]:
+    def next_op(self) -> tuple[int, int, int, int]:
         """plan.next.* as host enum values, computed once per tick (and after plan changes)."""
         if self._next is None:
             a = self.board.next_executable(self.facts)
@@ -334,13 +246,15 @@ class ErrandsWorld:
         loc = LOCATIONS[out["plan.op.loc"]]
         if schema == "go_to":
             return f"goto {LOCATIONS[out['plan.op.from']]} {loc}"
-        return f"{_PDDL_SCHEMA[schema]} {ITEMS[out['plan.op.obj']]} {loc}"
+        return f"{PDDL_SCHEMA[schema]} {ITEMS[out['plan.op.obj']]} {loc}"
 
-    def _plan(self, reason: str) -> None:
+    def plan_from_facts(self, reason: str) -> None:
+        """Run GRAPHPLAN from the derived facts (the basic behavior plan_from_facts)."""
         self.board.plan_from(self.facts, self.t, reason)
         self._next = None
 
-    def _complete(self) -> None:
+    def complete_operator(self) -> None:
+        """Mark the monitor's operator done (the basic behavior complete_operator)."""
         op = self._operator()
         if op is not None:
             if op not in self.board.done:
@@ -578,17 +492,6 @@ def _round(a: np.ndarray) -> list[float]:
 
 def _event_json(e: FactEvent) -> dict[str, Any]:
     return {"t": round(e.t, 3), "fact": e.fact, "value": e.value, "cause": dict(e.cause)}
-
-
-def _setter(store: dict[str, int], name: str) -> Callable[[Any], None]:
-    def set_value(value: Any) -> None:
-        store[name] = int(value)
-
-    return set_value
-
-
-def _getter(store: Mapping[str, int], name: str) -> Callable[[], int]:
-    return lambda: store[name]
 
 
 def build_world(

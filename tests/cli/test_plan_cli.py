@@ -44,8 +44,11 @@ def test_unsolvable_problem_exits_1_with_the_reason(tmp_path, capsys):
     "domain_text, message",
     [
         ("(define (domain x", r"d.pddl:1:17: syntax error: unexpected end of file; expected RPAR"),
-        ("(define (domain x) (:requirements :strips) (:predicates (p)) (:action a :parameters () "
-         ":precondition (or (p) (p)) :effect (p)))", "d.pddl: "),
+        (
+            "(define (domain x) (:requirements :strips) (:predicates (p)) (:action a :parameters () "
+            ":precondition (or (p) (p)) :effect (p)))",
+            "d.pddl: ",
+        ),
         ("(define (domain x) ;; \x00", "d.pddl:1:"),
     ],
 )
