@@ -515,10 +515,16 @@ def history(ring: Ring, t0: int, t1: int, every: int = 1) -> Iterator[bytes]:
     if start is None:
         return
     # A full frame at `start`: the last key frame at or before it, with the deltas up to it merged.
+    # At the old end of the ring that key frame may be gone: then start at the first key frame.
     key = start
-    while key > 0 and entries[key].full is None:
+    while key >= 0 and entries[key].full is None:
         key -= 1
-    state = orjson.loads(entries[key].full or entries[key].delta)
+    if key < 0:
+        key = next((k for k in range(start, len(entries)) if entries[k].full is not None), None)
+        if key is None:
+            return
+        start = key
+    state = orjson.loads(entries[key].full)  # type: ignore[arg-type]
     for e in entries[key + 1 : start + 1]:
         _merge(state, orjson.loads(e.delta))
     state["full"] = True
