@@ -22,9 +22,10 @@ Ids are those of the program JSON (``engine.emit.json``); see docs/protocol.md f
 
 from __future__ import annotations
 
+import functools
 import time
 from collections import deque
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -107,12 +108,15 @@ class ProgramCodec:
 class AgentSampler:
     """Reads one engine after a tick: path, input values, output values, extras (fault, force)."""
 
-    __slots__ = ("codec", "engine", "index", "input_kinds", "output_kinds")
+    __slots__ = ("_input_plan", "_output_plan", "codec", "engine", "index")
 
     def __init__(self, index: int, engine: Engine, codec: ProgramCodec) -> None:
         self.index = index
         self.engine = engine
         self.codec = codec
+        # Per symbol: its name and the conversion to a display value, decided once.
+        self._input_plan = [(name, self._converter(kind, enum)) for _, name, kind, enum in codec.inputs]
+        self._output_plan = [(name, self._converter(kind, enum)) for _, name, kind, enum in codec.outputs]
 
     def path(self) -> list[list[Any]]:
         codec = self.codec
@@ -137,28 +141,40 @@ class AgentSampler:
         walk(self.engine.activation(), 0)
         return out
 
+    def _converter(self, kind: Kind, enum: str | None) -> Callable[[Any], Value | None]:
+        if kind is Kind.DECIMAL:
+            return _round
+        if kind is Kind.BOOLEAN:
+            return bool
+        table = self.codec.enum_index.get(enum or "", {})
+        return lambda value: table.get(int(value), -1)
+
     def inputs(self) -> tuple[Value | None, ...]:
+        # Read through the engine's current input callables (an override replaces one of them).
         reads = self.engine._loaded_program().input_reads
-        display = self.codec.display
-        values: list[Value | None] = []
-        for _, name, kind, enum in self.codec.inputs:
-            read = reads.get(name)
-            try:
-                values.append(display(kind, enum, read()) if read is not None else None)
-            except Exception:  # a host getter that raises must not stop the simulation thread
-                values.append(None)
-        return tuple(values)
+        try:
+            return tuple([convert(reads[name]()) for name, convert in self._input_plan])
+        except Exception:  # a host getter that raises must not stop the simulation thread
+            values: list[Value | None] = []
+            for name, convert in self._input_plan:
+                try:
+                    values.append(convert(reads[name]()))
+                except Exception:
+                    values.append(None)
+            return tuple(values)
 
     def outputs(self) -> tuple[Value | None, ...]:
-        engine = self.engine
-        display = self.codec.display
-        values: list[Value | None] = []
-        for _, name, kind, enum in self.codec.outputs:
-            try:
-                values.append(display(kind, enum, engine.output(name)))
-            except Exception:
-                values.append(None)
-        return tuple(values)
+        output = self.engine.output
+        try:
+            return tuple([convert(output(name)) for name, convert in self._output_plan])
+        except Exception:
+            values: list[Value | None] = []
+            for name, convert in self._output_plan:
+                try:
+                    values.append(convert(output(name)))
+                except Exception:
+                    values.append(None)
+            return tuple(values)
 
     def extras(self) -> bytes:
         """``,"fault":...,"forced":...,"overrides":...`` for the agent object, or b''."""
@@ -432,13 +448,19 @@ class FrameRecorder:
         return entry
 
 
+#: round(value, DECIMALS) without a Python frame per value.
+_round: Callable[[Any], Value] = functools.partial(round, ndigits=DECIMALS)
+
+
 def _changed(new: tuple[Value | None, ...], old: tuple[Value | None, ...]) -> int:
+    if new == old:
+        return 0
     if len(new) != len(old):
         return (1 << len(new)) - 1
     mask = 0
     bit = 1
     for a, b in zip(new, old, strict=True):
-        if a != b or type(a) is not type(b):
+        if a != b:
             mask |= bit
         bit <<= 1
     return mask

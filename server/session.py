@@ -591,6 +591,9 @@ class Session:
             "generation": self.generation.number,
             "real_time_factor": round(self.timing.real_time_factor(), 3),
             "tick_ms": round(1000 * self.timing.busy / self.timing.ticks, 3) if self.timing.ticks else 0.0,
+            # raw counters, for windowed measurements (benchmarks/stream_load.py)
+            "timing": {"ticks": self.timing.ticks, "busy_seconds": self.timing.busy,
+                       "sim_seconds": self.loop.sim_seconds, "frame_seconds": self.recorder.sample_seconds},
             "ring": {"frames": ring_entries, "capacity": self.ring.capacity,
                      "seconds": round(ring_entries / self.behavior_hz, 1), "bytes": self.ring.nbytes()},
             "programs": {key: state.as_dict() for key, state in self.programs.items()},

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import orjson
@@ -41,7 +42,7 @@ def test_path_nodes_use_program_ids(demo_dir: Path) -> None:
     assert option_time == 725 and 0 <= state_time <= option_time and leaf >= 0 and decided_in >= 0
     assert params == []
     depths = [node[1] for node in frame["agents"][0]["path"]]
-    assert depths[0] == 0 and all(b <= a + 1 for a, b in zip(depths, depths[1:], strict=False))
+    assert depths[0] == 0 and all(b <= a + 1 for a, b in itertools.pairwise(depths))
 
 
 def test_a_client_skipping_frames_converges_to_exact_values(demo_dir: Path) -> None:
@@ -80,7 +81,7 @@ def test_full_frames_at_least_every_full_every_ticks_and_for_filters(demo_dir: P
             fulls.append(entry.seq)
         assert "inputs" not in frame["agents"][0] and "inputs" in frame["agents"][1]
         last = entry.seq
-    assert len(fulls) >= 3 and all(b - a <= FULL_EVERY for a, b in zip(fulls, fulls[1:], strict=False))
+    assert len(fulls) >= 3 and all(b - a <= FULL_EVERY for a, b in itertools.pairwise(fulls))
 
 
 def test_ring_is_bounded_and_history_rebuilds_full_frames(demo_dir: Path) -> None:
