@@ -18,7 +18,7 @@ from engine.cli import UsageError
 from engine.emit.ic import emit_ic
 from engine.emit.json import program_to_json
 from engine.files import write_atomically
-from engine.lang import compile_file
+from engine.lang import compile_file, deep_recursion
 
 #: Diagnostic codes of the whole-program lint that ``--no-lint`` silences.
 LINT_CODES = frozenset({"unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"})
@@ -58,7 +58,9 @@ def run(args: argparse.Namespace) -> int:
     if not failed and compilation.program is not None:
         try:
             if args.ic:
-                write_atomically(args.ic, emit_ic(compilation.program).encode("utf-8"))
+                with deep_recursion():
+                    text = emit_ic(compilation.program)
+                write_atomically(args.ic, text.encode("utf-8"))
             if args.json:
                 document = program_to_json(compilation.program, compilation.source_text)
                 write_atomically(args.json, orjson.dumps(document, option=orjson.OPT_INDENT_2))

@@ -172,7 +172,8 @@ def _parameter(param: ir.Parameter) -> str:
 
 
 def _sorted(items: list, key: Callable) -> list:  # type: ignore[type-arg]
-    return sorted(items, key=lambda item: key(item).lower())
+    # by lower-cased name as the original; ties by exact name so that file order cannot matter
+    return sorted(items, key=lambda item: (key(item).lower(), key(item)))
 
 
 def emit_ic(program: ir.Program) -> str:

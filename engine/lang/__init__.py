@@ -15,8 +15,10 @@ IR), :mod:`.lint` (whole-program checks). User mistakes never raise: they are di
 
 from __future__ import annotations
 
+import sys
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from engine import ir
@@ -28,6 +30,23 @@ from engine.lang.symbols import Declarations
 from engine.types import Span
 
 __all__ = ["Compilation", "Diagnostic", "Severity", "compile_file"]
+
+
+#: Recursion limit while compiling: deeply nested expressions and long ``else if`` chains recurse
+#: in the parser and checker. Python 3.11 keeps pure-Python frames off the C stack, so this is safe;
+#: deeper input still gets a ``nesting-too-deep`` diagnostic instead of a RecursionError.
+RECURSION_LIMIT = 12_000
+
+
+@contextmanager
+def deep_recursion() -> Iterator[None]:
+    """Temporarily allow :data:`RECURSION_LIMIT` nested calls (never lowers the limit)."""
+    previous = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(previous, RECURSION_LIMIT))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(previous)
 
 
 @dataclass
@@ -78,6 +97,11 @@ def compile_file(
     Returns:
         a :class:`Compilation`; ``program`` is None when there is any error.
     """
+    with deep_recursion():
+        return _compile(path, base, overrides)
+
+
+def _compile(path: str, base: str | None, overrides: Mapping[str, str] | None) -> Compilation:
     diagnostics = Diagnostics()
     started = time.perf_counter()
     loaded = load(path, diagnostics, base, overrides)
@@ -90,12 +114,19 @@ def compile_file(
     usage: set[tuple[str, str]] = set()
     ordered = sorted(
         (h for h in table.options.values() if h.file.path not in broken),
-        key=lambda h: h.decl.name.text.lower(),
+        # ties (names differing only in case) by exact name, so include order cannot matter
+        key=lambda h: (h.decl.name.text.lower(), h.decl.name.text),
     )
-    options = {
-        header.decl.name.text: OptionChecker(table, header, diagnostics, usage).build(index)
-        for index, header in enumerate(ordered)
-    }
+    options: dict[str, ir.Option] = {}
+    for index, header in enumerate(ordered):
+        try:
+            options[header.decl.name.text] = OptionChecker(table, header, diagnostics, usage).build(index)
+        except RecursionError:
+            diagnostics.add(
+                "nesting-too-deep",
+                f"option '{header.decl.name.text}' nests expressions or decisions too deeply to check",
+                header.decl.name.span,
+            )
 
     agents: list[ir.Agent] = []
     agent_names: set[str] = set()

@@ -28,6 +28,7 @@ CODES: dict[str, tuple[Severity, str, str]] = {
     "unterminated-comment": (Severity.ERROR, "X3275", "a /* comment without */"),
     "syntax-error": (Severity.ERROR, "X2537", "a token the grammar does not accept here"),
     "unexpected-end-of-file": (Severity.ERROR, "X2555", "the file ends inside a declaration"),
+    "nesting-too-deep": (Severity.ERROR, "", "nesting deeper than the compiler can follow"),
     # files and includes (§1.1)
     "missing-include-file": (Severity.ERROR, "X2375", "an included file does not exist"),
     "include-twice": (Severity.ERROR, "", "the same file included twice from one file"),

@@ -72,6 +72,11 @@ def load(
         source = parse_file(shown, text, diagnostics)
         included_here: set[str] = set()
         for include in source.includes:
+            if "\0" in include.path:
+                diagnostics.add(
+                    "missing-include-file", "unable to open file: the name contains a NUL byte", include.span
+                )
+                continue
             target = os.path.realpath(os.path.join(os.path.dirname(real), include.path))
             if target in included_here:
                 diagnostics.add("include-twice", f"'{include.path}' is included twice from this file", include.span)

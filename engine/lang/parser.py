@@ -50,7 +50,15 @@ def parse_file(path: str, text: str, diagnostics: Diagnostics) -> ast.SourceFile
     """Parse one file's text; problems are added to ``diagnostics``, never raised."""
     tokens = tokenize(text, path, diagnostics)
     truncated = any(d.code == "unterminated-comment" and d.file == path for d in diagnostics)
-    return _Parser(path, text, tokens, diagnostics, truncated).parse()
+    parser = _Parser(path, text, tokens, diagnostics, truncated)
+    try:
+        return parser.parse()
+    except RecursionError:
+        token = parser.tok
+        diagnostics.add(
+            "nesting-too-deep", "expressions or decision trees nest too deeply to parse here", token.span, path
+        )
+        return ast.SourceFile(path, text)
 
 
 class _Parser:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import enum
 import re
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from engine.lang.diagnostics import Diagnostics
 from engine.types import Span
@@ -85,9 +85,8 @@ _NUMBER = re.compile(r"[0-9]+(?:\.[0-9]*)?")
 _WHITESPACE = re.compile(r"[ \t\r\n\f\v]+")
 
 
-@dataclass(frozen=True, slots=True)
-class Token:
-    """One token with its exact text and position."""
+class Token(NamedTuple):
+    """One token with its exact text and position (a NamedTuple: cheap to build, see Span)."""
 
     type: TokenType
     text: str
@@ -119,24 +118,31 @@ def decode_source(data: bytes) -> str:
         return data.decode("latin-1")
 
 
-class _LineIndex:
-    """Offset -> (line, column) for one text, by binary search over line starts."""
+class _Positions:
+    """Offsets -> (line, column), for offsets visited in increasing order.
 
-    __slots__ = ("starts",)
+    Tokens come in source order, so the line is tracked incrementally: the newlines between the
+    last offset and the next one are counted with ``str.count`` (C speed) instead of searching a
+    line table per token; this was the tokenizer's largest cost on 200 KB behavior sets.
+    """
+
+    __slots__ = ("line", "line_start", "offset", "text")
 
     def __init__(self, text: str) -> None:
-        self.starts = [0]
-        self.starts.extend(m.end() for m in re.finditer("\n", text))
+        self.text = text
+        self.line = 1
+        self.line_start = 0
+        self.offset = 0
 
     def position(self, offset: int) -> tuple[int, int]:
-        lo, hi = 0, len(self.starts) - 1
-        while lo < hi:
-            mid = (lo + hi + 1) // 2
-            if self.starts[mid] <= offset:
-                lo = mid
-            else:
-                hi = mid - 1
-        return lo + 1, offset - self.starts[lo] + 1
+        if offset < self.offset:  # rare: restart (only an error span could look back)
+            self.line, self.line_start, self.offset = 1, 0, 0
+        newlines = self.text.count("\n", self.offset, offset)
+        if newlines:
+            self.line += newlines
+            self.line_start = self.text.rfind("\n", self.offset, offset) + 1
+        self.offset = offset
+        return self.line, offset - self.line_start + 1
 
 
 def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
@@ -145,14 +151,17 @@ def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
     An illegal character is reported and skipped; an unterminated comment is reported at its
     start and ends the token stream. The list always ends with an EOF token.
     """
-    lines = _LineIndex(text)
+    positions = _Positions(text)
     tokens: list[Token] = []
     pos = 0
     length = len(text)
 
     def span(start: int, end: int) -> Span:
-        line, col = lines.position(start)
-        end_line, end_col = lines.position(end)
+        line, col = positions.position(start)
+        if text.find("\n", start, end) < 0:  # most tokens: the end is on the same line
+            return Span(file, line, col, line, col + end - start, start, end)
+        end_line = line + text.count("\n", start, end)
+        end_col = end - text.rfind("\n", start, end)
         return Span(file, line, col, end_line, end_col, start, end)
 
     def add(kind: TokenType, start: int, end: int) -> None:

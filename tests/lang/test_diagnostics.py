@@ -44,12 +44,19 @@ def agents(*options: str, includes: str = "") -> str:
     return includes + "\n".join(lines) + '\nagent a("A", ' + options[0] + ");\n"
 
 
-#: code -> (files, file of the diagnostic, line, column)
-CASES: dict[str, tuple[dict[str, str], str, int, int]] = {
+#: code -> (files, file of the diagnostic, line, column); column None where it depends on the
+#: interpreter's stack (where the recursion limit strikes inside 4000 nested parentheses)
+CASES: dict[str, tuple[dict[str, str], str, int, int | None]] = {
     "illegal-character": ({"o.xabsl": option_file("o", state("out = x $ 1;"))}, "o.xabsl", 6, 15),
     "unterminated-comment": ({"o.xabsl": "option o {\n  /* open\n"}, "o.xabsl", 2, 3),
     "syntax-error": ({"o.xabsl": option_file("o", state("out = ;"))}, "o.xabsl", 6, 13),
     "unexpected-end-of-file": ({"o.xabsl": "option o {\n  initial state s {"}, "o.xabsl", 2, 20),
+    "nesting-too-deep": (
+        {"o.xabsl": option_file("o", state("out = " + "(" * 4000 + "1" + ")" * 4000 + ";"))},
+        "o.xabsl",
+        6,
+        None,
+    ),
     "missing-include-file": ({"o.xabsl": 'include "defs.xabsl";\ninclude "gone.xabsl";\n'}, "o.xabsl", 2, 1),
     "include-twice": ({"o.xabsl": 'include "defs.xabsl";\ninclude "./defs.xabsl";\n'}, "o.xabsl", 2, 1),
     "unreadable-file": ({"o.xabsl/x": ""}, "o.xabsl", 0, 0),
@@ -184,7 +191,8 @@ def test_diagnostic(code: str, compile_sources: Callable[..., Compilation]) -> N
     assert found, f"no {code} diagnostic"
     d = found[0]
     assert d.file == file
-    assert ((d.span.line, d.span.col) if d.span else (0, 0)) == (line, col)
+    where = (d.span.line, d.span.col) if d.span else (0, 0)
+    assert where == (line, col if col is not None else where[1])
     if CODES[code][0] is Severity.ERROR:
         assert compilation.program is None
     else:
