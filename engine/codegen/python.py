@@ -2,16 +2,27 @@
 
 Per option ``o`` (index ``i``) the generated chunk, compiled with the filename ``<xabsl:o>``, holds:
 
-* ``D{i}_{s}(st, ot, tick)``: the decision of state ``s`` (common decision tree inlined, §2.4).
+* ``D{i}_{s}(...)``: the decision of state ``s`` (common decision tree inlined, §2.4).
   It returns a constant tuple ``(next_state, leaf_id, s)``: CPython keeps constant tuples
   prebuilt, so deciding allocates nothing, and the engine records the tuple as the tick's
   leaf (§2.12) with a single store.
-* ``A{i}_{s}(st, ot, now, tick)``: the action list of state ``s`` (§2.2): output assignments written
+* ``A{i}_{s}(...)``: the action list of state ``s`` (§2.2): output assignments written
   through at once, subsequent options and basic behaviors called in textual order with every
   parameter re-evaluated in the engine's order and unassigned ones reset (§2.5).
 * ``O{i}(now, tick)``: one execution of the option (§2.2 ``ActionBehavior.execute`` +
   ``Option.execute``): activation bookkeeping with tick stamps instead of per-tick flag resets,
   unsigned millisecond times (§2.6), decision before actions, at most one transition.
+
+What a tick does not need is not generated (the engine runs ~10 options per agent tick, so
+every bytecode of the prologue counts):
+
+* ``state_time`` / ``option_time`` are computed only in options that read them, and passed only
+  to the functions that read them: a decision gets ``st``/``ot``/``tick`` and an action list
+  ``st``/``ot``/``now``/``tick`` as far as its option's expressions use them;
+* an option with a single state has no ``D``/``A`` functions: its decision and actions are
+  written inline in ``O{i}`` (no dispatch and two calls less per execution);
+* a basic-behavior call does its activation bookkeeping inline (``BB{k}``/``BE{k}`` are the
+  instance and its bound ``execute``) instead of calling back into the engine.
 
 Expressions are inlined as Python expressions (§2.8): short-circuit ``and``/``or``, exact float
 comparisons, ``/`` with the 1e-7 rule inlined, ``%`` through :mod:`engine.codegen.support`.
@@ -207,13 +218,18 @@ class _ExpressionWriter:
         if not slot.params:
             return f"I{slot.index}()"
         assigned = {a.param: a for a in ref.args}
-        nested = any(isinstance(node, InputRef) and node.args for a in ref.args for node in walk(a.value))
+        inner = [node for a in ref.args for node in walk(a.value) if isinstance(node, InputRef)]
+        nested = any(node.args for node in inner)
+        same = any(node.symbol == ref.symbol for node in inner)
+        in_order = engine_order(slot.params) == list(range(len(slot.params)))
         self.calling.append(ref.symbol)
         try:
-            if not nested and ref.symbol not in self.calling[:-1]:
-                # No host function inside the arguments and no enclosing call of the same
-                # symbol: the storage is unobservable, so the arguments go straight into the
-                # call in registration order.
+            if not same and ref.symbol not in self.calling[:-1] and (not nested or in_order):
+                # No call of the same symbol inside the arguments and no enclosing one: the
+                # shared storage is unobservable, so the arguments go straight into the call
+                # in registration order. Host functions inside the arguments (``abs(value =
+                # angle_diff(...))``) are allowed when that order is also the engine's, so
+                # they run in the same order either way.
                 values = [self.arg_or_default(assigned.get(name), kind) for name, kind in slot.params]
                 return f"I{slot.index}({', '.join(values)})"
             # Set the shared parameter storage one parameter at a time in the engine's order,
@@ -242,6 +258,58 @@ def expression_source(layout: Layout, option: Option, state: State | None, expre
     return _ExpressionWriter(layout, option, state)(expression)
 
 
+def _reads(expressions: list[Expression], node_type: type) -> bool:
+    return any(isinstance(node, node_type) for e in expressions for node in walk(e))
+
+
+def _conditions(tree: DecisionTree) -> list[Expression]:
+    found: list[Expression] = []
+    while isinstance(tree, If):
+        found.append(tree.condition)
+        found.extend(_conditions(tree.then))
+        tree = tree.otherwise
+    return found
+
+
+def _action_expressions(state: State) -> list[Expression]:
+    found: list[Expression] = []
+    for action in state.actions:
+        if isinstance(action, Assignment):
+            found.append(action.value)
+        else:
+            found.extend(a.value for a in action.args)
+    return found
+
+
+@dataclass(frozen=True, slots=True)
+class _Uses:
+    """What the code of one option needs from its prologue (see the module docstring)."""
+
+    #: the decisions read ``state_time`` (also: the tick records it for the debugger)
+    decision_st: bool
+    #: the actions read ``state_time``
+    action_st: bool
+    #: some expression reads ``option_time``
+    ot: bool
+    #: parameter lists of the decision and action functions
+    decision_params: str
+    action_params: str
+
+    @classmethod
+    def of(cls, option: Option) -> _Uses:
+        decisions = [c for state in option.states for c in _conditions(state.decision)]
+        actions = [e for state in option.states for e in _action_expressions(state)]
+        decision_st = _reads(decisions, StateTime)
+        action_st = _reads(actions, StateTime)
+        ot = _reads(decisions + actions, OptionTime)
+        calls = any(not isinstance(a, Assignment) for state in option.states for a in state.actions)
+        decision_params = [n for n, used in (("st", decision_st), ("ot", _reads(decisions, OptionTime)),
+                                              ("tick", _reads(decisions, ActionDone))) if used]
+        action_params = [n for n, used in (("st", action_st), ("ot", _reads(actions, OptionTime)), ("now", calls),
+                                            ("tick", calls or _reads(actions, ActionDone))) if used]
+        return cls(decision_st, action_st, ot, ", ".join(decision_params), ", ".join(action_params))
+
+
 class _OptionWriter:
     """Writes the chunk of one option."""
 
@@ -250,6 +318,7 @@ class _OptionWriter:
         self.layout = layout
         self.option = option
         self.slot = layout.options[option.name]
+        self.uses = _Uses.of(option)
         self.lines: list[str] = []
         self.origins: dict[int, Origin] = {}
 
@@ -257,13 +326,19 @@ class _OptionWriter:
         self.lines.append(text)
         self.origins[len(self.lines)] = Origin(self.option.name, state.name if state else None, span, what)
 
+    @property
+    def single(self) -> bool:
+        """One state: decision and actions are inlined into ``O{i}`` (nothing to dispatch)."""
+        return len(self.option.states) == 1
+
     def write(self) -> str:
         i = self.slot.index
-        for state in self.option.states:
-            self.decide(state)
-            self.act(state)
-        self.emit(f"DEC{i} = ({', '.join(f'D{i}_{s.index}' for s in self.option.states)},)")
-        self.emit(f"ACT{i} = ({', '.join(f'A{i}_{s.index}' for s in self.option.states)},)")
+        if not self.single:
+            for state in self.option.states:
+                self.decide(state)
+                self.act(state)
+            self.emit(f"DEC{i} = ({', '.join(f'D{i}_{s.index}' for s in self.option.states)},)")
+            self.emit(f"ACT{i} = ({', '.join(f'A{i}_{s.index}' for s in self.option.states)},)")
         self.emit(f"TG{i} = {tuple(self.slot.targets)!r}")
         if any(self.slot.coop):
             self.emit(f"CO{i} = {tuple(self.slot.coop)!r}")
@@ -274,16 +349,17 @@ class _OptionWriter:
 
     def decide(self, state: State) -> None:
         i = self.slot.index
-        self.emit(f"def D{i}_{state.index}(st, ot, tick):", state, state.span, "decision")
+        self.emit(f"def D{i}_{state.index}({self.uses.decision_params}):", state, state.span, "decision")
         writer = _ExpressionWriter(self.layout, self.option, state)
-        self.tree(state, state.decision, writer, "    ")
+        self.tree(state, state.decision, writer, "    ", "return ")
         self.emit("")
 
-    def tree(self, state: State, node: DecisionTree, writer: _ExpressionWriter, indent: str) -> None:
+    def tree(self, state: State, node: DecisionTree, writer: _ExpressionWriter, indent: str, leaf: str) -> None:
+        """The decision tree of ``state``; a leaf is ``{leaf}(next, leaf id, state)``."""
         keyword = "if"
         while isinstance(node, If):
             self.emit(f"{indent}{keyword} {writer(node.condition)}:", state, node.span, "condition")
-            self.tree(state, node.then, writer, indent + "    ")
+            self.tree(state, node.then, writer, indent + "    ", leaf)
             node = node.otherwise
             # ``else if`` chains (the inlined common decision tree) become ``elif``: no
             # nesting, so long chains never reach Python's indentation limit.
@@ -292,68 +368,94 @@ class _OptionWriter:
             self.emit(f"{indent}else:", state)
             indent += "    "
         target = self.option.state(node.target or state.name).index
-        self.emit(f"{indent}return ({target}, {node.leaf}, {state.index})", state, node.span, "transition")
+        self.emit(f"{indent}{leaf}({target}, {node.leaf}, {state.index})", state, node.span, "transition")
 
     # -- act --------------------------------------------------------------------------------
 
     def act(self, state: State) -> None:
         i = self.slot.index
-        self.emit(f"def A{i}_{state.index}(st, ot, now, tick):", state, state.span, "actions")
+        self.emit(f"def A{i}_{state.index}({self.uses.action_params}):", state, state.span, "actions")
+        self.actions(state, "    ")
+        self.emit("")
+
+    def actions(self, state: State, indent: str) -> None:
+        """The action list of ``state`` as statements at ``indent`` (``pass`` if empty)."""
         writer = _ExpressionWriter(self.layout, self.option, state)
         body = len(self.lines)
         for position, action in enumerate(state.actions):
             if isinstance(action, Assignment):
                 out = self.layout.outputs[action.symbol]
                 site = self.layout.sites[(self.option.name, state.index, position)]
-                self.emit(f"    v = {writer(action.value)}", state, action.span, f"assignment {action.symbol}")
-                self.emit(f"    AV[{site}] = v", state, action.span)
+                self.emit(f"{indent}v = {writer(action.value)}", state, action.span, f"assignment {action.symbol}")
+                self.emit(f"{indent}AV[{site}] = v", state, action.span)
                 if out.stored:
-                    self.emit(f"    OV[{out.index}] = v", state, action.span)
+                    self.emit(f"{indent}OV[{out.index}] = v", state, action.span)
                 else:
-                    self.emit(f"    OS{out.index}(v)", state, action.span)
+                    self.emit(f"{indent}OS{out.index}(v)", state, action.span)
             elif isinstance(action, OptionCall):
-                self.option_call(state, action, writer)
+                self.option_call(state, action, writer, indent)
             elif isinstance(action, BehaviorCall):
-                self.behavior_call(state, action, writer)
+                self.behavior_call(state, action, writer, indent)
         if len(self.lines) == body:
-            self.emit("    pass", state)
-        self.emit("")
+            self.emit(f"{indent}pass", state)
 
-    def option_call(self, state: State, call: OptionCall, writer: _ExpressionWriter) -> None:
+    def option_call(self, state: State, call: OptionCall, writer: _ExpressionWriter, indent: str) -> None:
         callee = self.layout.options[call.option]
         assigned = {a.param: a for a in call.args}
         what = f"call of option {call.option}"
         for position in engine_order(callee.params):
             name, kind = callee.params[position]
             value = writer.arg_or_default(assigned.get(name), kind)
-            self.emit(f"    PP[{callee.offset + position}] = {value}", state, call.span, what)
-        self.emit(f"    O{callee.index}(now, tick)", state, call.span, what)
+            self.emit(f"{indent}PP[{callee.offset + position}] = {value}", state, call.span, what)
+        self.emit(f"{indent}O{callee.index}(now, tick)", state, call.span, what)
 
-    def behavior_call(self, state: State, call: BehaviorCall, writer: _ExpressionWriter) -> None:
+    def behavior_call(self, state: State, call: BehaviorCall, writer: _ExpressionWriter, indent: str) -> None:
         callee = self.layout.behaviors[call.behavior]
         assigned = {a.param: a for a in call.args}
         what = f"call of basic behavior {call.behavior}"
+
+        def e(text: str) -> None:
+            self.emit(indent + text, state, call.span, what)
+
         if callee.hook:
-            self.emit("    changed = False", state, call.span, what)
+            e("changed = False")
         for position in engine_order(callee.params):
             name, kind = callee.params[position]
             value = writer.arg_or_default(assigned.get(name), kind)
             slot = callee.offset + position
             if callee.hook:
-                self.emit(f"    v = {value}", state, call.span, what)
-                self.emit(f"    if BP[{slot}] != v:", state, call.span, what)
-                self.emit(f"        BP[{slot}] = v", state, call.span, what)
-                self.emit("        changed = True", state, call.span, what)
+                e(f"v = {value}")
+                e(f"if BP[{slot}] != v:")
+                e(f"    BP[{slot}] = v")
+                e("    changed = True")
             else:
-                self.emit(f"    BP[{slot}] = {value}", state, call.span, what)
-        changed = "changed" if callee.hook else "False"
-        self.emit(f"    RB({callee.index}, now, tick, {changed})", state, call.span, what)
+                e(f"BP[{slot}] = {value}")
+        # §2.2 ActionBehavior.execute, inline (the engine's ``run_behavior`` does the same for
+        # root actions): tick stamps as for options, parametersChanged, activation time, execute.
+        k = callee.index
+        e(f"blt = BLT[{k}]")
+        e("if blt != tick:")
+        e(f"    BPV[{k}] = blt")
+        e(f"    BLT[{k}] = tick")
+        e("    bwas = blt == tick - 1")
+        e("else:")
+        e(f"    bwas = BPV[{k}] == tick - 1")
+        if callee.hook:
+            e("if changed:")
+            e(f"    BB{k}.parameters_changed()")
+        e("if not bwas:")
+        e(f"    BTA[{k}] = now")
+        e(f"BB{k}.time_of_execution = (now - BTA[{k}]) & {_MASK}")
+        e(f"BE{k}()")
 
     # -- execute ----------------------------------------------------------------------------
 
     def execute(self) -> None:
         i = self.slot.index
+        uses = self.uses
+        single = self.single
         e = self.emit
+        st_now = f"float((now - TS[{i}]) & {_MASK})"
         e(f"def O{i}(now, tick):", None, self.option.span, "option")
         e(f"    lt = LT[{i}]")
         e("    if lt != tick:")
@@ -362,21 +464,50 @@ class _OptionWriter:
         e("        was = lt == tick - 1")
         e("    else:")
         e(f"        was = DX({i}, tick)")
-        e("    if was:")
-        e(f"        ot = float((now - TA[{i}]) & {_MASK})")
-        e(f"        s = S[{i}]")
-        e(f"        st = float((now - TS[{i}]) & {_MASK})")
-        e("    else:")
+        continued = []
+        if not single:
+            continued.append(f"s = S[{i}]")
+        if uses.ot:
+            continued.append(f"ot = float((now - TA[{i}]) & {_MASK})")
+        if uses.decision_st:
+            continued.append(f"st = {st_now}")
+        if continued:
+            e("    if was:")
+            for line in continued:
+                e(f"        {line}")
+            e("    else:")
+        else:
+            e("    if not was:")
         # (Re)activation: the initial state, state_time and option_time start at 0 (§2.2).
         e(f"        TA[{i}] = now")
-        e(f"        s = {self.slot.initial}")
-        e(f"        S[{i}] = s")
+        if not single:
+            e(f"        s = {self.slot.initial}")
+            e(f"        S[{i}] = s")
         e(f"        TS[{i}] = now")
-        e("        ot = 0.0")
-        e("        st = 0.0")
-        e(f"    r = DEC{i}[s](st, ot, tick)")
+        if uses.ot:
+            e("        ot = 0.0")
+        if uses.decision_st:
+            e("        st = 0.0")
+        if single:
+            # A single state can only stay: the decision only picks the leaf to record.
+            state = self.option.states[0]
+            writer = _ExpressionWriter(self.layout, self.option, state)
+            if isinstance(state.decision, If):
+                self.tree(state, state.decision, writer, "    ", "r = ")
+                e(f"    LF[{i}] = r")
+            else:
+                self.tree(state, state.decision, writer, "    ", f"LF[{i}] = ")
+            if uses.decision_st:
+                e(f"    SD[{i}] = st")
+            if uses.action_st and not uses.decision_st:
+                e(f"    st = {st_now}")
+            self.actions(state, "    ")
+            return
+        e(f"    r = DEC{i}[s]({uses.decision_params})")
         e(f"    LF[{i}] = r")
-        e(f"    SD[{i}] = st")
+        if uses.decision_st:
+            # What ``state_time`` the decision saw, for the debugger's explanation (§2.12).
+            e(f"    SD[{i}] = st")
         e("    n = r[0]")
         if any(self.slot.coop):
             e(f"    if n != s and CO{i}[n] and not CC({i}, n, s):")
@@ -384,8 +515,12 @@ class _OptionWriter:
         e("    if n != s:")
         e(f"        S[{i}] = n")
         e(f"        TS[{i}] = now")
-        e("        st = 0.0")
-        e(f"    ACT{i}[n](st, ot, now, tick)")
+        if uses.action_st:
+            e("        st = 0.0")
+            if not uses.decision_st:
+                e("    else:")
+                e(f"        st = {st_now}")
+        e(f"    ACT{i}[n]({uses.action_params})")
 
 
 _CACHE: dict[tuple[int, tuple[object, ...]], GeneratedProgram] = {}

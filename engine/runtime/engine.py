@@ -99,6 +99,9 @@ class _Loaded:
             SD=self.SD,
             PP=self.PP,
             BP=self.BP,
+            BLT=self.BLT,
+            BPV=self.BPV,
+            BTA=self.BTA,
             OV=self.OV,
             AV=self.AV,
             DX=engine._double_execution,
@@ -106,6 +109,10 @@ class _Loaded:
             CC=self.coop.check,
             CF=self.coop.conflict,
         )
+        for k, behavior in enumerate(linked.behaviors):
+            # Generated basic-behavior calls do the bookkeeping of ``run_behavior`` inline.
+            g[f"BB{k}"] = behavior
+            g[f"BE{k}"] = behavior.execute
         for k, binding in enumerate(linked.inputs):
             g[f"I{k}"] = binding.read
             if binding.params:
@@ -122,7 +129,10 @@ class _Loaded:
         self.input_reads = {name: g[f"I{slot.index}"] for name, slot in linked.layout.inputs.items()}
 
     def run_behavior(self, k: int, now: int, tick: int, changed: bool) -> None:
-        """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set."""
+        """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set.
+
+        Used for root actions; generated calls inline the same steps (``engine.codegen.python``).
+        """
         lt = self.BLT[k]
         if lt != tick:
             self.BPV[k] = lt
@@ -151,6 +161,8 @@ class _Loaded:
                 for p in engine_order(slot.params)
             ]
             function = self.functions[slot.index]
+            if not values:
+                return function  # nothing to set: the generated option is the root action
             store = self.PP
 
             def run_option(now: int, tick: int) -> None:
@@ -206,6 +218,8 @@ class Engine:
         self._overrides: dict[str, Value] = {}
         self._roots: list[RootAction] = []
         self._root_names: tuple[Root, ...] = ()
+        #: the loaded program has cooperative states (only then a tick clears their bookkeeping)
+        self._coop_states = False
         if program is not None:
             self.load(program)
 
@@ -309,6 +323,7 @@ class Engine:
 
     def _install_roots(self) -> None:
         loaded = self._require()
+        self._coop_states = bool(loaded.coop.states)
         if self._forced is not None:
             root, params = self._forced
             self._root_names = (root,)
@@ -331,7 +346,10 @@ class Engine:
         self._tick += 1
         tick = self._tick
         self._now = now
-        self._loaded.coop.entering_now.clear()
+        if self._coop_states:
+            self._loaded.coop.entering_now.clear()
+        # One handler for the whole tick: a fault is located from its traceback (``_locate``),
+        # not from which root was running.
         try:
             for action in self._roots:
                 action(now, tick)
