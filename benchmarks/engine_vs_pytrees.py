@@ -65,7 +65,7 @@ class Act(BasicBehavior):
     last = -1.0
 
     def execute(self) -> None:
-        Act.last = self._store[self._offset]
+        Act.last = self.parameter_values[self.parameter_offset]
 
 
 def xabsl_engine(x: list[float]) -> Engine:

@@ -81,6 +81,10 @@ class BasicBehavior:
     * ``time_of_execution``: ms since the behavior was activated (0 on its first tick, §2.6).
     * ``param(name)`` / ``params``: the values set by the current call (every parameter is set
       on every call; unassigned ones are 0.0, false or enum raw value 0, §2.5).
+    * ``parameter_values[parameter_offset + k]``: the same value of the ``k``-th declared
+      parameter, by position: a list read, for ``execute`` methods on a hot path (``param``
+      looks the name up in a dict). Both attributes are set by the engine when it loads a
+      program (again on a hot reload), so read them in the hook, do not keep them.
     """
 
     #: The name options use to call this behavior.
@@ -91,8 +95,10 @@ class BasicBehavior:
 
     def __init__(self) -> None:
         self.time_of_execution: Ms = 0
-        self._store: list[Any] = []
-        self._offset = 0
+        #: The engine's basic-behavior parameter storage (shared by all behaviors of an engine).
+        self.parameter_values: list[Any] = []
+        #: Where this behavior's parameters start in ``parameter_values`` (declaration order).
+        self.parameter_offset = 0
         self._index: dict[str, int] = {}
         self._names: tuple[str, ...] = ()
 
@@ -104,8 +110,8 @@ class BasicBehavior:
         return _parameters(cls.name, cls.parameters)
 
     def _attach(self, store: list[Any], offset: int, names: Sequence[str]) -> None:
-        self._store = store
-        self._offset = offset
+        self.parameter_values = store
+        self.parameter_offset = offset
         self._index = {}
         self._names = tuple(names)
         for i, name in enumerate(names):
@@ -114,12 +120,22 @@ class BasicBehavior:
 
     def param(self, name: str) -> Value:
         """The current value of parameter ``name`` (qualified or short)."""
-        return self._store[self._offset + self._index[name]]
+        return self.parameter_values[self.parameter_offset + self._index[name]]
 
     @property
     def params(self) -> dict[str, Value]:
         """All parameter values by qualified name."""
-        return {name: self._store[self._offset + i] for i, name in enumerate(self._names)}
+        store, offset = self.parameter_values, self.parameter_offset
+        return {name: store[offset + i] for i, name in enumerate(self._names)}
+
+    # The names ``_store`` / ``_offset`` predate the public attributes; kept for old hosts.
+    @property
+    def _store(self) -> list[Any]:
+        return self.parameter_values
+
+    @property
+    def _offset(self) -> int:
+        return self.parameter_offset
 
     # -- hooks ------------------------------------------------------------------------------
 

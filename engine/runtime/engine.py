@@ -478,6 +478,29 @@ class Engine:
             return value
         return self._require().linked.enum_names.get(enum, {}).get(int(value), value)
 
+    # -- which options ran ---------------------------------------------------------------------------
+
+    @property
+    def option_names(self) -> tuple[str, ...]:
+        """The options of the loaded program in index order (the order of ``ran_options``)."""
+        return tuple(self._require().linked.option_names)
+
+    def ran_options(self) -> bytes:
+        """Per option (``option_names`` order): 1 if it ran in the last tick, else 0.
+
+        The cheap per-tick view for statistics and trace hashes: built in C from the engine's
+        tick stamps (no walk, no objects), unlike :meth:`snapshot` / :meth:`activation`.
+        """
+        return bytes(map(self._tick.__eq__, self._require().LT))
+
+    def active_states(self) -> tuple[int, ...]:
+        """Per option (``option_names`` order): the index of its active state.
+
+        Options that did not run keep the state they were left in (§2.2); read it together
+        with :meth:`ran_options`.
+        """
+        return tuple(self._require().S)
+
     # -- activation tree ---------------------------------------------------------------------------
 
     def snapshot(self) -> Snapshot:

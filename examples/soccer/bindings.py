@@ -366,31 +366,25 @@ def make_bindings(perception: WorldModel, motion: MotionRequest) -> tuple[Bindin
 class ActivationRecorder:
     """Counts, per option, the ticks it was active, and hashes the activation trace.
 
-    After each tick it reads the engine's per-option tick stamps (an option ran in tick ``t`` iff
-    its stamp is ``t``) and active states as two ``bytes`` built in C, appends the active flags
-    to one ``bytearray`` and feeds both to a hash; the counts are summed (numpy) on request.
+    After each tick it takes the engine's cheap per-tick views (``Engine.ran_options()``, one
+    ``bytes`` of active flags, and ``Engine.active_states()``), appends the flags to one
+    ``bytearray`` and feeds both to a hash; the counts are summed (numpy) on request.
     """
 
-    __slots__ = ("_active", "_engine", "_last_tick", "_states", "hash", "option_names")
+    __slots__ = ("_active", "_engine", "hash", "option_names")
 
     def __init__(self, engine: Engine) -> None:
-        # The engine has no public per-tick "which options ran" view yet and its snapshot copies
-        # fifteen lists per tick, so the recorder reads the two lists it needs through the
-        # debugger's accessor (see "Engine notes" in examples/soccer/README.md).
-        loaded = engine._loaded_program()
         self._engine = engine
-        self._last_tick = loaded.LT
-        self._states = loaded.S
-        self.option_names: list[str] = list(loaded.linked.option_names)
+        self.option_names: list[str] = list(engine.option_names)
         self._active = bytearray()
         self.hash = hashlib.blake2b(digest_size=16)
 
     def record(self) -> None:
-        tick = self._engine.tick
-        active = bytes(map(tick.__eq__, self._last_tick))
+        engine = self._engine
+        active = engine.ran_options()
         self._active += active
         self.hash.update(active)
-        self.hash.update(bytes(self._states))
+        self.hash.update(bytes(engine.active_states()))
 
     def counts(self) -> dict[str, int]:
         """Ticks each option was active (options that never ran are left out)."""

@@ -11,9 +11,9 @@ How to write one for your own robot:
 * subclass :class:`SoccerSkill` (which keeps the world model and the motion request of *one*
   robot), set ``name`` to the XABSL name and ``parameters`` to the declared parameters **in
   declaration order**, and override ``execute``;
-* read the parameters in ``execute`` by position, ``self._store[self._offset + k]`` for the
-  k-th declared parameter: a list read costs far less than ``self.param("x")`` (a dict lookup),
-  and ``execute`` runs once per tick per robot;
+* read the parameters in ``execute`` by position, ``self.parameter_values[self.parameter_offset + k]``
+  for the k-th declared parameter: a list read costs far less than ``self.param("x")`` (a dict
+  lookup), and ``execute`` runs once per tick per robot;
 * write only the motion request: never the world model, never the engine.
 
 Units are the behavior units of the whole example: mm, mm/s, degrees, deg/s, and positions and
@@ -45,10 +45,10 @@ MAX_TURN = 57.0
 class SoccerSkill(BasicBehavior):
     """A basic behavior bound to one robot: reads its world model, writes its motion request.
 
-    The engine attaches its parameter storage after construction: ``self._store[self._offset + k]``
-    is the k-th declared parameter. (``BasicBehavior.param(name)`` reads the same value through a
-    dict; the store and offset are fixed once the engine linked the program, so skills index
-    them directly on the per-tick path.)
+    The engine attaches its parameter storage after construction:
+    ``self.parameter_values[self.parameter_offset + k]`` is the k-th declared parameter.
+    (``BasicBehavior.param(name)`` reads the same value through a dict; skills index the list
+    directly on the per-tick path.)
     """
 
     def __init__(self, perception: WorldModel, motion: MotionRequest) -> None:
@@ -73,7 +73,7 @@ class Walk(SoccerSkill):
     parameters: ClassVar = (("vx", Kind.DECIMAL), ("vy", Kind.DECIMAL), ("rot", Kind.DECIMAL))
 
     def execute(self) -> None:
-        v, b, m = self._store, self._offset, self.motion
+        v, b, m = self.parameter_values, self.parameter_offset, self.motion
         m.mode = _WALK
         m.vx, m.vy, m.vrot = v[b], v[b + 1], v[b + 2]
 
@@ -88,7 +88,7 @@ class Turn(SoccerSkill):
         m = self.motion
         m.mode = _WALK
         m.vx = m.vy = 0.0
-        m.vrot = self._store[self._offset]
+        m.vrot = self.parameter_values[self.parameter_offset]
 
 
 class WalkTo(SoccerSkill):
@@ -102,7 +102,7 @@ class WalkTo(SoccerSkill):
     parameters: ClassVar = (("x", Kind.DECIMAL), ("y", Kind.DECIMAL), ("rot", Kind.DECIMAL))
 
     def execute(self) -> None:
-        v, b, m = self._store, self._offset, self.motion
+        v, b, m = self.parameter_values, self.parameter_offset, self.motion
         m.mode = _WALK_TO
         m.target_x, m.target_y, m.target_rot = v[b], v[b + 1], v[b + 2]
 
@@ -119,7 +119,7 @@ class GoToBall(SoccerSkill):
     parameters: ClassVar = (("distance", Kind.DECIMAL), ("direction", Kind.DECIMAL))
 
     def execute(self) -> None:
-        v, b, m, wm = self._store, self._offset, self.motion, self.wm
+        v, b, m, wm = self.parameter_values, self.parameter_offset, self.motion, self.wm
         distance, direction = v[b], v[b + 1]
         a = direction * RAD_PER_DEG
         m.mode = _WALK_TO
@@ -140,7 +140,7 @@ class Dribble(SoccerSkill):
 
     def execute(self) -> None:
         wm, m = self.wm, self.motion
-        turn = normalize_deg(self._store[self._offset] - wm.rotation)
+        turn = normalize_deg(self.parameter_values[self.parameter_offset] - wm.rotation)
         off_centre = wm.ball_rel_y
         m.mode = _WALK
         m.vx = MAX_FORWARD * max(0.2, 1.0 - abs(turn) / 60.0 - abs(off_centre) / 150.0)
@@ -161,7 +161,7 @@ class Kick(SoccerSkill):
     parameters: ClassVar = (("direction", Kind.DECIMAL), ("strength", Kind.DECIMAL))
 
     def execute(self) -> None:
-        v, b, m, wm = self._store, self._offset, self.motion, self.wm
+        v, b, m, wm = self.parameter_values, self.parameter_offset, self.motion, self.wm
         direction = v[b]
         m.kick_strength = v[b + 1]
         m.kick_direction = normalize_deg(direction - wm.rotation)
