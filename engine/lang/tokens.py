@@ -79,11 +79,6 @@ TWO_CHAR_OPERATORS = ("<=", ">=", "==", "!=", "&&", "||")
 SINGLE_CHAR_OPERATORS = frozenset("%!<>[]{}();|+-*/=,?:")
 OPERATORS = frozenset(TWO_CHAR_OPERATORS) | SINGLE_CHAR_OPERATORS
 
-_KEYWORD_RUN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
-_IDENTIFIER = re.compile(r"@?[A-Za-z_][A-Za-z0-9_.]*")
-_NUMBER = re.compile(r"[0-9]+(?:\.[0-9]*)?")
-_WHITESPACE = re.compile(r"[ \t\r\n\f\v]+")
-
 
 class Token(NamedTuple):
     """One token with its exact text and position (a NamedTuple: cheap to build, see Span)."""
@@ -145,6 +140,30 @@ class _Positions:
         return self.line, offset - self.line_start + 1
 
 
+#: One pattern for every token start; ``lastgroup`` names the rule that matched. The order is
+#: the tokenizer's priority: a ``//`` comment only counts with its newline (else ``/`` is an
+#: operator), ``/*`` opens a comment before ``/`` is an operator, two-character operators win.
+_TOKEN = re.compile(
+    r"""(?P<space>[ \t\r\n\f\v]+)
+      | (?P<line_comment>//[^\n]*\n)
+      | (?P<block_comment>/\*)
+      | (?P<word>[A-Za-z_][A-Za-z0-9_.\-]*)
+      | (?P<parameter>@[A-Za-z_][A-Za-z0-9_.]*)
+      | (?P<number>[0-9]+(?:\.[0-9]*)?)
+      | (?P<string>"[^"]*")
+      | (?P<range>\[[^\]]*\])
+      | (?P<operator><=|>=|==|!=|&&|\|\||[%!<>\[\]{}();|+\-*/=,?:])""",
+    re.VERBOSE,
+)
+_KIND = {
+    "parameter": TokenType.IDENTIFIER,
+    "number": TokenType.NUMBER,
+    "string": TokenType.STRING,
+    "range": TokenType.RANGE,
+    "operator": TokenType.OPERATOR,
+}
+
+
 def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
     """Split ``text`` into tokens; lexical errors go to ``diagnostics``.
 
@@ -153,6 +172,8 @@ def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
     """
     positions = _Positions(text)
     tokens: list[Token] = []
+    append = tokens.append
+    match_token = _TOKEN.match
     pos = 0
     length = len(text)
 
@@ -164,26 +185,31 @@ def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
         end_col = end - text.rfind("\n", start, end)
         return Span(file, line, col, end_line, end_col, start, end)
 
-    def add(kind: TokenType, start: int, end: int) -> None:
-        tokens.append(Token(kind, text[start:end], span(start, end)))
-
     while pos < length:
-        char = text[pos]
-        if char in " \t\r\n\f\v":
-            match = _WHITESPACE.match(text, pos)
-            assert match is not None
-            pos = match.end()
+        match = match_token(text, pos)
+        if match is None:
+            end = pos + 1
+            diagnostics.add("illegal-character", f"illegal character {text[pos]!r} encountered", span(pos, end))
+            pos = end
             continue
-        if char == "/" and text.startswith("//", pos):
-            newline = text.find("\n", pos)
-            if newline >= 0:
-                pos = newline + 1
-                continue
-            # no newline after the comment: the original lexes it as '/' tokens
-            add(TokenType.OPERATOR, pos, pos + 1)
-            pos += 1
+        rule = match.lastgroup
+        end = match.end()
+        if rule == "space" or rule == "line_comment":
+            pos = end
             continue
-        if char == "/" and text.startswith("/*", pos):
+        if rule == "word":
+            word = match.group()
+            if word in KEYWORDS:
+                append(Token(TokenType.KEYWORD, word, span(pos, end)))
+            else:
+                # keyword-run rule: a run that is no keyword lexes as the identifier before any '-'
+                dash = word.find("-")
+                if dash >= 0:
+                    word, end = word[:dash], pos + dash
+                append(Token(TokenType.IDENTIFIER, word, span(pos, end)))
+            pos = end
+            continue
+        if rule == "block_comment":
             if text.startswith("/***", pos):
                 kind, body = TokenType.INITIAL_COMMENT, pos + 4
             elif text.startswith("/**", pos):
@@ -193,58 +219,14 @@ def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
             close = text.find("*/", body)
             if close < 0:
                 diagnostics.add("unterminated-comment", "end-of-comment missing: '*/' never comes", span(pos, pos + 2))
+                pos = length
                 break
             if kind is not None:
-                add(kind, pos, close + 2)
+                append(Token(kind, text[pos : close + 2], span(pos, close + 2)))
             pos = close + 2
             continue
-        if char.isascii() and (char.isalpha() or char == "_"):
-            run = _KEYWORD_RUN.match(text, pos)
-            assert run is not None
-            if run.group() in KEYWORDS:
-                add(TokenType.KEYWORD, pos, run.end())
-                pos = run.end()
-                continue
-            ident = _IDENTIFIER.match(text, pos)
-            assert ident is not None
-            add(TokenType.IDENTIFIER, pos, ident.end())
-            pos = ident.end()
-            continue
-        if char == "@":
-            ident = _IDENTIFIER.match(text, pos)
-            if ident is not None:
-                add(TokenType.IDENTIFIER, pos, ident.end())
-                pos = ident.end()
-                continue
-        if "0" <= char <= "9":
-            number = _NUMBER.match(text, pos)
-            assert number is not None
-            add(TokenType.NUMBER, pos, number.end())
-            pos = number.end()
-            continue
-        if char == '"':
-            close = text.find('"', pos + 1)
-            if close >= 0:
-                add(TokenType.STRING, pos, close + 1)
-                pos = close + 1
-                continue
-        if char == "[":
-            close = text.find("]", pos + 1)
-            if close >= 0:
-                add(TokenType.RANGE, pos, close + 1)
-                pos = close + 1
-                continue
-        two = text[pos : pos + 2]
-        if two in TWO_CHAR_OPERATORS:
-            add(TokenType.OPERATOR, pos, pos + 2)
-            pos += 2
-            continue
-        if char in SINGLE_CHAR_OPERATORS:
-            add(TokenType.OPERATOR, pos, pos + 1)
-            pos += 1
-            continue
-        end = pos + 1
-        diagnostics.add("illegal-character", f"illegal character {char!r} encountered", span(pos, end))
+        assert rule is not None
+        append(Token(_KIND[rule], match.group(), span(pos, end)))
         pos = end
     tokens.append(Token(TokenType.EOF, "", span(min(pos, length), min(pos, length))))
     return tokens
