@@ -16,6 +16,14 @@ Models, chosen to be cheap at 120 Hz with ten robots:
   long as the force suffices; a robot pushing another one stalls instead of passing through it,
   and a standing robot resists being pushed like feet on carpet.
 * Goal posts are static discs, nets and border walls static segments.
+
+Per-tick reads and writes (poses, ball, the legs' velocity commands) call Chipmunk through
+pymunk's cffi module ``pymunk._chipmunk.lib`` on the bodies' ``_body`` pointers. pymunk's
+properties cost ~4x more: ``body.velocity = v`` goes through a Python ``__setattr__`` mixin and a
+property (1.4 us for velocity + angular velocity vs 0.39 us direct), ``body.position`` builds a
+``Vec2d`` (1.0 us for position + angle vs 0.3 us). That was ~10 % of a whole match. The pymunk
+version is pinned to 7.x (pyproject) and ``tests/soccer/test_physics.py`` checks these accessors
+against pymunk's public properties.
 """
 
 from __future__ import annotations
@@ -25,6 +33,7 @@ import math
 from dataclasses import dataclass
 
 import pymunk
+from pymunk._chipmunk import lib as _cp
 
 from examples.soccer.field import FieldDimensions
 
@@ -94,6 +103,10 @@ class SoccerPhysics:
 
         self.robots: list[pymunk.Body] = []
         self.controls: list[pymunk.Body] = []
+        # Chipmunk pointers of the bodies, for the direct calls (see the module docstring).
+        self._ball_ptr = self.ball._body
+        self._robot_ptrs: list[object] = []
+        self._control_ptrs: list[object] = []
         self._damping_dt = -1.0
         self._damping_factor = 1.0
 
@@ -137,6 +150,8 @@ class SoccerPhysics:
         self.space.add(body, shape, control, pivot, gear)
         self.robots.append(body)
         self.controls.append(control)
+        self._robot_ptrs.append(body._body)
+        self._control_ptrs.append(control._body)
         return len(self.robots) - 1
 
     def drive(self, index: int, vx: float, vy: float, omega: float) -> None:
@@ -144,9 +159,9 @@ class SoccerPhysics:
         # The control body's position never matters: both pivot anchors sit on their body's
         # centre of gravity, so the joint's lever arms are zero and, with max_bias = 0, it only
         # equates velocities. Not moving it saves a call into C per robot and tick.
-        control = self.controls[index]
-        control.velocity = (vx, vy)
-        control.angular_velocity = omega
+        control = self._control_ptrs[index]
+        _cp.cpBodySetVelocity(control, (vx, vy))
+        _cp.cpBodySetAngularVelocity(control, omega)
 
     def place_robot(self, index: int, x: float, y: float, theta: float) -> None:
         """Teleport a robot (referee placement) and stop it."""
@@ -163,6 +178,17 @@ class SoccerPhysics:
         x, y = body.position
         return x, y, body.angle
 
+    def read_poses(self, xs: list[float], ys: list[float], thetas: list[float]) -> tuple[float, float]:
+        """Fill ``xs``/``ys``/``thetas`` with every robot's pose [m, rad]; return the ball position."""
+        get_position, get_angle = _cp.cpBodyGetPosition, _cp.cpBodyGetAngle
+        for i, body in enumerate(self._robot_ptrs):
+            p = get_position(body)
+            xs[i] = p.x
+            ys[i] = p.y
+            thetas[i] = get_angle(body)
+        p = get_position(self._ball_ptr)
+        return p.x, p.y
+
     def robot_velocity(self, index: int) -> tuple[float, float, float]:
         body = self.robots[index]
         vx, vy = body.velocity
@@ -178,12 +204,12 @@ class SoccerPhysics:
         self.space.reindex_shapes_for_body(self.ball)
 
     def ball_position(self) -> tuple[float, float]:
-        x, y = self.ball.position
-        return x, y
+        p = _cp.cpBodyGetPosition(self._ball_ptr)
+        return p.x, p.y
 
     def ball_velocity(self) -> tuple[float, float]:
-        vx, vy = self.ball.velocity
-        return vx, vy
+        v = _cp.cpBodyGetVelocity(self._ball_ptr)
+        return v.x, v.y
 
     def push_ball(self, dvx: float, dvy: float) -> None:
         """Change the ball's velocity by (dvx, dvy) m/s: the impulse of a kick."""
@@ -195,8 +221,9 @@ class SoccerPhysics:
     def step(self, dt: float) -> None:
         """Advance the space by ``dt`` seconds, then apply the ball's rolling resistance."""
         self.space.step(dt)
-        ball = self.ball
-        vx, vy = ball.velocity
+        ball = self._ball_ptr
+        v = _cp.cpBodyGetVelocity(ball)
+        vx, vy = v.x, v.y
         if vx == 0.0 and vy == 0.0:
             return
         if dt != self._damping_dt:
@@ -205,8 +232,8 @@ class SoccerPhysics:
         speed = math.hypot(vx, vy)
         new_speed = speed * self._damping_factor - self.ball_params.rolling_deceleration * dt
         if new_speed <= 0.0:
-            ball.velocity = (0.0, 0.0)
-            ball.angular_velocity = 0.0
+            _cp.cpBodySetVelocity(ball, (0.0, 0.0))
+            _cp.cpBodySetAngularVelocity(ball, 0.0)
         else:
             scale = new_speed / speed
-            ball.velocity = (vx * scale, vy * scale)
+            _cp.cpBodySetVelocity(ball, (vx * scale, vy * scale))

@@ -155,7 +155,7 @@ class SoccerWorld:
         physics = self.physics
         physics.step(dt)
         self._steps += 1
-        bx, by = physics.ball.position
+        bx, by = physics.ball_position()
         self.game.step(dt, bx, by, self)
 
     def static_scene(self) -> Scene:
@@ -240,11 +240,7 @@ class SoccerWorld:
         snap = self._snapshot
         if self._snapshot_steps != self._steps:
             self._snapshot_steps = self._steps
-            xs, ys, ths = snap.x, snap.y, snap.theta
-            for i, body in enumerate(self.physics.robots):
-                xs[i], ys[i] = body.position
-                ths[i] = body.angle
-            snap.ball_x, snap.ball_y = self.physics.ball.position
+            snap.ball_x, snap.ball_y = self.physics.read_poses(snap.x, snap.y, snap.theta)
         return snap
 
     def _sense(self, agent: SoccerAgent, now_ms: int) -> None:

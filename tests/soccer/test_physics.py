@@ -119,3 +119,21 @@ def test_placing_a_robot_stops_it():
     # the joints' warm start carries a trace of the old command into the first step: < 1 mm
     assert math.hypot(x - 2.0, y - 1.0) < 1e-3
     assert abs(theta - 1.0) < 1e-3
+
+
+def test_direct_chipmunk_accessors_agree_with_pymunk_properties():
+    # physics.py bypasses pymunk's properties on the per-tick path; this pins them together.
+    physics = SoccerPhysics(FieldDimensions())
+    r = physics.add_robot(0.5, -0.25, 0.3)
+    physics.place_ball(1.0, 0.5)
+    physics.push_ball(0.4, -0.2)
+    physics.drive(r, 0.2, -0.1, 0.5)
+    assert tuple(physics.controls[r].velocity) == (0.2, -0.1)
+    assert physics.controls[r].angular_velocity == 0.5
+    for _ in range(12):
+        physics.step(1 / 120)
+    xs, ys, thetas = [0.0], [0.0], [0.0]
+    assert physics.read_poses(xs, ys, thetas) == tuple(physics.ball.position) == physics.ball_position()
+    body = physics.robots[r]
+    assert (xs[0], ys[0], thetas[0]) == (body.position.x, body.position.y, body.angle)
+    assert physics.ball_velocity() == tuple(physics.ball.velocity)
