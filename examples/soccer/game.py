@@ -47,6 +47,13 @@ class GameState(enum.IntEnum):
     FINISHED = 4
 
 
+# The members as module constants: queries and ``step`` run every physics step and for every
+# robot every tick, and an IntEnum member lookup (``GameState.PLAYING``) costs ~80 ns in 3.11.
+_READY = GameState.READY
+_PLAYING = GameState.PLAYING
+_FINISHED = GameState.FINISHED
+
+
 @dataclass(frozen=True, slots=True)
 class GameRules:
     """Durations and placement rules (seconds and metres)."""
@@ -124,15 +131,15 @@ class GameController:
 
     @property
     def may_move(self) -> bool:
-        return self.state == GameState.READY or self.state == GameState.PLAYING
+        return self.state in (_READY, _PLAYING)
 
     @property
     def may_kick(self) -> bool:
-        return self.state == GameState.PLAYING
+        return self.state == _PLAYING
 
     @property
     def finished(self) -> bool:
-        return self.state == GameState.FINISHED
+        return self.state == _FINISHED
 
     @property
     def time_ms(self) -> int:
@@ -151,13 +158,13 @@ class GameController:
         self.time_ns += dt_ns
         self.state_ns += dt_ns
         state = self.state
-        if state == GameState.PLAYING:
+        if state == _PLAYING:
             self.play_ns += dt_ns
             if self.play_ns >= self._half_ns:
                 self._end_half(referee)
                 return
             self._check_ball(ball_x, ball_y, referee)
-        elif state != GameState.FINISHED and self.state_ns >= self._durations_ns[state]:
+        elif state != _FINISHED and self.state_ns >= self._durations_ns[state]:
             # Carry the overshoot into the next state, so state changes do not lose time.
             self._enter(GameState(state + 1), referee, self.state_ns - self._durations_ns[state])
 

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from examples.soccer.units import DEG_PER_RAD, MM_PER_M, normalize_deg
+from examples.soccer.units import DEG_PER_RAD, MM_PER_M
 
 #: ``ball_time_since_seen`` before the first sighting: large, like a ball seen long ago.
 NEVER_SEEN_MS = 1_000_000_000
@@ -216,10 +216,13 @@ def perceive(
         noise: samples from the world's random generator (the only source of noise).
         now_ms: the tick's time.
     """
+    # Runs for every robot every tick: noise samples are read from the table inline (a method
+    # call per sample cost as much as the rest of a line) in the same order ``normal`` would,
+    # and angles are wrapped inline (``units.normalize_deg``).
     wm.time_ms = now_ms
     fov = sensor.fov
     max_d = sensor.max_distance
-    normal = noise.normal
+    samples, mask, k = noise._values, noise._mask, noise._index
 
     # True pose in the world frame, in mm/deg.
     px = snap.x[me] * MM_PER_M
@@ -230,12 +233,17 @@ def perceive(
     # Self-localisation in team frame (a team attacking -x sees the world turned by 180 deg).
     sx, sy = px * side, py * side
     srot = pth * DEG_PER_RAD + (0.0 if side > 0 else 180.0)
-    if sensor.pose_xy_noise > 0.0:
-        sx += normal(sensor.pose_xy_noise)
-        sy += normal(sensor.pose_xy_noise)
-    if sensor.pose_rot_noise > 0.0:
-        srot += normal(sensor.pose_rot_noise)
-    srot = normalize_deg(srot)
+    sigma = sensor.pose_xy_noise
+    if sigma > 0.0:
+        sx += samples[k] * sigma
+        k = (k + 1) & mask
+        sy += samples[k] * sigma
+        k = (k + 1) & mask
+    sigma = sensor.pose_rot_noise
+    if sigma > 0.0:
+        srot += samples[k] * sigma
+        k = (k + 1) & mask
+    srot = (srot + 180.0) % 360.0 - 180.0
     wm.x, wm.y, wm.rotation = sx, sy, srot
 
     # Ball relative to the true pose: what the camera measures.
@@ -244,10 +252,14 @@ def perceive(
     dist = math.hypot(dx, dy)
     angle = math.atan2(-sin_t * dx + cos_t * dy, cos_t * dx + sin_t * dy) * DEG_PER_RAD
     if dist <= max_d and -fov <= angle <= fov:
-        if sensor.ball_distance_noise > 0.0:
-            dist = max(0.0, dist * (1.0 + normal(sensor.ball_distance_noise)))
-        if sensor.ball_angle_noise > 0.0:
-            angle += normal(sensor.ball_angle_noise)
+        sigma = sensor.ball_distance_noise
+        if sigma > 0.0:
+            dist = max(0.0, dist * (1.0 + samples[k] * sigma))
+            k = (k + 1) & mask
+        sigma = sensor.ball_angle_noise
+        if sigma > 0.0:
+            angle += samples[k] * sigma
+            k = (k + 1) & mask
         a = angle / DEG_PER_RAD
         rel_x, rel_y = dist * math.cos(a), dist * math.sin(a)
         # The field estimate combines the measurement with the (noisy) self-localisation.
@@ -257,7 +269,7 @@ def perceive(
         wm.ball_y = sy + ss * rel_x + cs * rel_y
         wm.ball_seen = True
         wm.ball_last_seen_ms = now_ms
-        wm.ball_distance, wm.ball_angle = dist, normalize_deg(angle)
+        wm.ball_distance, wm.ball_angle = dist, (angle + 180.0) % 360.0 - 180.0
         wm.ball_rel_x, wm.ball_rel_y = rel_x, rel_y
     else:
         wm.ball_seen = False
@@ -271,6 +283,7 @@ def perceive(
             wm.ball_distance = math.hypot(rel_x, rel_y)
             wm.ball_angle = math.atan2(rel_y, rel_x) * DEG_PER_RAD
     wm.ball_time_since_seen = now_ms - wm.ball_last_seen_ms
+    noise._index = k
 
     # Opponents are seen from the true pose, on demand (see ``WorldModel.opponents``). The
     # snapshot is reused in place, so ``_view`` must be consumed within the tick; the next
@@ -303,9 +316,11 @@ class TeamChannel:
         while queue and queue[0][0] <= now_ms:
             _, sender, sent_ms, payload = queue.popleft()
             count += 1
+            # One message object for all receivers (they only read it), as the payload already is.
+            message = TeamMessage(sender, sent_ms, now_ms, payload)
             for wm in receivers:
                 if wm.number != sender:
-                    wm.team_messages[sender] = TeamMessage(sender, sent_ms, now_ms, payload)
+                    wm.team_messages[sender] = message
         return count
 
     def __len__(self) -> int:

@@ -31,7 +31,6 @@ import enum
 import math
 from dataclasses import dataclass
 
-from examples.soccer.field import from_team_frame
 from examples.soccer.physics import SoccerPhysics
 from examples.soccer.units import M_PER_MM, RAD_PER_DEG, normalize_rad
 
@@ -42,6 +41,10 @@ class MotionMode(enum.IntEnum):
     STAND = 0
     WALK = 1
     WALK_TO = 2
+
+
+_STAND = MotionMode.STAND
+_WALK = MotionMode.WALK
 
 
 @dataclass(slots=True)
@@ -147,37 +150,54 @@ class Robot:
             may_move: False in game states where robots must stand (INITIAL, SET, FINISHED).
             may_kick: False outside the PLAYING state.
         """
+        # Runs for every robot every tick (a quarter of a match's time before it was written
+        # flat): the clamp is inline, enum members are module constants (an IntEnum member
+        # lookup costs ~80 ns in 3.11) and the acceleration limit uses comparisons instead of
+        # min/max calls (the same values for every non-NaN input).
         lim = self.limits
         last = self._last_act_ms
         dt = 0.025 if last is None or now_ms <= last else (now_ms - last) / 1000.0
         self._last_act_ms = now_ms
         x, y, theta = pose
 
-        if not may_move or request.mode == MotionMode.STAND:
+        mode = request.mode
+        if not may_move or mode == _STAND:
+            # Clamping zero changes nothing.
             want_x = want_y = want_rot = 0.0
-        elif request.mode == MotionMode.WALK:
-            want_x = request.vx * M_PER_MM
-            want_y = request.vy * M_PER_MM
-            want_rot = request.vrot * RAD_PER_DEG
         else:
-            want_x, want_y, want_rot = self._walk_to(request, x, y, theta, side)
-        want_x, want_y, want_rot = self._clamp(want_x, want_y, want_rot)
+            if mode == _WALK:
+                want_x = request.vx * M_PER_MM
+                want_y = request.vy * M_PER_MM
+                want_rot = request.vrot * RAD_PER_DEG
+            else:
+                want_x, want_y, want_rot = self._walk_to(request, x, y, theta, side)
+            # Elliptic limit: the walk cannot reach full forward and full sideways speed together.
+            r = math.hypot(want_x / (lim.max_forward if want_x >= 0.0 else lim.max_backward),
+                           want_y / lim.max_sideways)
+            if r > 1.0:
+                want_x /= r
+                want_y /= r
+            turn = lim.max_turn
+            want_rot = turn if want_rot > turn else -turn if want_rot < -turn else want_rot
 
         dv = lim.max_acceleration * dt
         dw = lim.max_turn_acceleration * dt
-        self.vx += min(dv, max(-dv, want_x - self.vx))
-        self.vy += min(dv, max(-dv, want_y - self.vy))
-        self.vrot += min(dw, max(-dw, want_rot - self.vrot))
+        d = want_x - self.vx
+        self.vx = vx = self.vx + (dv if d > dv else -dv if d < -dv else d)
+        d = want_y - self.vy
+        self.vy = vy = self.vy + (dv if d > dv else -dv if d < -dv else d)
+        d = want_rot - self.vrot
+        self.vrot = vrot = self.vrot + (dw if d > dw else -dw if d < -dw else d)
 
-        if self.vx == 0.0 and self.vy == 0.0:
-            command = (0.0, 0.0, self.vrot)
+        if vx == 0.0 and vy == 0.0:
+            command = (0.0, 0.0, vrot)
         else:
             c, s = math.cos(theta), math.sin(theta)
-            command = (c * self.vx - s * self.vy, s * self.vx + c * self.vy, self.vrot)
+            command = (c * vx - s * vy, s * vx + c * vy, vrot)
         # A standing robot (most of them, most of the time) needs no call into the physics.
         if command != self._driven:
             self._driven = command
-            self.physics.drive(self.index, *command)
+            self.physics.drive(self.index, command[0], command[1], command[2])
 
         kicked = False
         strength = request.kick_strength
@@ -188,23 +208,12 @@ class Robot:
         request.kick_strength = 0.0
         return kicked
 
-    def _clamp(self, vx: float, vy: float, vrot: float) -> tuple[float, float, float]:
-        lim = self.limits
-        ax = lim.max_forward if vx >= 0.0 else lim.max_backward
-        # Elliptic limit: the walk cannot reach full forward and full sideways speed together.
-        r = math.hypot(vx / ax, vy / lim.max_sideways)
-        if r > 1.0:
-            vx /= r
-            vy /= r
-        return vx, vy, min(lim.max_turn, max(-lim.max_turn, vrot))
-
     def _walk_to(
         self, request: MotionRequest, x: float, y: float, theta: float, side: int
     ) -> tuple[float, float, float]:
         lim = self.limits
-        tx, ty = from_team_frame(request.target_x * M_PER_MM, request.target_y * M_PER_MM, side)
-        target_theta = request.target_rot * RAD_PER_DEG + (0.0 if side > 0 else math.pi)
-        dx, dy = tx - x, ty - y
+        # The team frame maps to the world frame by the sign of ``side`` (``field.from_team_frame``).
+        dx, dy = request.target_x * M_PER_MM * side - x, request.target_y * M_PER_MM * side - y
         c, s = math.cos(theta), math.sin(theta)
         rel_x, rel_y = c * dx + s * dy, -s * dx + c * dy
         distance = math.hypot(rel_x, rel_y)
@@ -212,6 +221,7 @@ class Robot:
             # Far away, face the target: forward is the walk's fastest direction.
             turn = math.atan2(rel_y, rel_x)
         else:
+            target_theta = request.target_rot * RAD_PER_DEG + (0.0 if side > 0 else math.pi)
             turn = normalize_rad(target_theta - theta)
         if distance < lim.walk_to_tolerance:
             rel_x = rel_y = 0.0
