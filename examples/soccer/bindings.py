@@ -126,9 +126,11 @@ class SoccerSymbols:
         self.wm = perception
         self._opponents_at = -1
         self._opponents: list[tuple[float, float]] = []
-        self._team_at = -1
-        self._rank_key: tuple[int, float] = (-1, 0.0)
+        self._rank_at = -1
+        self._rank_time = 0.0
         self._rank = 0.0
+        self._team_at = -1
+        self._pass_at = -1
         self.striker_known = False
         self.striker_x = self.striker_y = 0.0
         self.pass_available = False
@@ -182,9 +184,10 @@ class SoccerSymbols:
         several times per tick with the same time, so the last answer is cached.
         """
         wm = self.wm
-        if self._rank_key == (wm.time_ms, time):
+        now = wm.time_ms
+        if self._rank_at == now and self._rank_time == time:
             return self._rank
-        oldest = wm.time_ms - MESSAGE_TIMEOUT_MS
+        oldest = now - MESSAGE_TIMEOUT_MS
         me = wm.number
         better = 0
         for message in wm.team_messages.values():
@@ -193,23 +196,48 @@ class SoccerSymbols:
             other = message.payload.get("time_to_ball", NO_TIME_TO_BALL)
             if other < time or (other == time and message.sender < me):
                 better += 1
-        self._rank_key = (wm.time_ms, time)
+        self._rank_at = now
+        self._rank_time = time
         self._rank = float(better)
         return self._rank
 
+    # The team queries are computed at most once per tick, on the first read, in two parts: the
+    # striker and the team ball (a pass over the messages), and the pass target, which also
+    # looks at opponents and is only read by the striker. Each getter checks the tick itself,
+    # so a cached read is one Python call.
+
     def _team(self) -> None:
-        """Compute the team queries once per tick: striker, pass target, team ball."""
+        """The striker and the team ball of this tick."""
         wm = self.wm
         now = wm.time_ms
-        if self._team_at == now:
-            return
         self._team_at = now
         oldest = now - MESSAGE_TIMEOUT_MS
         striker_time = NO_TIME_TO_BALL * 2
-        self.striker_known = self.pass_available = self.team_ball_known = False
-        best_pass_x = -1.0e9
+        self.striker_known = self.team_ball_known = False
         best_ball_age = TEAM_BALL_TIMEOUT_MS
         striker = int(Role.STRIKER)
+        for message in wm.team_messages.values():
+            if message.sent_ms < oldest:
+                continue
+            p = message.payload
+            if "x" not in p:
+                continue
+            if p.get("role") == striker and p.get("time_to_ball", NO_TIME_TO_BALL) < striker_time:
+                striker_time = p["time_to_ball"]
+                self.striker_known, self.striker_x, self.striker_y = True, p["x"], p["y"]
+            age = p["ball_age"] + now - message.sent_ms
+            if age < best_ball_age:
+                best_ball_age = age
+                self.team_ball_known, self.team_ball_x, self.team_ball_y = True, p["ball_x"], p["ball_y"]
+
+    def _pass(self) -> None:
+        """The pass target of this tick: the most advanced free field player ahead of the ball."""
+        wm = self.wm
+        now = wm.time_ms
+        self._pass_at = now
+        oldest = now - MESSAGE_TIMEOUT_MS
+        self.pass_available = False
+        best_pass_x = -1.0e9
         bx, by = wm.ball_x, wm.ball_y
         for message in wm.team_messages.values():
             if message.sent_ms < oldest:
@@ -218,13 +246,6 @@ class SoccerSymbols:
             if "x" not in p:
                 continue
             x, y = p["x"], p["y"]
-            if p.get("role") == striker and p.get("time_to_ball", NO_TIME_TO_BALL) < striker_time:
-                striker_time = p["time_to_ball"]
-                self.striker_known, self.striker_x, self.striker_y = True, x, y
-            age = p["ball_age"] + now - message.sent_ms
-            if age < best_ball_age:
-                best_ball_age = age
-                self.team_ball_known, self.team_ball_x, self.team_ball_y = True, p["ball_x"], p["ball_y"]
             if message.sender == GOALIE_NUMBER or x < bx + 300.0 or x <= best_pass_x:
                 continue
             d = math.hypot(x - bx, y - by)
@@ -234,40 +255,49 @@ class SoccerSymbols:
                 self.pass_available, self.pass_x, self.pass_y = True, x, y
 
     def get_striker_known(self) -> bool:
-        self._team()
+        if self._team_at != self.wm.time_ms:
+            self._team()
         return self.striker_known
 
     def get_striker_x(self) -> float:
-        self._team()
+        if self._team_at != self.wm.time_ms:
+            self._team()
         return self.striker_x
 
     def get_striker_y(self) -> float:
-        self._team()
+        if self._team_at != self.wm.time_ms:
+            self._team()
         return self.striker_y
 
-    def get_pass_available(self) -> bool:
-        self._team()
-        return self.pass_available
-
-    def get_pass_x(self) -> float:
-        self._team()
-        return self.pass_x
-
-    def get_pass_y(self) -> float:
-        self._team()
-        return self.pass_y
-
     def get_team_ball_known(self) -> bool:
-        self._team()
+        if self._team_at != self.wm.time_ms:
+            self._team()
         return self.team_ball_known
 
     def get_team_ball_x(self) -> float:
-        self._team()
+        if self._team_at != self.wm.time_ms:
+            self._team()
         return self.team_ball_x
 
     def get_team_ball_y(self) -> float:
-        self._team()
+        if self._team_at != self.wm.time_ms:
+            self._team()
         return self.team_ball_y
+
+    def get_pass_available(self) -> bool:
+        if self._pass_at != self.wm.time_ms:
+            self._pass()
+        return self.pass_available
+
+    def get_pass_x(self) -> float:
+        if self._pass_at != self.wm.time_ms:
+            self._pass()
+        return self.pass_x
+
+    def get_pass_y(self) -> float:
+        if self._pass_at != self.wm.time_ms:
+            self._pass()
+        return self.pass_y
 
 
 def _attr(wm: WorldModel, name: str) -> Callable[[], Any]:
