@@ -45,9 +45,9 @@ $(STAMP): pyproject.toml | check-python
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check -e '.[test,bench]'
 	touch $(STAMP)
 
+# The studio on http://127.0.0.1:8000 with the soccer example (Ctrl+C stops it).
 run: $(STAMP) system-deps web
-	mkdir -p build
-	$(BIN)/xabsl compile examples/demo/agents.xabsl --ic build/demo.ic --json build/demo.json
+	$(BIN)/xabsl serve examples/soccer
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
