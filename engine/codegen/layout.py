@@ -58,6 +58,8 @@ class InputSlot:
     index: int
     #: the host function's parameters in registration order (also the positional call order)
     params: tuple[ParamSpec, ...] = ()
+    #: the symbol is this attribute of a host object (global ``IA{index}``): read, not called
+    attribute: str | None = None
 
 
 @dataclass(frozen=True, slots=True)

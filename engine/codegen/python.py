@@ -21,6 +21,8 @@ every bytecode of the prologue counts):
   ``st``/``ot``/``now``/``tick`` as far as its option's expressions use them;
 * an option with a single state has no ``D``/``A`` functions: its decision and actions are
   written inline in ``O{i}`` (no dispatch and two calls less per execution);
+* an input symbol registered as an attribute of a host object is read as ``IA{k}.<attribute>``
+  rather than called as ``I{k}()``;
 * a basic-behavior call does its activation bookkeeping inline (``BB{k}``/``BE{k}`` are the
   instance and its bound ``execute``) instead of calling back into the engine.
 
@@ -215,6 +217,8 @@ class _ExpressionWriter:
 
     def input_call(self, ref: InputRef) -> str:
         slot = self.layout.inputs[ref.symbol]
+        if slot.attribute is not None:
+            return f"IA{slot.index}.{slot.attribute}"
         if not slot.params:
             return f"I{slot.index}()"
         assigned = {a.param: a for a in ref.args}

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import traceback
 from collections.abc import Callable, Mapping
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 from engine.codegen.layout import default_value, engine_order
@@ -115,6 +116,8 @@ class _Loaded:
             g[f"BE{k}"] = behavior.execute
         for k, binding in enumerate(linked.inputs):
             g[f"I{k}"] = binding.read
+            if binding.attribute is not None:
+                g[f"IA{k}"] = binding.source
             if binding.params:
                 storage = [default_value(p.kind) for p in binding.params]
                 g[f"FP{k}"] = storage
@@ -566,12 +569,18 @@ class Engine:
         loaded = self._require()
         slot = loaded.layout.inputs[symbol]
         key = f"I{slot.index}"
+        binding = loaded.linked.inputs[slot.index]
         if value is None:
             self._overrides.pop(symbol, None)
-            loaded.globals[key] = loaded.linked.inputs[slot.index].read
+            loaded.globals[key] = binding.read
+            if slot.attribute is not None:
+                loaded.globals[f"IA{slot.index}"] = binding.source
         else:
             self._overrides[symbol] = value
             loaded.globals[key] = lambda *_args, _value=value: _value
+            if slot.attribute is not None:
+                # Generated code reads ``IA{k}.<attribute>``: give it an object that has the value.
+                loaded.globals[f"IA{slot.index}"] = SimpleNamespace(**{slot.attribute: value})
         loaded.input_reads[symbol] = loaded.globals[key]
 
     @property

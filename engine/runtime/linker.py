@@ -166,7 +166,9 @@ def link(
                     f"parameter {param.name} of input symbol {symbol.name} is {param.kind.value} "
                     f"but registered as {have.kind.value}"
                 )
-        input_slots[symbol.name] = InputSlot(len(inputs), tuple((p.name, p.kind) for p in binding.params))
+        input_slots[symbol.name] = InputSlot(
+            len(inputs), tuple((p.name, p.kind) for p in binding.params), binding.attribute
+        )
         inputs.append(binding)
 
     # -- output and internal symbols -----------------------------------------------------------

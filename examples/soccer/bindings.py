@@ -9,9 +9,10 @@ This module is the host half of the symbol files in ``behavior/symbols/`` and of
 1. **Enumerations** (:func:`register_enums`): the host gives each element its value. Here the
    values are the world's own (``GameState`` numbers, :class:`Role`), so symbols need no
    translation.
-2. **Input symbols** (:class:`SoccerSymbols`): a getter per symbol, bound *once* when the
-   engine is built (a closure over the world model, which perception updates in place), so a
-   tick reads attributes and allocates nothing. Input *functions* (``distance_to(x, y)``) are
+2. **Input symbols**: most are one attribute of the world model, which perception updates in
+   place, registered with ``Bindings.input_attribute`` so that generated code reads the
+   attribute directly; the others are getters of :class:`SoccerSymbols`, bound *once* when the
+   engine is built, so a tick allocates nothing. Input *functions* (``distance_to(x, y)``) are
    plain Python functions of their parameters, registered with the parameter names in the order
    the function takes them.
 3. **Output symbols**: a setter/getter pair writing straight into the outgoing team message
@@ -20,8 +21,8 @@ This module is the host half of the symbol files in ``behavior/symbols/`` and of
 5. **The controller** (:class:`XabslController`): the ``engine.host.AgentController`` of one
    robot; it owns an :class:`engine.runtime.Engine` and runs one tick per ``execute``.
 
-Per-tick cost matters (ten robots at 40 Hz, 100x real time): getters are closures over
-attributes, team queries are computed at most once per tick and cached, and the opponent list is
+Per-tick cost matters (ten robots at 40 Hz, 100x real time): world-model symbols are attribute
+reads, team queries are computed at most once per tick and cached, and the opponent list is
 only built when a behavior asks about opponents.
 
 Units: mm, degrees, ms; field positions and directions in the team frame (own goal at negative
@@ -33,10 +34,7 @@ from __future__ import annotations
 import enum
 import hashlib
 import math
-from collections.abc import Callable
 from functools import partial
-from operator import attrgetter
-from typing import Any
 
 import numpy as np
 
@@ -300,15 +298,9 @@ class SoccerSymbols:
         return self.pass_y
 
 
-def _attr(wm: WorldModel, name: str) -> Callable[[], Any]:
-    """A getter for one world-model attribute, bound once (the engine calls it every reference).
-
-    ``partial(attrgetter(name), wm)`` is two C calls, no Python frame: as cheap as a getter gets.
-    """
-    return partial(attrgetter(name), wm)
-
-
-#: Input symbols that read one world-model attribute: symbol -> (kind, attribute).
+#: Input symbols that read one world-model attribute: symbol -> (kind, attribute). They are
+#: registered with ``Bindings.input_attribute``, so generated code reads ``wm.<attribute>``
+#: directly: these symbols are most of a behavior's ~14 input reads per tick.
 ATTRIBUTE_INPUTS: dict[str, tuple[Kind, str]] = {
     "robot.number": (D, "number"),
     "robot.x": (D, "x"),
@@ -347,8 +339,8 @@ def make_bindings(perception: WorldModel, motion: MotionRequest) -> tuple[Bindin
     wm = perception
 
     for name, (kind, attribute) in ATTRIBUTE_INPUTS.items():
-        b.input(name, kind, _attr(wm, attribute))
-    b.input("game.state", E, _attr(wm, "game_state"), enum="game.state")
+        b.input_attribute(name, kind, wm, attribute)
+    b.input_attribute("game.state", E, wm, "game_state", enum="game.state")
 
     # math and geometry
     b.input("abs", D, abs, params=[("value", D)])

@@ -52,3 +52,28 @@ def test_ran_options_and_active_states_follow_the_activation_tree() -> None:
     assert engine.ran_options() == b"\x01\x00", "child did not run in state b"
     assert engine.active_states() == (1, 0)
     assert Act.seen[-1] == (0.0, 1.0), "unassigned p is reset to 0, q = x"
+
+
+class Model:
+    def __init__(self) -> None:
+        self.x = 0.0
+
+
+def test_attribute_inputs_are_read_directly_and_can_be_overridden() -> None:
+    model = Model()
+    bindings = Bindings()
+    bindings.input_attribute("x", D, model, "x")
+    bindings.behavior(Act)
+    engine = Engine(bindings, program())
+    assert "IA0.x" in engine.source("main")
+    model.x = 1.0
+    engine.execute(0)
+    assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 1.0)
+    engine.debug.override_input("x", 0.25)
+    assert engine.debug.input_values() == {"x": 0.25}
+    engine.execute(10)
+    assert engine.active_states()[0] == 0, "the override is what the decision read"
+    engine.debug.release_input("x")
+    engine.execute(20)
+    assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 1.0)
+    assert engine.debug.input_values() == {"x": 1.0}
