@@ -34,6 +34,9 @@ from examples.soccer.robot import MotionRequest, Robot, WalkLimits
 from examples.soccer.units import DEG_PER_RAD, MM_PER_M, normalize_rad
 
 TEAM_NAMES = ("blue", "red")
+
+_READY = GameState.READY
+_PLAYING = GameState.PLAYING
 TEAM_COLORS = ("#1f6fd1", "#d1341f")
 
 
@@ -123,12 +126,13 @@ class SoccerWorld:
         self._last_sent_ms = [-(10**9)] * len(agents)
         self.noise = GaussianNoise(self.rng)
         self._game_info: list[tuple[int, int, bool, int, int, int, int]] = [(0, 1, False, 0, 0, 0, 1)] * 2
-        self._kickoff_mm = {
-            (number, kicking): (kickoff_position(number, kicking)[0] * MM_PER_M,
-                                kickoff_position(number, kicking)[1] * MM_PER_M)
-            for number in range(1, players_per_team + 1)
-            for kicking in (False, True)
-        }
+        # Per agent: its kick-off position [mm] when the other team kicks off, and when its own
+        # team does (indexed by ``own_kickoff``: a tuple index, not a dict lookup, every sense).
+        self._kickoff_mm = [
+            tuple((kickoff_position(a.number, kicking)[0] * MM_PER_M, kickoff_position(a.number, kicking)[1] * MM_PER_M)
+                  for kicking in (False, True))
+            for a in agents
+        ]
         self._snapshot = Snapshot(len(agents))
         self._steps = 0
         self._snapshot_steps = -1
@@ -262,7 +266,7 @@ class SoccerWorld:
         wm.own_score = own_score
         wm.opponent_score = opponent_score
         wm.half_time_left_ms = time_left
-        wm.kickoff_x, wm.kickoff_y = self._kickoff_mm[agent.number, own_kickoff]
+        wm.kickoff_x, wm.kickoff_y = self._kickoff_mm[agent.index][own_kickoff]
         wm.kick_ready = agent.robot.kick_ready(now_ms)
 
     def _act(self, agent: SoccerAgent, now_ms: int) -> None:
@@ -272,7 +276,11 @@ class SoccerWorld:
         # for perception serves the legs too.
         snap = self._refresh_snapshot()
         pose = (snap.x[index], snap.y[index], snap.theta[index])
-        agent.robot.act(agent.motion, now_ms, pose, game.side[agent.team_index], game.may_move, game.may_kick)
+        # ``game.may_move`` / ``game.may_kick``, without two property calls per robot and tick.
+        state = game.state
+        may_kick = state == _PLAYING
+        agent.robot.act(agent.motion, now_ms, pose, game.side[agent.team_index], may_kick or state == _READY,
+                        may_kick)
         if now_ms - self._last_sent_ms[index] >= self.sensor.message_interval_ms:
             self._last_sent_ms[index] = now_ms
             self.channels[agent.team_index].send(now_ms, agent.number, agent.perception.outgoing)
