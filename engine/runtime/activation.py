@@ -51,6 +51,8 @@ class Snapshot(NamedTuple):
     activated: tuple[Ms, ...]
     state_entered: tuple[Ms, ...]
     decisions: tuple[tuple[int, int, int] | None, ...]
+    #: the ``state_time`` each option's decision saw; kept only for options whose decisions read
+    #: ``state_time`` (the generated code skips it elsewhere, where nothing can depend on it)
     decision_state_time: tuple[float, ...]
     option_params: tuple[Value, ...]
     behavior_params: tuple[Value, ...]
