@@ -22,7 +22,7 @@ Ids are those of the program JSON (``engine.emit.json``); see docs/protocol.md f
 
 from __future__ import annotations
 
-import functools
+import operator
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -32,7 +32,7 @@ from typing import Any
 import orjson
 
 from engine.ir.model import Program
-from engine.runtime import BehaviorNode, Engine, OptionNode
+from engine.runtime import Engine
 from engine.types import Kind, Value
 from server.protocol import BEHAVIOR_NODE, FULL_EVERY, OPTION_NODE
 
@@ -108,7 +108,19 @@ class ProgramCodec:
 class AgentSampler:
     """Reads one engine after a tick: path, input values, output values, extras (fault, force)."""
 
-    __slots__ = ("_input_plan", "_output_plan", "codec", "engine", "index")
+    __slots__ = (
+        "_behavior_params",
+        "_input_converters",
+        "_input_plan",
+        "_option_params",
+        "_output_converters",
+        "_output_plan",
+        "_sample_inputs",
+        "_sample_outputs",
+        "codec",
+        "engine",
+        "index",
+    )
 
     def __init__(self, index: int, engine: Engine, codec: ProgramCodec) -> None:
         self.index = index
@@ -116,30 +128,35 @@ class AgentSampler:
         self.codec = codec
         # Per symbol: its name and the conversion to a display value, decided once.
         self._input_plan = [(name, self._converter(kind, enum)) for _, name, kind, enum in codec.inputs]
+        self._input_converters = tuple(convert for _, convert in self._input_plan)
+        self._sample_inputs = engine.input_sampler([name for name, _ in self._input_plan])
         self._output_plan = [(name, self._converter(kind, enum)) for _, name, kind, enum in codec.outputs]
+        self._output_converters = tuple(convert for _, convert in self._output_plan)
+        self._sample_outputs = engine.output_sampler([name for name, _ in self._output_plan])
+        # Per option / basic behavior id: the conversion of each parameter, in declaration order.
+        program = codec.program
+        self._option_params = {
+            o.index: tuple(self._converter(p.kind, p.enum) for p in o.params) for o in program.options.values()
+        }
+        self._behavior_params = {
+            b.index: tuple(self._converter(p.kind, p.enum) for p in b.params) for b in program.behaviors.values()
+        }
 
     def path(self) -> list[list[Any]]:
-        codec = self.codec
-        out: list[list[Any]] = []
-        display = codec.display
+        """The agent's activation path in the frame format (docs/protocol.md "path").
 
-        def walk(nodes: Sequence[Any], depth: int) -> None:
-            for node in nodes:
-                if isinstance(node, OptionNode):
-                    option = codec.program.options[node.option]
-                    states = codec.state_ids[node.option]
-                    params = [display(p.kind, p.enum, node.params.get(p.name, 0.0)) for p in option.params]
-                    out.append([OPTION_NODE, depth, codec.option_ids[node.option], states[node.state],
-                                node.option_time, node.state_time, states.get(node.decided_in, -1), node.leaf,
-                                params])
-                    walk(node.sub, depth + 1)
-                elif isinstance(node, BehaviorNode):
-                    behavior = codec.program.behaviors[node.behavior]
-                    params = [display(p.kind, p.enum, node.params.get(p.name, 0.0)) for p in behavior.params]
-                    out.append([BEHAVIOR_NODE, depth, codec.behavior_ids[node.behavior], node.time, params])
-
-        walk(self.engine.activation(), 0)
-        return out
+        The engine's compact path already has the frame's node layout and the JSON ids; only the
+        parameter values are turned into display values (rounded decimals, enum element indices).
+        """
+        nodes = self.engine.path()
+        option_params, behavior_params = self._option_params, self._behavior_params
+        for node in nodes:
+            if node[0] == OPTION_NODE:
+                if node[8]:
+                    node[8] = [convert(v) for convert, v in zip(option_params[node[2]], node[8], strict=True)]
+            elif node[4]:
+                node[4] = [convert(v) for convert, v in zip(behavior_params[node[2]], node[4], strict=True)]
+        return nodes
 
     def _converter(self, kind: Kind, enum: str | None) -> Callable[[Any], Value | None]:
         if kind is Kind.DECIMAL:
@@ -150,11 +167,11 @@ class AgentSampler:
         return lambda value: table.get(int(value), -1)
 
     def inputs(self) -> tuple[Value | None, ...]:
-        # Read through the engine's current input callables (an override replaces one of them).
-        reads = self.engine._loaded_program().input_reads
+        # One engine sampler reads all plain inputs (overrides included), converted in C.
         try:
-            return tuple([convert(reads[name]()) for name, convert in self._input_plan])
+            return tuple(map(operator.call, self._input_converters, self._sample_inputs()))
         except Exception:  # a host getter that raises must not stop the simulation thread
+            reads = self.engine.input_reads
             values: list[Value | None] = []
             for name, convert in self._input_plan:
                 try:
@@ -164,10 +181,10 @@ class AgentSampler:
             return tuple(values)
 
     def outputs(self) -> tuple[Value | None, ...]:
-        output = self.engine.output
         try:
-            return tuple([convert(output(name)) for name, convert in self._output_plan])
+            return tuple(map(operator.call, self._output_converters, self._sample_outputs()))
         except Exception:
+            output = self.engine.output
             values: list[Value | None] = []
             for name, convert in self._output_plan:
                 try:
@@ -183,9 +200,8 @@ class AgentSampler:
         fault = engine.fault
         if fault is not None:
             parts["fault"] = {"message": fault.message, "option": fault.option, "state": fault.state}
-        forced = engine._forced
-        if forced is not None:
-            root = forced[0]
+        root = engine.forced
+        if root is not None:
             if root.kind == "option":
                 parts["forced"] = [OPTION_NODE, self.codec.option_ids.get(root.name, -1)]
             else:
@@ -246,7 +262,12 @@ class Entry:
 
 def _head(entry: Entry, full: bool) -> bytes:
     return b'{"type":"frame","seq":%d,"gen":%d,"t":%d,"wall":%.1f,"full":%s,"agents":[' % (
-        entry.seq, entry.gen.number, entry.t, entry.wall, b"true" if full else b"false")
+        entry.seq,
+        entry.gen.number,
+        entry.t,
+        entry.wall,
+        b"true" if full else b"false",
+    )
 
 
 def _values(ids: tuple[int, ...], values: tuple[Value | None, ...], mask: int | None) -> bytes:
@@ -448,8 +469,18 @@ class FrameRecorder:
         return entry
 
 
-#: round(value, DECIMALS) without a Python frame per value.
-_round: Callable[[Any], Value] = functools.partial(round, ndigits=DECIMALS)
+_SCALE = 10.0**DECIMALS
+
+
+def _round(value: float) -> float:
+    """``value`` to DECIMALS fractional digits for display.
+
+    ``round(v * 1000) / 1000`` rather than ``round(v, 3)``: the two-argument round does exact
+    decimal rounding through a string conversion and costs 3-4x as much, and every decimal input
+    and output of every agent passes here on every tick. NaN and infinities raise (the sampler
+    then records None for the value).
+    """
+    return round(value * _SCALE) / _SCALE
 
 
 def _changed(new: tuple[Value | None, ...], old: tuple[Value | None, ...]) -> int:

@@ -194,3 +194,113 @@ def node_to_dict(node: Node, enum_name: Callable[[str | None, Value], Any]) -> d
             "time": node.time,
         }
     return {"output": node.symbol, "value": enum_name(node.enum, node.value)}
+
+
+# -- the compact activation path -------------------------------------------------------------------
+
+#: Node kinds of :func:`compact_path`.
+OPTION_NODE = 0
+BEHAVIOR_NODE = 1
+
+
+@dataclass(frozen=True, slots=True)
+class PathPlan:
+    """What :func:`compact_path` needs of a program, precomputed once per load.
+
+    ``options[slot]`` = (IR option index, parameter offset, parameter count, per state the calls
+    in action order as ``(is_option, slot)``); ``behaviors[slot]`` = (IR index, offset, count).
+    """
+
+    options: tuple[tuple[int, int, int, tuple[tuple[tuple[bool, int], ...], ...]], ...]
+    behaviors: tuple[tuple[int, int, int], ...]
+    roots: dict[Root, tuple[bool, int]]
+
+    @classmethod
+    def of(cls, program: Program, layout: Layout) -> PathPlan:
+        options: list[tuple[int, int, int, tuple[tuple[tuple[bool, int], ...], ...]]] = [None] * len(layout.options)  # type: ignore[list-item]
+        for name, slot in layout.options.items():
+            option = program.options[name]
+            calls = tuple(
+                tuple(
+                    (True, layout.options[a.option].index)
+                    if isinstance(a, OptionCall)
+                    else (False, layout.behaviors[a.behavior].index)
+                    for a in state.actions
+                    if isinstance(a, OptionCall | BehaviorCall)
+                )
+                for state in option.states
+            )
+            options[slot.index] = (option.index, slot.offset, len(slot.params), calls)
+        behaviors: list[tuple[int, int, int]] = [None] * len(layout.behaviors)  # type: ignore[list-item]
+        for name, bslot in layout.behaviors.items():
+            behaviors[bslot.index] = (program.behaviors[name].index, bslot.offset, len(bslot.params))
+        roots = {Root("option", n): (True, s.index) for n, s in layout.options.items()}
+        roots.update({Root("behavior", n): (False, s.index) for n, s in layout.behaviors.items()})
+        return cls(tuple(options), tuple(behaviors), roots)
+
+
+def compact_path(
+    plan: PathPlan,
+    roots: tuple[Root, ...],
+    tick: int,
+    now: Ms,
+    storage: tuple[list[int], list[int], list[Ms], list[Ms], list[Any], list[Value], list[Value], list[int], list[Ms]],
+) -> list[list[Any]]:
+    """The activation path of the last tick as flat lists, read straight from engine storage.
+
+    Pre-order, one list per node, ids are IR indices (the JSON ids)::
+
+        [0, depth, option, active state, option_time, state_time, decided-in state, leaf, [params]]
+        [1, depth, basic behavior, time of execution, [params]]
+
+    Parameter values are raw (enum values as host integers), in declaration order. This is the
+    per-tick recording path of the studio: no snapshot copy, no node objects.
+    """
+    last_tick, states, activated, entered, decisions, option_params, behavior_params, b_last, b_activated = storage
+    options, behaviors = plan.options, plan.behaviors
+    out: list[list[Any]] = []
+    append = out.append
+
+    def behavior(k: int, depth: int) -> None:
+        if b_last[k] == tick:
+            index, offset, count = behaviors[k]
+            append(
+                [
+                    BEHAVIOR_NODE,
+                    depth,
+                    index,
+                    (now - b_activated[k]) & MS_MASK,
+                    behavior_params[offset : offset + count],
+                ]
+            )
+
+    def option(i: int, depth: int) -> None:
+        if last_tick[i] != tick:
+            return
+        index, offset, count, calls = options[i]
+        state = states[i]
+        record = decisions[i]
+        append(
+            [
+                OPTION_NODE,
+                depth,
+                index,
+                state,
+                (now - activated[i]) & MS_MASK,
+                (now - entered[i]) & MS_MASK,
+                record[2] if record is not None else state,
+                record[1] if record is not None else -1,
+                option_params[offset : offset + count],
+            ]
+        )
+        for is_option, k in calls[state]:
+            if is_option:
+                option(k, depth + 1)
+            else:
+                behavior(k, depth + 1)
+
+    for root in roots:
+        found = plan.roots.get(root)
+        if found is not None:
+            (option if found[0] else behavior)(found[1], 0)
+    return out

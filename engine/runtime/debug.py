@@ -159,8 +159,7 @@ class Debugger:
     @property
     def forced(self) -> Root | None:
         """The forced root, if any."""
-        forced = self.engine._forced
-        return forced[0] if forced is not None else None
+        return self.engine.forced
 
     def override_input(self, name: str, value: Value | str) -> None:
         """Make input symbol ``name`` read ``value`` (for any parameters) until released."""

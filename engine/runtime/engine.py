@@ -23,15 +23,16 @@ leaves the running one untouched and raises.
 from __future__ import annotations
 
 import traceback
-from collections.abc import Callable, Mapping
-from types import SimpleNamespace
+from collections.abc import Callable, Mapping, Sequence
+from operator import attrgetter
+from types import MappingProxyType, SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 from engine.codegen.layout import default_value, engine_order
 from engine.codegen.python import GeneratedProgram, generate
 from engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
 from engine.ir.model import Agent, Program
-from engine.runtime.activation import Node, Root, Snapshot, build_tree, node_to_dict
+from engine.runtime.activation import Node, PathPlan, Root, Snapshot, build_tree, compact_path, node_to_dict
 from engine.runtime.bindings import Bindings
 from engine.runtime.checks import Policy, check_root
 from engine.runtime.coop import CoopStates
@@ -130,6 +131,9 @@ class _Loaded:
         generated.bind(g)
         self.functions: list[Callable[[int, int], None]] = [g[f"O{i}"] for i in range(n)]
         self.input_reads = {name: g[f"I{slot.index}"] for name, slot in linked.layout.inputs.items()}
+        #: built on the first :meth:`Engine.path` call (hosts that never record pay nothing)
+        self.path_plan: PathPlan | None = None
+        self.path_storage = (self.LT, self.S, self.TA, self.TS, self.LF, self.PP, self.BP, self.BLT, self.BTA)
 
     def run_behavior(self, k: int, now: int, tick: int, changed: bool) -> None:
         """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set.
@@ -527,6 +531,18 @@ class Engine:
             tuple(loaded.OV),
         )
 
+    def path(self) -> list[list[Any]]:
+        """The activation path of the last tick, compact (see :func:`~engine.runtime.activation.compact_path`).
+
+        The cheap alternative to :meth:`activation` for recording every tick: flat lists with
+        integer ids, read straight from the engine's storage.
+        """
+        loaded = self._require()
+        plan = loaded.path_plan
+        if plan is None:
+            plan = loaded.path_plan = PathPlan.of(loaded.program, loaded.layout)
+        return compact_path(plan, self._root_names, self._tick, self._now, loaded.path_storage)
+
     def activation(self, snapshot: Snapshot | None = None) -> list[Node]:
         """The activation tree of the last tick (or of ``snapshot``)."""
         loaded = self._require()
@@ -582,6 +598,84 @@ class Engine:
                 # Generated code reads ``IA{k}.<attribute>``: give it an object that has the value.
                 loaded.globals[f"IA{slot.index}"] = SimpleNamespace(**{slot.attribute: value})
         loaded.input_reads[symbol] = loaded.globals[key]
+
+    @property
+    def forced(self) -> Root | None:
+        """The root the debugger forced in place of the agent's root option, if any."""
+        return self._forced[0] if self._forced is not None else None
+
+    @property
+    def input_reads(self) -> Mapping[str, Callable[..., Value]]:
+        """Per input symbol the callable the behavior reads it through (an override replaces it).
+
+        A live, read-only view for samplers: call ``input_reads[name]()`` for a plain input's value.
+        """
+        return MappingProxyType(self._require().input_reads)
+
+    def input_sampler(self, names: Sequence[str]) -> Callable[[], tuple[Value, ...]]:
+        """A function that reads the plain input symbols ``names`` as one tuple, in that order.
+
+        For recording every tick: inputs bound with :meth:`Bindings.input_attribute` are read with
+        one ``operator.attrgetter`` call per host object (all in C), the others through their
+        getters. While the debugger overrides any input, the sampler reads through
+        :attr:`input_reads` instead, so overridden values are what it returns. Valid until the
+        next load or reload.
+        """
+        loaded = self._require()
+        groups: dict[int, tuple[object, list[str], list[int], list[Callable[..., Value]]]] = {}
+        getters: list[tuple[Callable[..., Value], int]] = []
+        for position, name in enumerate(names):
+            binding = loaded.linked.inputs[loaded.layout.inputs[name].index]
+            if binding.attribute is not None and binding.source is not None:
+                group = groups.setdefault(id(binding.source), (binding.source, [], [], []))
+                group[1].append(binding.attribute)
+                group[2].append(position)
+                group[3].append(binding.read)
+            else:
+                getters.append((binding.read, position))
+        readers: list[tuple[Callable[[object], tuple[Value, ...]], object]] = []
+        order: list[int] = []
+        for source, attributes, positions, single_reads in groups.values():
+            if len(attributes) > 1:  # one C call reads them all (attrgetter of several names -> tuple)
+                readers.append((attrgetter(*attributes), source))
+                order.extend(positions)
+            else:
+                getters.append((single_reads[0], positions[0]))
+        order.extend(p for _, p in getters)
+        where = [0] * len(names)  # requested position -> position in the read order
+        for slot, position in enumerate(order):
+            where[position] = slot
+        reads = loaded.input_reads
+        plain = [g for g, _ in getters]
+        names = tuple(names)
+
+        def sample() -> tuple[Value, ...]:
+            if self._overrides:
+                return tuple([reads[name]() for name in names])
+            values: list[Value] = []
+            for read, source in readers:
+                values.extend(read(source))
+            values.extend([read() for read in plain])
+            return tuple(map(values.__getitem__, where))
+
+        return sample
+
+    def output_sampler(self, names: Sequence[str]) -> Callable[[], tuple[Value, ...]]:
+        """A function that reads the output and internal symbols ``names`` as one tuple, in order.
+
+        The recording counterpart of :meth:`input_sampler`: engine-stored symbols are picked from
+        the storage list in C, host symbols read through their getters. Valid until the next load
+        or reload.
+        """
+        loaded = self._require()
+        stored = all(loaded.layout.outputs[name].stored for name in names)
+        if stored:
+            indices = [loaded.layout.outputs[name].index for name in names]
+            pick = loaded.OV.__getitem__
+            return lambda: tuple(map(pick, indices))
+        output = self.output
+        names = tuple(names)
+        return lambda: tuple([output(name) for name in names])
 
     @property
     def overrides(self) -> dict[str, Value]:
