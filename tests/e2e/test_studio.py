@@ -206,6 +206,8 @@ def test_scrub_the_timeline_and_back_to_live(page: Any) -> None:
     screenshot(page, "timeline")
     page.keyboard.press("l")
     wait_until(page, f"() => {STUDIO}.session.cursor === null")
+    # the button is redrawn on the next animation frame
+    wait_until(page, "() => !document.querySelector('button.live').innerText.includes('Back to live')")
     assert "Live" in page.locator("button.live").inner_text()
 
 
