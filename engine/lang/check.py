@@ -15,7 +15,6 @@ from __future__ import annotations
 import difflib
 import re
 from collections.abc import Iterable
-from dataclasses import replace
 
 from engine import ir
 from engine.lang import ast
@@ -565,20 +564,30 @@ class OptionChecker:
 
 
 def _resolve_stay(tree: ir.DecisionTree, state: str) -> ir.DecisionTree:
+    """``stay`` (target None) becomes ``state``; nodes are rebuilt directly (no ``replace``)."""
     if isinstance(tree, ir.Transition):
         target = state if tree.target is None else tree.target
-        return replace(tree, target=target, stay=target == state)
-    return replace(tree, then=_resolve_stay(tree.then, state), otherwise=_resolve_stay(tree.otherwise, state))
+        return ir.Transition(target, target == state, tree.leaf, tree.span)
+    return ir.If(
+        tree.condition,
+        _resolve_stay(tree.then, state),
+        _resolve_stay(tree.otherwise, state),
+        tree.text,
+        tree.doc,
+        tree.else_doc,
+        tree.span,
+    )
 
 
 def _number_leaves(tree: ir.DecisionTree) -> ir.DecisionTree:
+    """Number the leaves in pre-order (then-branch first), from 0."""
     counter = iter(range(1 << 30))
 
     def visit(node: ir.DecisionTree) -> ir.DecisionTree:
         if isinstance(node, ir.Transition):
-            return replace(node, leaf=next(counter))
+            return ir.Transition(node.target, node.stay, next(counter), node.span)
         then = visit(node.then)
-        return replace(node, then=then, otherwise=visit(node.otherwise))
+        return ir.If(node.condition, then, visit(node.otherwise), node.text, node.doc, node.else_doc, node.span)
 
     return visit(tree)
 

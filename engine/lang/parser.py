@@ -17,6 +17,8 @@ to the following node; anywhere else they are a syntax error, exactly like the o
 
 from __future__ import annotations
 
+import functools
+
 from engine.lang import ast
 from engine.lang.diagnostics import Diagnostics
 from engine.lang.tokens import Token, TokenType, doc_text, tokenize
@@ -69,15 +71,22 @@ class _Parser:
         self.diagnostics = diagnostics
         self.truncated = truncated
         self.pos = 0
-        # brace depth before each token: recovery resumes at the depth it started from
-        self.depth: list[int] = []
+
+    @functools.cached_property
+    def depth(self) -> list[int]:
+        """The brace depth before each token; recovery resumes at the depth it started from.
+
+        Computed on the first syntax error only: a file without errors never needs it.
+        """
+        depths: list[int] = []
         depth = 0
-        for token in tokens:
-            self.depth.append(depth)
+        for token in self.tokens:
+            depths.append(depth)
             if token.is_op("{"):
                 depth += 1
             elif token.is_op("}"):
                 depth = max(0, depth - 1)
+        return depths
 
     # ---------------------------------------------------------------- token helpers
 
@@ -215,7 +224,7 @@ class _Parser:
         title = self.expect_string("the namespace's title in quotes")
         self.expect_op(")")
         self.expect_op("{")
-        depth = self.depth[self.pos]
+        body = self.pos
         items: list[ast.NamespaceItem] = []
         while not self.tok.is_op("}"):
             if self.tok.type is TokenType.EOF:
@@ -224,7 +233,7 @@ class _Parser:
                 items.append(self.parse_namespace_item())
             except _SyntaxError as error:
                 self.report(error)
-                self.recover_to_item(depth)
+                self.recover_to_item(self.depth[body])
         self.advance()
         return ast.Namespace(name, title, items, self.span_from(start), doc)
 
@@ -361,7 +370,7 @@ class _Parser:
         start = self.expect_kw("option").span
         name = self.expect_ident("the option's name")
         self.expect_op("{")
-        body_depth = self.depth[self.pos]
+        body = self.pos
         params: list[ast.ParamDecl] = []
         common_decision = None
         common_action = None
@@ -380,7 +389,7 @@ class _Parser:
             states.append(self.parse_state())
         except _SyntaxError as error:
             self.report(error)
-            self.recover_to_state(body_depth)
+            self.recover_to_state(self.depth[body])
         while not self.tok.is_op("}"):
             if self.tok.type is TokenType.EOF:
                 raise self.error("'}' closing the option")
@@ -388,7 +397,7 @@ class _Parser:
                 states.append(self.parse_state())
             except _SyntaxError as error:
                 self.report(error)
-                self.recover_to_state(body_depth)
+                self.recover_to_state(self.depth[body])
         self.advance()
         return ast.OptionDecl(name, params, common_decision, common_action, states, self.span_from(start), doc)
 
