@@ -30,7 +30,7 @@ __all__ = ["AssignmentNode", "BehaviorNode", "Node", "OptionNode", "Root", "Snap
 
 @dataclass(frozen=True, slots=True)
 class Root:
-    """A root action: an option or a basic behavior (``kind`` is ``"option"`` or ``"behavior"``)."""
+    """A root action: ``kind`` is ``"option"``, ``"behavior"`` or ``"output"`` (an output-symbol assignment)."""
 
     kind: str
     name: str
@@ -163,7 +163,12 @@ def build_tree(
 
     tree: list[Node] = []
     for root in snapshot.roots:
-        node = option_node(root.name) if root.kind == "option" else behavior_node(root.name)
+        if root.kind == "option":
+            node: Node | None = option_node(root.name)
+        elif root.kind == "behavior":
+            node = behavior_node(root.name)
+        else:  # an output-symbol root action is not part of the activation tree
+            node = None
         if node is not None:
             tree.append(node)
     return tree

@@ -125,10 +125,11 @@ class Debugger:
         """Restart every option on the next tick and clear a fault (§2.9)."""
         self.engine.reset()
 
-    def force_option(self, name: str, params: Mapping[str, Value | str] | None = None) -> None:
+    def force_option(self, name: str, params: Mapping[str, Value | str] | None = None, *, add: bool = False) -> None:
         """Run option ``name`` as the root with ``params`` (others default) until :meth:`release`.
 
-        Enum parameters accept a qualified element name or a host value.
+        Enum parameters accept a qualified element name or a host value. With ``add=True`` the
+        option runs after the current root actions instead of replacing them (``addRootAction``).
 
         Raises:
             DebugError: unknown option or parameter, or a value of the wrong kind.
@@ -140,20 +141,32 @@ class Debugger:
             raise DebugError(f"unknown option {name}")
         enums = {p.name: p.enum for p in loaded.program.options[name].params}
         values = self._params(name, slot.params, enums, params or {})
-        self.engine._force(Root("option", name), values)
+        self.engine._force(Root("option", name), values, add=add)
 
-    def force_behavior(self, name: str, params: Mapping[str, Value | str] | None = None) -> None:
-        """Run basic behavior ``name`` as the root with ``params`` until :meth:`release`."""
+    def force_behavior(self, name: str, params: Mapping[str, Value | str] | None = None, *, add: bool = False) -> None:
+        """Run basic behavior ``name`` as the root with ``params`` until :meth:`release` (``add``: append)."""
         loaded = self.engine._loaded_program()
         slot = loaded.layout.behaviors.get(name)
         if slot is None:
             raise DebugError(f"unknown basic behavior {name}")
         enums = {p[0]: p[2] for p in loaded.behavior_params[name]}
         values = self._params(name, slot.params, enums, params or {})
-        self.engine._force(Root("behavior", name), values)
+        self.engine._force(Root("behavior", name), values, add=add)
+
+    def add_output(self, name: str, value: Value | str) -> None:
+        """Append a root action that assigns ``value`` to output symbol ``name`` every tick (§2.9).
+
+        Enum values accept a qualified element name or a host value.
+        """
+        loaded = self.engine._loaded_program()
+        symbol = loaded.program.outputs.get(name)
+        if symbol is None:
+            raise DebugError(f"unknown output symbol {name}")
+        values = self._params(name, ((name, symbol.kind),), {name: symbol.enum}, {name: value})
+        self.engine._force(Root("output", name), {"value": values[name]}, add=True)
 
     def release(self) -> None:
-        """Return to the selected agent's root option."""
+        """Return to the selected agent's root option (releases every forced root action)."""
         self.engine._force(None, {})
 
     @property

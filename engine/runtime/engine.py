@@ -160,7 +160,25 @@ class _Loaded:
         return [key for key in self.coop.states if self.LT[key[0]] == tick and self.S[key[0]] == key[1]]
 
     def root_action(self, root: Root, params: Mapping[str, Value]) -> RootAction:
-        """A root action calling ``root`` with constant ``params`` (others get defaults, §2.5)."""
+        """A root action calling ``root`` with constant ``params`` (others get defaults, §2.5).
+
+        A root of kind ``"output"`` assigns ``params["value"]`` to that output symbol on every
+        tick (``addRootActionDecimalOutputSymbol`` and siblings, §2.9).
+        """
+        if root.kind == "output":
+            oslot = self.layout.outputs[root.name]
+            value = params["value"]
+            if oslot.stored:
+                outputs, position = self.OV, oslot.index
+
+                def assign_stored(now: int, tick: int) -> None:
+                    outputs[position] = value
+
+                return assign_stored
+            binding = self.linked.outputs[oslot.index]
+            assert binding is not None and binding.setter is not None
+            setter = binding.setter
+            return lambda now, tick: setter(value)
         if root.kind == "option":
             slot = self.layout.options[root.name]
             values = [
@@ -221,7 +239,8 @@ class Engine:
         self._now: Ms = 0
         self._fault: Fault | None = None
         self._agent: Agent | None = None
-        self._forced: tuple[Root, dict[str, Value]] | None = None
+        #: root actions the debugger installed instead of the agent's root (None: the agent's)
+        self._forced: list[tuple[Root, dict[str, Value]]] | None = None
         self._overrides: dict[str, Value] = {}
         self._roots: list[RootAction] = []
         self._root_names: tuple[Root, ...] = ()
@@ -309,8 +328,9 @@ class Engine:
         self._agent = next((a for a in program.agents if a.name == agent_name), None) or (
             program.agents[0] if program.agents else None
         )
-        if self._forced is not None and not self._root_exists(self._forced[0]):
-            self._forced = None
+        if self._forced is not None:
+            kept = [(root, params) for root, params in self._forced if self._root_exists(root)]
+            self._forced = kept or None
         overrides = self._overrides
         self._overrides = {}
         for symbol, value in overrides.items():
@@ -325,6 +345,8 @@ class Engine:
 
     def _root_exists(self, root: Root) -> bool:
         loaded = self._require()
+        if root.kind == "output":
+            return root.name in loaded.layout.outputs
         table = loaded.layout.options if root.kind == "option" else loaded.layout.behaviors
         return root.name in table
 
@@ -332,9 +354,8 @@ class Engine:
         loaded = self._require()
         self._coop_states = bool(loaded.coop.states)
         if self._forced is not None:
-            root, params = self._forced
-            self._root_names = (root,)
-            self._roots = [loaded.root_action(root, params)]
+            self._root_names = tuple(root for root, _ in self._forced)
+            self._roots = [loaded.root_action(root, params) for root, params in self._forced]
         elif self._agent is not None:
             root = Root("option", self._agent.root)
             self._root_names = (root,)
@@ -575,10 +596,21 @@ class Engine:
     def _loaded_program(self) -> _Loaded:
         return self._require()
 
-    def _force(self, root: Root | None, params: dict[str, Value]) -> None:
+    def _force(self, root: Root | None, params: dict[str, Value], add: bool = False) -> None:
+        """Replace the root actions by ``root`` (``setRootAction``), or append it (``addRootAction``).
+
+        ``root=None`` releases every forced root: the selected agent's root option runs again.
+        """
         if root is not None and root.kind == "option":
             check_root(self._require().program, root.name, self.policy)
-        self._forced = None if root is None else (root, params)
+        if root is None:
+            self._forced = None
+        elif add and self._forced is not None:
+            self._forced = [*self._forced, (root, params)]
+        elif add and self._agent is not None:
+            self._forced = [(Root("option", self._agent.root), {}), (root, params)]
+        else:
+            self._forced = [(root, params)]
         self._install_roots()
 
     def _apply_override(self, symbol: str, value: Value | None) -> None:
@@ -602,7 +634,12 @@ class Engine:
     @property
     def forced(self) -> Root | None:
         """The root the debugger forced in place of the agent's root option, if any."""
-        return self._forced[0] if self._forced is not None else None
+        return self._forced[0][0] if self._forced is not None else None
+
+    @property
+    def forced_roots(self) -> tuple[Root, ...]:
+        """Every root action the debugger installed, in execution order (empty: the agent's root)."""
+        return tuple(root for root, _ in self._forced) if self._forced is not None else ()
 
     @property
     def input_reads(self) -> Mapping[str, Callable[..., Value]]:

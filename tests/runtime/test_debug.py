@@ -85,3 +85,43 @@ def test_explain_unknown_or_idle_option() -> None:
         debug.explain("nope")
     with pytest.raises(DebugError, match="not run"):
         debug.explain("child")
+
+
+# -- several root actions (§2.9 addRootAction / addRootAction...OutputSymbol) ----------------------
+
+
+def test_add_root_action_runs_after_the_agents_root() -> None:
+    host = Host(ic(PROGRAM))
+    host.engine.debug.force_behavior("beep", {"beep.loud": 1.0}, add=True)
+    host.tick(0, x=0.0)
+    tree = host.engine.activation()
+    assert [getattr(n, "option", None) or n.behavior for n in tree] == ["main", "beep"]
+    assert [r.kind for r in host.engine.forced_roots] == ["option", "behavior"]
+    host.engine.debug.release()
+    host.tick(10, x=0.0)
+    assert [getattr(n, "option", None) or n.behavior for n in host.engine.activation()] == ["main"]
+
+
+def test_added_roots_run_in_order_and_force_replaces_them_all() -> None:
+    host = Host(ic(PROGRAM))
+    debug = host.engine.debug
+    debug.force_option("child", {"v": 20})
+    debug.force_behavior("beep", add=True)
+    host.tick(0)
+    assert [getattr(n, "option", None) or n.behavior for n in host.engine.activation()] == ["child", "beep"]
+    debug.force_behavior("beep")
+    host.tick(10)
+    assert [n.behavior for n in host.engine.activation()] == ["beep"]
+
+
+def test_output_symbol_root_action_assigns_every_tick() -> None:
+    host = Host(ic(PROGRAM))
+    debug = host.engine.debug
+    debug.force_option("child", {"v": 20})
+    debug.add_output("seen", 7.5)  # after child, which writes seen = 20: the later write wins
+    host.tick(0)
+    assert host.engine.output("seen") == 7.5
+    assert host.engine.path()[0][2] == host.program.options["child"].index  # not in the path
+    debug.release()
+    with pytest.raises(DebugError, match="unknown output"):
+        debug.add_output("nothing", 1.0)
