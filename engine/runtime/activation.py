@@ -265,23 +265,31 @@ def compact_path(
     options, behaviors = plan.options, plan.behaviors
     out: list[list[Any]] = []
     append = out.append
-
-    def behavior(k: int, depth: int) -> None:
-        if b_last[k] == tick:
-            index, offset, count = behaviors[k]
-            append(
-                [
-                    BEHAVIOR_NODE,
-                    depth,
-                    index,
-                    (now - b_activated[k]) & MS_MASK,
-                    behavior_params[offset : offset + count],
-                ]
-            )
-
-    def option(i: int, depth: int) -> None:
+    # An explicit stack instead of nested recursive closures: paths are walked every tick, and
+    # defining two closures per call plus a Python call per node cost more than the nodes.
+    stack: list[tuple[bool, int, int]] = []
+    for root in reversed(roots):
+        found = plan.roots.get(root)
+        if found is not None:
+            stack.append((found[0], found[1], 0))
+    pop, push = stack.pop, stack.extend
+    while stack:
+        is_option, i, depth = pop()
+        if not is_option:
+            if b_last[i] == tick:
+                index, offset, count = behaviors[i]
+                append(
+                    [
+                        BEHAVIOR_NODE,
+                        depth,
+                        index,
+                        (now - b_activated[i]) & MS_MASK,
+                        behavior_params[offset : offset + count],
+                    ]
+                )
+            continue
         if last_tick[i] != tick:
-            return
+            continue
         index, offset, count, calls = options[i]
         state = states[i]
         record = decisions[i]
@@ -298,14 +306,8 @@ def compact_path(
                 option_params[offset : offset + count],
             ]
         )
-        for is_option, k in calls[state]:
-            if is_option:
-                option(k, depth + 1)
-            else:
-                behavior(k, depth + 1)
-
-    for root in roots:
-        found = plan.roots.get(root)
-        if found is not None:
-            (option if found[0] else behavior)(found[1], 0)
+        children = calls[state]
+        if children:
+            child_depth = depth + 1
+            push([(kind, k, child_depth) for kind, k in reversed(children)])
     return out
