@@ -72,9 +72,16 @@ from engine.ir.model import (
 )
 from engine.types import Kind, Span
 
-__all__ = ["GeneratedOption", "GeneratedProgram", "Origin", "expression_source", "generate"]
+__all__ = ["CodegenError", "GeneratedOption", "GeneratedProgram", "Origin", "expression_source", "generate"]
+
+
+class CodegenError(ValueError):
+    """A program the code generator cannot turn into Python (the engine reports it as a LoadError)."""
+
 
 _MASK = "0xFFFFFFFF"
+_ADDITIVE = frozenset({"+", "-"})
+_MULTIPLICATIVE = frozenset({"*"})
 _COMPARE = {"<": "<", "<=": "<=", ">": ">", ">=": ">=", "==": "==", "!=": "!=", "enum==": "==", "enum!=": "!="}
 
 
@@ -191,7 +198,16 @@ class _ExpressionWriter:
             case Binary(op="%", left=left, right=right):
                 return f"_mod({self(left)}, {self(right)})"
             case Binary(op=op, left=left, right=right) if op in ("+", "-", "*"):
-                return f"({self(left)} {op} {self(right)})"
+                # Python's + - * associate to the left like C++, so a left-deep chain (what the
+                # parser builds for `a + b + c`) needs no inner parentheses; written flat, a long
+                # sum stays under CPython's limit of 200 nested parentheses.
+                group = _ADDITIVE if op in _ADDITIVE else _MULTIPLICATIVE
+                terms = [f" {op} {self(right)}"]
+                node = left
+                while isinstance(node, Binary) and node.op in group:
+                    terms.append(f" {node.op} {self(node.right)}")
+                    node = node.left
+                return "(" + self(node) + "".join(reversed(terms)) + ")"
             case Binary(op=op, left=left, right=right):
                 return f"({self(left)} {_COMPARE[op]} {self(right)})"
             case Logical(op=op, operands=operands):
@@ -307,10 +323,25 @@ class _Uses:
         action_st = _reads(actions, StateTime)
         ot = _reads(decisions + actions, OptionTime)
         calls = any(not isinstance(a, Assignment) for state in option.states for a in state.actions)
-        decision_params = [n for n, used in (("st", decision_st), ("ot", _reads(decisions, OptionTime)),
-                                              ("tick", _reads(decisions, ActionDone))) if used]
-        action_params = [n for n, used in (("st", action_st), ("ot", _reads(actions, OptionTime)), ("now", calls),
-                                            ("tick", calls or _reads(actions, ActionDone))) if used]
+        decision_params = [
+            n
+            for n, used in (
+                ("st", decision_st),
+                ("ot", _reads(decisions, OptionTime)),
+                ("tick", _reads(decisions, ActionDone)),
+            )
+            if used
+        ]
+        action_params = [
+            n
+            for n, used in (
+                ("st", action_st),
+                ("ot", _reads(actions, OptionTime)),
+                ("now", calls),
+                ("tick", calls or _reads(actions, ActionDone)),
+            )
+            if used
+        ]
         return cls(decision_st, action_st, ot, ", ".join(decision_params), ", ".join(action_params))
 
 
@@ -546,9 +577,16 @@ def generate(program: Program, layout: Layout) -> GeneratedProgram:
         writer = _OptionWriter(program, layout, option)
         source = writer.write()
         filename = f"<xabsl:{option.name}>"
-        options[option.name] = GeneratedOption(
-            option.name, filename, source, compile(source, filename, "exec"), writer.origins
-        )
+        try:
+            code = compile(source, filename, "exec")
+        except (SyntaxError, RecursionError, MemoryError) as error:
+            # Only pathological sources get here: expressions nested deeper than CPython's
+            # parser accepts (about 200 levels of parentheses the user wrote).
+            raise CodegenError(
+                f"option {option.name}: an expression is nested too deeply to compile to Python "
+                f"({type(error).__name__}: {getattr(error, 'msg', error)})"
+            ) from None
+        options[option.name] = GeneratedOption(option.name, filename, source, code, writer.origins)
     generated = GeneratedProgram(program, options)
     if len(_CACHE) >= _CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))

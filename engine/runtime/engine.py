@@ -29,14 +29,14 @@ from types import MappingProxyType, SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 from engine.codegen.layout import default_value, engine_order
-from engine.codegen.python import GeneratedProgram, generate
+from engine.codegen.python import CodegenError, GeneratedProgram, generate
 from engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
 from engine.ir.model import Agent, Program
 from engine.runtime.activation import Node, PathPlan, Root, Snapshot, build_tree, compact_path, node_to_dict
 from engine.runtime.bindings import Bindings
 from engine.runtime.checks import Policy, check_root
 from engine.runtime.coop import CoopStates
-from engine.runtime.errors import DebugError, DoubleExecutionError, Fault
+from engine.runtime.errors import DebugError, DoubleExecutionError, Fault, LoadError
 from engine.runtime.linker import Linked, link
 from engine.types import Kind, Ms, Value
 
@@ -258,7 +258,10 @@ class Engine:
         linked = link(program, self.bindings, double_execution_is_error=self.policy is Policy.B2, reuse=reuse)
         for agent in program.agents:
             check_root(program, agent.root, self.policy)
-        generated = generate(program, linked.layout)
+        try:
+            generated = generate(program, linked.layout)
+        except CodegenError as error:
+            raise LoadError(str(error)) from None
         return _Loaded(linked, generated, self)
 
     def load(self, program: Program) -> None:
