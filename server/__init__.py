@@ -5,7 +5,9 @@ One module per concern:
 * ``protocol``  message types, the schema version, close codes, limits (what the UI codes against)
 * ``examples``  adapters from an example folder to a world whose agents run XABSL engines
 * ``demo_world`` a small kinematic world for behaviors without a world of their own (the demo)
-* ``session``   the simulation thread: real time x speed, commands between ticks, hot reload
+* ``worker``    the simulation process: world, engines, commands, one sample per tick
+* ``channel``   the non-blocking pipe between the server and the simulation process
+* ``session``   the server's end of it: starts, restarts and stops the process, records frames
 * ``frames``    per-tick frames: sampling engines, compact encoding, the ring buffer, deltas
 * ``clients``   one websocket client: state, latest-frame slot, bounded control queue, sender
 * ``files``     behavior files: confinement, versions, atomic writes

@@ -5,11 +5,11 @@ lifespan), a :class:`~server.clients.Hub` for the websocket clients, the behavio
 graph cache and the security middleware. Handlers here stay thin: they validate, hand the work
 to the module that owns it, and turn that module's errors into 4xx answers
 (``{"detail": message}``). Anything slow runs off the event loop: compiling in a worker thread,
-engine work in the simulation thread (``Session.submit``), Graphviz in a worker thread.
+engine work in the simulation process (``Session.request``), Graphviz in a worker thread.
 
-Writing a behavior file compiles every behavior the file belongs to and hot-swaps clean ones
-(``Session.apply``); one asyncio lock serialises write + compile + swap so two saves cannot
-interleave their reloads.
+Writing a behavior file compiles every behavior the file belongs to (here, in the server process)
+and hot-swaps clean ones into the simulation (``Session.apply``); one asyncio lock serialises
+write + compile + swap so two saves cannot interleave their reloads.
 """
 
 from __future__ import annotations
@@ -106,8 +106,7 @@ class Studio:
             if command.op is Op.HISTORY:
                 return self.start_history(command, client)
             owner = client.id if client is not None else None
-            result = await asyncio.wrap_future(session.submit(lambda: session.execute(command.op, args, owner)))
-            return True, result, None
+            return True, await session.request(command.op, args, owner), None
         except CommandError as error:
             return False, None, str(error)
 
@@ -143,7 +142,7 @@ class Studio:
         results: dict[str, dict[str, Any]] = {}
         for key in keys:
             compilation = await asyncio.to_thread(session.compile, key)
-            problem = await asyncio.wrap_future(session.submit(lambda c=compilation, k=key: session.apply(k, c)))
+            problem = await session.apply(key, compilation)
             diagnostics = [d.as_dict() for d in compilation.diagnostics]
             results[key] = {"ok": problem is None, "diagnostics": diagnostics, "error": problem}
             if self.hub is not None:
@@ -240,8 +239,7 @@ async def websocket(ws: WebSocket) -> None:
 @router.get("/api/status", tags=["session"])
 async def status(studio: StudioDep) -> dict[str, Any]:
     """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
-    session = studio.session
-    result: dict[str, Any] = await asyncio.wrap_future(session.submit(session.status))
+    result = await studio.session.status()
     result["clients"] = studio.hub.stats() if studio.hub is not None else {}
     result["token_required"] = studio.policy.token is not None
     result["version"] = VERSION
@@ -251,7 +249,8 @@ async def status(studio: StudioDep) -> dict[str, Any]:
 @router.get("/api/structure", tags=["session"])
 async def structure(studio: StudioDep) -> Response:
     """The ``structure`` of the current hello (programs JSON and agents)."""
-    return Response(studio.session.generation.structure_bytes, media_type="application/json")
+    gen = studio.session.generation
+    return Response(gen.structure_bytes if gen is not None else b"{}", media_type="application/json")
 
 
 @router.post("/api/command", tags=["session"])
@@ -278,8 +277,11 @@ async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(
     if t1 < t0:
         raise HTTPException(400, "t1 must not be before t0")
     session = studio.session
+    latest = session.ring.latest
+    if latest is None:
+        return StreamingResponse(iter(()), media_type="application/x-ndjson")
     encoded = frames.history(session.ring, t0, t1)
-    return StreamingResponse(_log_lines(encoded, session.generation), media_type="application/x-ndjson")
+    return StreamingResponse(_log_lines(encoded, latest.gen), media_type="application/x-ndjson")
 
 
 # -- files ------------------------------------------------------------------------------------------
@@ -411,14 +413,14 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     hub.token_required = studio.policy.token is not None
     studio.hub = hub
     session.notify = hub.on_entry
-    if not session.running:
-        session.start()
+    session.on_crash = hub.on_crash
+    await session.start()
     try:
         yield
     finally:
         await hub.close_all()
         session.notify = _ignore
-        session.stop()
+        await session.aclose()
         studio.hub = None
 
 
@@ -484,21 +486,23 @@ def _log_lines(encoded: Iterator[bytes], gen: frames.Generation) -> Iterator[byt
 
 
 class _Names:
-    def __init__(self, codec: frames.ProgramCodec) -> None:
-        program = codec.program
-        self.options = {o.index: o for o in program.options.values()}
-        self.behaviors = {b.index: b.name for b in program.behaviors.values()}
-        self.inputs = {s.index: s.name for s in program.inputs.values()}
-        self.outputs = {s.index: s.name for s in program.outputs.values()}
+    """Id -> name tables of one program, from its program JSON (the hello's structure)."""
+
+    def __init__(self, program: dict[str, Any]) -> None:
+        self.options = {o["id"]: o for o in program["options"]}
+        self.behaviors = {b["id"]: b["name"] for b in program["behaviors"]}
+        self.inputs = {s["id"]: s["name"] for s in program["inputs"]}
+        self.outputs = {s["id"]: s["name"] for s in program["outputs"]}
 
     def node(self, node: list[Any]) -> dict[str, Any]:
         if node[0] == 0:
             _, depth, option_id, state_id, option_time, state_time, decided_in, leaf, params = node
             option = self.options[option_id]
-            return {"depth": depth, "option": option.name, "state": option.states[state_id].name,
+            states = option["states"]
+            return {"depth": depth, "option": option["name"], "state": states[state_id]["name"],
                     "option_time": option_time, "state_time": state_time,
-                    "decided_in": option.states[decided_in].name if decided_in >= 0 else None, "leaf": leaf,
-                    "params": dict(zip((p.name for p in option.params), params, strict=False))}
+                    "decided_in": states[decided_in]["name"] if decided_in >= 0 else None, "leaf": leaf,
+                    "params": dict(zip((p["name"] for p in option["params"]), params, strict=False))}
         _, depth, behavior_id, time, params = node
         return {"depth": depth, "behavior": self.behaviors[behavior_id], "time": time, "params": params}
 
@@ -506,12 +510,12 @@ class _Names:
 def _names(gen: frames.Generation) -> dict[int, _Names]:
     tables: dict[str, _Names] = {}
     result: dict[int, _Names] = {}
-    for index, sampler in enumerate(gen.samplers):
-        if sampler is None:
+    programs = gen.structure["programs"]
+    for agent in gen.structure["agents"]:
+        key = agent["program"]
+        if key is None:
             continue
-        key = sampler.codec.key
         if key not in tables:
-            tables[key] = _Names(sampler.codec)
-        result[index] = tables[key]
+            tables[key] = _Names(programs[key])
+        result[agent["id"]] = tables[key]
     return result
-

@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    print(f"xabsl studio: {example.name} ({len(session.engines)} agents), speed {session.speed:g}x")
+    print(f"xabsl studio: {example.name}, speed {session.speed:g}x (simulation in its own process)")
     print(f"  open  http://{shown}:{args.port}{query}")
     print(f"  API   http://{shown}:{args.port}/api/openapi.json   websocket ws://{shown}:{args.port}/ws")
     if not (web_dist / "index.html").is_file():

@@ -1,7 +1,7 @@
 """Websocket clients: one :class:`Client` per connection, and the :class:`Hub` that feeds them frames.
 
-Backpressure is the point of this module. The simulation thread never waits for a client and a
-client is never queued frames without bound:
+Backpressure is the point of this module. The simulation (its own process) never waits for a
+client and a client is never queued frames without bound:
 
 * each client has a *latest-frame slot* (``Client.target``): the hub overwrites it with the newest
   frame due for that client; the client's sender task sends whatever the slot holds when the
@@ -45,6 +45,7 @@ from server.protocol import (
     Resync,
     ServerMessage,
     Subscribe,
+    event,
     parse_message,
     reply,
 )
@@ -148,6 +149,8 @@ class Client:
                     self.hello_reason = latest.gen.reason
                 if self.hello_reason is not None:
                     gen = latest.gen if latest is not None else hub.session.generation
+                    if gen is None:  # nothing recorded yet (the session is starting)
+                        break
                     await self.send(hub.hello(gen, self.hello_reason))
                     self.hello_reason = None
                     self.last_gen = gen.number
@@ -237,7 +240,7 @@ def _guess_id(text: str) -> Any:
 
 
 class Hub:
-    """All live clients of a session; hands them frames from the simulation thread's ring."""
+    """All live clients of a session; hands them frames from the session's ring."""
 
     def __init__(self, session: Session, loop: asyncio.AbstractEventLoop) -> None:
         self.session = session
@@ -248,10 +251,10 @@ class Hub:
         self._hello_cache: tuple[int, bytes] | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
 
-    # -- from the simulation thread ----------------------------------------------------------------
+    # -- from the session ----------------------------------------------------------------------------
 
     def on_entry(self, entry: Entry) -> None:
-        """Called by the simulation thread after each frame: never blocks, coalesces wake-ups."""
+        """Called after frames were recorded: never blocks, coalesces wake-ups."""
         if not self._scheduled:
             self._scheduled = True
             try:
@@ -269,6 +272,10 @@ class Hub:
         for client in self.clients.values():
             if client.state is ClientState.LIVE and client.due(entry, ticks_per_second):
                 client.offer(entry)
+
+    def on_crash(self, crash: dict[str, Any]) -> None:
+        """The simulation process ended unasked: tell every client (``event`` ``crash``)."""
+        self.broadcast(event("crash", message=crash["message"], seq=crash["seq"], t=crash["t"]))
 
     # -- messages ------------------------------------------------------------------------------------
 
@@ -333,8 +340,7 @@ class Hub:
                     await client.close(CloseCode.NORMAL)
                 client._move(ClientState.CLOSED)
             self.clients.pop(client.id, None)
-            session = self.session
-            session.submit(lambda: session.release_owner(client.id))
+            self.session.release_owner(client.id)
 
     def close_soon(self, client: Client, code: int) -> None:
         task = self.loop.create_task(client.close(code))

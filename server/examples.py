@@ -72,6 +72,8 @@ class SoccerExample:
 
     def __init__(self, root: Path, players_per_team: int = 5, half_duration_s: float = 600.0) -> None:
         self.name = "soccer"
+        #: modules the simulation process imports ahead (the forkserver preloads them once)
+        self.preload = ("examples.soccer.world", "examples.soccer.bindings")
         self.root = root.resolve()
         self.players_per_team = players_per_team
         self.half_duration_s = half_duration_s

@@ -1,17 +1,19 @@
 """Frames: what one tick looked like, sampled from the engines, kept in a ring buffer, sent as deltas.
 
-Three stages, split between the two threads:
+Three stages, split between the two processes (docs/server.md):
 
-1. **Sampling** (simulation thread, every tick): :class:`AgentSampler` turns an engine's activation
-   tree into the compact ``path`` of docs/protocol.md (integer ids) and reads its input and output
-   symbols into tuples of display values (decimals rounded, enums as element indices).
-   :class:`FrameRecorder` compares them with the previous tick and stores, per agent, a bit mask
-   of the symbols that changed, then appends an :class:`Entry` to the :class:`Ring`.
-2. **Storage**: the ring keeps the last ``seconds`` of ticks. Old entries keep only their encoded
+1. **Sampling** (simulation process, ``server.worker``, every tick): :class:`AgentSampler` turns
+   an engine's activation tree into the compact ``path`` of docs/protocol.md (integer ids) and
+   reads its input and output symbols into tuples of display values (decimals rounded, enums as
+   element indices); the tick's sample goes to the server process. There
+   :class:`FrameRecorder` compares the values with the previous sample and stores, per agent, a
+   bit mask of the symbols that changed, encodes the tick's delta (and, every :data:`KEY_EVERY`
+   ticks, a full frame), then appends an :class:`Entry` to the :class:`Ring`.
+2. **Storage** (server process): the ring keeps the last ``seconds`` of ticks. Old entries keep only their encoded
    tick delta (bytes) and, once per :data:`KEY_EVERY` ticks, a full frame; values as Python
    objects are kept only for the most recent :data:`LIVE_ENTRIES` entries, so memory is bounded by
    about ``seconds x behavior_hz x bytes per delta`` (see :meth:`Ring.nbytes`).
-3. **Encoding for a client** (asyncio thread, :class:`FrameEncoder`): a client that last received
+3. **Encoding for a client** (asyncio loop, :class:`FrameEncoder`): a client that last received
    frame L gets frame K with the values of the symbols whose bit is set in any mask of
    (L, K] -- so a client that skips frames still ends with exact values. Clients with the same L,
    K and agent filter share one encoding (a cache per K), which is what makes twenty clients
@@ -25,7 +27,7 @@ from __future__ import annotations
 import operator
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -221,19 +223,27 @@ class AgentSampler:
 
 @dataclass(slots=True)
 class Generation:
-    """The ids in force between two reloads or resets: structure, static scene, codecs, samplers."""
+    """The ids in force between two reloads or resets: structure, static scene, symbol id tables."""
 
     number: int
     reason: str
     structure: dict[str, Any]
     structure_bytes: bytes
     scene_bytes: bytes
-    codecs: dict[str, ProgramCodec]
-    #: per agent (agent id order): its sampler, or None for an agent without engine
-    samplers: list[AgentSampler | None]
     #: per agent: symbol ids of its program (inputs, outputs), aligned with the sampled tuples
-    input_ids: list[tuple[int, ...]]
-    output_ids: list[tuple[int, ...]]
+    input_ids: tuple[tuple[int, ...], ...]
+    output_ids: tuple[tuple[int, ...], ...]
+    #: per agent (agent id order): whether it runs an XABSL engine
+    engines: tuple[bool, ...] = ()
+
+    @classmethod
+    def from_message(cls, message: tuple[Any, ...]) -> Generation:
+        """The generation announced by the simulation process (``("g", number, reason, ...)``)."""
+        _, number, reason, structure_bytes, scene_bytes, input_ids, output_ids, *_ = message
+        structure = orjson.loads(structure_bytes)
+        return cls(number=number, reason=reason, structure=structure, structure_bytes=structure_bytes,
+                   scene_bytes=scene_bytes, input_ids=input_ids, output_ids=output_ids,
+                   engines=tuple(a["program"] is not None for a in structure["agents"]))
 
 
 @dataclass(slots=True, eq=False)
@@ -300,7 +310,7 @@ def encode(
     for i, path in enumerate(entry.paths):
         if i:
             parts.append(b",")
-        if gen.samplers[i] is None:
+        if not gen.engines[i]:
             parts.append(b'{"id":%d,"path":[]}' % i)
             continue
         parts.append(b'{"id":%d,"path":%s' % (i, path))
@@ -321,10 +331,10 @@ def encode(
 
 
 class Ring:
-    """The last ``seconds`` of entries (ticks); appended by the simulation thread only.
+    """The last ``seconds`` of entries (ticks), appended as samples arrive from the simulation.
 
-    Reads from the asyncio thread use single deque operations (atomic under the GIL) and check
-    the seq they got, so an append racing a read is detected instead of misread.
+    Seqs may have gaps (samples the simulation dropped when the server fell behind): lookups
+    check the seq they found, so a gap reads as a missing entry, never as a wrong one.
     """
 
     def __init__(self, seconds: float, behavior_hz: int) -> None:
@@ -384,76 +394,57 @@ class Ring:
 
 
 class FrameRecorder:
-    """Samples every agent after a tick and appends an :class:`Entry` (simulation thread only)."""
+    """Turns the simulation's samples into :class:`Entry` objects and appends them to the ring.
+
+    ``record(gen, sample)`` takes a sample of ``server.worker`` (``("s", seq, gen, t, wall, paused,
+    speed, paths, extras, inputs, outputs, scene, status)``) of generation ``gen``.
+    """
 
     def __init__(self, ring: Ring) -> None:
         self.ring = ring
-        self.seq = 0
-        self._prev_inputs: list[tuple[Value | None, ...]] = []
-        self._prev_outputs: list[tuple[Value | None, ...]] = []
+        self._prev_inputs: tuple[tuple[Value | None, ...], ...] = ()
+        self._prev_outputs: tuple[tuple[Value | None, ...], ...] = ()
         self._prev_status = b""
         self._prev_gen: Generation | None = None
-        self.sample_seconds = 0.0
+        self._last_key = -KEY_EVERY
+        self.record_seconds = 0.0
+        self.recorded = 0
 
-    def record(self, gen: Generation, t: int, scene: Mapping[str, Any], status: Mapping[str, Any]) -> Entry:
+    def record(self, gen: Generation, sample: tuple[Any, ...]) -> Entry:
         started = time.perf_counter()
-        self.seq += 1
-        seq = self.seq
-        samplers = gen.samplers
-        n = len(samplers)
+        _, seq, _, t, wall, _, _, paths, extras, inputs, outputs, scene, status = sample
+        n = len(paths)
         new_gen = gen is not self._prev_gen
-        if new_gen or len(self._prev_inputs) != n:
-            self._prev_inputs = [()] * n
-            self._prev_outputs = [()] * n
-        paths: list[bytes] = []
-        extras: list[bytes] = []
-        inputs: list[tuple[Value | None, ...]] = []
-        outputs: list[tuple[Value | None, ...]] = []
-        in_masks: list[int] = []
-        out_masks: list[int] = []
-        for i, sampler in enumerate(samplers):
-            if sampler is None:
-                paths.append(b"[]")
-                extras.append(b"")
-                inputs.append(())
-                outputs.append(())
-                in_masks.append(0)
-                out_masks.append(0)
-                continue
-            try:
-                path = orjson.dumps(sampler.path())
-            except Exception:  # a broken tree (e.g. a fault mid-tick) must not stop the thread
-                path = b"[]"
-            paths.append(path)
-            extras.append(sampler.extras())
-            ins, outs = sampler.inputs(), sampler.outputs()
-            inputs.append(ins)
-            outputs.append(outs)
-            in_masks.append(_changed(ins, self._prev_inputs[i]))
-            out_masks.append(_changed(outs, self._prev_outputs[i]))
+        prev_inputs, prev_outputs = self._prev_inputs, self._prev_outputs
+        if new_gen or len(prev_inputs) != n:
+            prev_inputs = prev_outputs = ((),) * n
+        in_masks = tuple(map(_changed, inputs, prev_inputs))
+        out_masks = tuple(map(_changed, outputs, prev_outputs))
         self._prev_inputs, self._prev_outputs = inputs, outputs
-        status_bytes = orjson.dumps(status)
         # Clocks (keys ending in _ms) change every tick and are in `t` and the scene already.
-        steady = orjson.dumps({k: v for k, v in status.items() if not k.endswith("_ms")})
+        steady = orjson.dumps({k: v for k, v in orjson.loads(status).items() if not k.endswith("_ms")})
         status_changed = steady != self._prev_status
         self._prev_status = steady
-        key = new_gen or seq % KEY_EVERY == 0
+        # A key frame every KEY_EVERY seqs (and when a dropped sample skipped the due one).
+        key = new_gen or seq % KEY_EVERY == 0 or seq - self._last_key >= KEY_EVERY
+        if key:
+            self._last_key = seq
         entry = Entry(
             seq=seq,
             gen=gen,
             t=t,
-            wall=time.time() * 1000.0,
-            in_masks=tuple(in_masks),
-            out_masks=tuple(out_masks),
+            wall=wall,
+            in_masks=in_masks,
+            out_masks=out_masks,
             status_changed=status_changed,
             key=key,
             delta=b"",
-            paths=tuple(paths),
-            extras=tuple(extras),
-            inputs=tuple(inputs),
-            outputs=tuple(outputs),
-            scene=orjson.dumps(scene),
-            status=status_bytes,
+            paths=paths,
+            extras=extras,
+            inputs=inputs,
+            outputs=outputs,
+            scene=scene,
+            status=status,
         )
         self._prev_gen = gen
         if new_gen:
@@ -465,7 +456,8 @@ class FrameRecorder:
                 entry.full = encode(entry, None, None, None, True)
         entry.nbytes = len(entry.delta) + (len(entry.full) if entry.full is not None and not new_gen else 0) + 200
         self.ring.append(entry)
-        self.sample_seconds += time.perf_counter() - started
+        self.recorded += 1
+        self.record_seconds += time.perf_counter() - started
         return entry
 
 

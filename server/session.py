@@ -1,52 +1,59 @@
-"""The live session: one world stepped by its own thread at real time x speed, steered between ticks.
+"""The live session as the server process sees it: a simulation process, its frames, its commands.
 
-The simulation thread is the only one that touches the world and the engines. Everything else
-(websocket commands, REST writes, hot reloads) hands it a function through a queue and waits on
-a ``concurrent.futures.Future``; the thread runs queued functions between two ticks, so a command
-never sees half a tick. The thread never waits for a client: after each tick it records a frame
-(``frames.FrameRecorder``) and calls ``notify`` (set by the app), which only schedules work on the
-asyncio loop.
+The world and the engines live in a separate process (``server.worker``, started with the
+forkserver or spawn method, never a fork of the running server) so that websocket clients cannot
+slow the simulation through the GIL (docs/server.md). This module is that process's other end:
 
-Timing: ticks are due every ``1 / (behavior_hz x speed)`` wall seconds. A thread that falls more
-than a quarter of a second behind (a slow machine at 20x) drops the backlog instead of bursting,
-so the real-time factor then simply tops out.
+* **frames**: the worker sends one sample per tick over a non-blocking socket
+  (``server.channel``); the asyncio loop reads it with ``add_reader`` (no extra thread), turns it
+  into a ring :class:`~server.frames.Entry` (masks, delta and key frames) and calls ``notify``
+  (the :class:`~server.clients.Hub`). Generation messages (start, reload, reset) come before the
+  first sample of their generation and become :attr:`Session.generation`;
+* **commands**: :meth:`Session.request` sends ``(id, op, args, owner)`` and resolves when the
+  worker answers (the samples a command produced, e.g. by ``step``, arrive before the answer);
+* **compiling** stays here (:meth:`Session.compile`, run in a worker thread by the app); a clean
+  program is pickled to the simulation, which hot-swaps it between two ticks (:meth:`Session.apply`);
+* **crashes**: when the simulation process ends unasked (an exception in the world, a kill), the
+  session keeps serving: status and clients learn why (``on_crash``), the ring stays readable,
+  and ``reset`` starts a new process (same seed unless given) that continues seq and generation.
 
-Compiling is not the thread's business: :meth:`Session.compile` runs anywhere (the app uses a
-worker thread) and :meth:`Session.apply` hot-swaps a clean program into the engines between
-ticks. Forces and input overrides remember which client made them (``owner``) so they can be
-released when that client disconnects.
+Mirrored state (``paused``, ``speed``, ``seed``) follows the samples and answers, so reading it
+never waits for the worker; :meth:`Session.status` asks the worker for its counters.
 """
 
 from __future__ import annotations
 
-import queue
-import threading
-import time
+import asyncio
+import contextlib
+import itertools
+import logging
+import multiprocessing
+import socket
 from collections.abc import Callable, Mapping
-from concurrent.futures import Future
-from dataclasses import dataclass, field
-from typing import Any, TypeVar
-
-import orjson
+from dataclasses import dataclass
+from typing import Any
 
 from engine.emit.json import program_to_json
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, World
-from engine.ir.model import Program, leaf_path
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ
+from engine.ir.model import Program
 from engine.lang import Compilation, compile_file
-from engine.runtime import DebugError, Engine, EngineError
-from engine.types import Kind, Value
+from server import worker
+from server.channel import Channel, ChannelClosed
 from server.examples import BehaviorSource, Example
-from server.frames import AgentSampler, Entry, FrameRecorder, Generation, ProgramCodec, Ring
-from server.protocol import MAX_SPEED, MAX_STEP_TICKS, MIN_SPEED, HelloReason
+from server.frames import Entry, FrameRecorder, Generation, Ring
+from server.protocol import HelloReason, Op
+from server.worker import CommandError, WorkerConfig, check_seed, check_speed
 
-T = TypeVar("T")
+__all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session"]
+
+log = logging.getLogger("xabsl.server")
 
 #: Seconds of ticks the ring buffer keeps.
 RING_SECONDS = 120.0
-
-
-class CommandError(ValueError):
-    """A command that cannot be carried out (bad agent, unknown option, wrong value...)."""
+#: Seconds the simulation process may take to come up (first start of the forkserver included).
+START_TIMEOUT = 60.0
+#: Seconds a stopping simulation process gets before it is terminated, then killed.
+STOP_TIMEOUT = 5.0
 
 
 @dataclass(slots=True)
@@ -72,28 +79,17 @@ class ProgramState:
         }
 
 
-@dataclass(slots=True)
-class _Timing:
-    """Wall and simulated time of the recent ticks, for the real-time factor and tick cost."""
-
-    window: list[tuple[float, float]] = field(default_factory=list)
-    busy: float = 0.0
-    ticks: int = 0
-
-    def add(self, wall: float, sim: float) -> None:
-        self.window.append((wall, sim))
-        if len(self.window) > 400:
-            del self.window[:200]
-
-    def real_time_factor(self) -> float:
-        if len(self.window) < 2:
-            return 0.0
-        (w0, s0), (w1, s1) = self.window[0], self.window[-1]
-        return (s1 - s0) / (w1 - w0) if w1 > w0 else 0.0
+def _context(example: Example) -> Any:
+    """The start method: forkserver where there is one (cheap starts, preloaded modules), else spawn."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(["server.worker", *getattr(example, "preload", ())])
+        return context
+    return multiprocessing.get_context("spawn")
 
 
 class Session:
-    """A running example: world, engines, ring buffer, simulation thread (see the module docstring).
+    """A running example: compiles here, simulates in its own process, records frames here.
 
     Args:
         example: the adapter of the example folder.
@@ -114,30 +110,32 @@ class Session:
     ) -> None:
         self.example = example
         self.seed = seed
-        self.speed = _check_speed(speed)
+        self.speed = check_speed(speed)
         self.behavior_hz = behavior_hz
         self.physics_hz = physics_hz
         self.paused = False
         self.programs: dict[str, ProgramState] = {s.key: ProgramState(s) for s in example.sources}
         self.ring = Ring(ring_seconds, behavior_hz)
         self.recorder = FrameRecorder(self.ring)
-        #: called from the simulation thread after every recorded frame (the app schedules work)
+        #: called on the asyncio loop after the samples that arrived together were recorded
         self.notify: Callable[[Entry], None] = lambda entry: None
-        self.timing = _Timing()
-        self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
-        self._generation_number = 0
-        self._owners: dict[tuple[int, str], str] = {}  # (agent, "root" | input name) -> client
-        self.world: World
-        self.loop: BehaviorLoop
-        self.engines: list[Engine | None] = []
-        self.keys: list[str | None] = []
-        self.generation: Generation
+        #: called on the asyncio loop when the simulation process ended unasked (with crash info)
+        self.on_crash: Callable[[dict[str, Any]], None] = lambda crash: None
+        self.generation: Generation | None = None
+        self.crash: dict[str, Any] | None = None
+        self.restarts = 0
+        self.pid: int | None = None
+        self._process: Any = None
+        self._channel: Channel | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._pending: dict[int, asyncio.Future[tuple[bool, Any, str | None]]] = {}
+        self._ids = itertools.count(1)
+        self._started: asyncio.Future[None] | None = None
+        self._stopping = False
+        self._worker_status: dict[str, Any] = {}
+        self._restart_lock: asyncio.Lock | None = None
         for key in self.programs:
             self._store_compilation(key, self.compile(key))
-        self._build_world(seed)
-        self._new_generation(HelloReason.CONNECT)
 
     # -- compiling -------------------------------------------------------------------------------
 
@@ -154,458 +152,309 @@ class Session:
             state.running = compilation.program
             state.running_json = program_to_json(compilation.program, compilation.source_text)
 
-    # -- world and generations (simulation thread, or before it starts) ---------------------------
-
-    def _build_world(self, seed: int) -> None:
-        world = self.example.build_world(seed)
-        engines: list[Engine | None] = []
-        keys: list[str | None] = []
-        for agent in world.agents:
-            key = self.example.program_key(agent)
-            engine = None
-            if key is not None and key in self.programs:
-                state = self.programs[key]
-                if state.running is not None:
-                    try:
-                        controller, engine = self.example.make_controller(agent, state.running)
-                        agent.controller = controller
-                    except EngineError as error:  # the program does not link with this host
-                        state.error = str(error)
-                        engine = None
-            engines.append(engine)
-            keys.append(key)
-        self.world = world
-        self.engines = engines
-        self.keys = keys
-        self.seed = seed
-        self.loop = BehaviorLoop(world, self.physics_hz, self.behavior_hz)
-        self._owners.clear()
-
-    def _new_generation(self, reason: str) -> Generation:
-        self._generation_number += 1
-        codecs: dict[str, ProgramCodec] = {}
-        samplers: list[AgentSampler | None] = []
-        input_ids: list[tuple[int, ...]] = []
-        output_ids: list[tuple[int, ...]] = []
-        agents = []
-        for index, (agent, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
-            program_key = key if engine is not None else None
-            agents.append({"id": index, "name": agent.name, "team": agent.team, "number": agent.number,
-                           "program": program_key})
-            if engine is None or key is None:
-                samplers.append(None)
-                input_ids.append(())
-                output_ids.append(())
-                continue
-            codec = codecs.get(key)
-            if codec is None or codec.program is not engine.program:
-                codec = codecs[key] = ProgramCodec.build(key, engine.program, engine)
-            samplers.append(AgentSampler(index, engine, codec))
-            input_ids.append(tuple(i for i, *_ in codec.inputs))
-            output_ids.append(tuple(i for i, *_ in codec.outputs))
-        programs = {key: state.running_json for key, state in self.programs.items() if state.running_json is not None}
-        structure = {"programs": programs, "agents": agents}
-        self.generation = Generation(
-            number=self._generation_number,
-            reason=str(reason),
-            structure=structure,
-            structure_bytes=orjson.dumps(structure),
-            scene_bytes=orjson.dumps(self.world.static_scene()),
-            codecs=codecs,
-            samplers=samplers,
-            input_ids=input_ids,
-            output_ids=output_ids,
-        )
-        return self.generation
-
-    def _record(self) -> Entry:
-        world = self.world
-        entry = self.recorder.record(self.generation, self._tick_time(), world.dynamic_scene(), world.status())
-        self.notify(entry)
-        return entry
-
-    def _tick_time(self) -> int:
-        # The clock of the tick just run (the loop's now_ms is already the next tick's).
-        loop = self.loop
-        return loop.start_ms + round(max(loop.ticks - 1, 0) * 1000 / self.behavior_hz)
-
-    def _tick(self) -> Entry:
-        started = time.perf_counter()
-        self.loop.tick()
-        entry = self._record()
-        done = time.perf_counter()
-        self.timing.busy += done - started
-        self.timing.ticks += 1
-        self.timing.add(done, self.loop.sim_seconds)
-        return entry
-
-    # -- the thread --------------------------------------------------------------------------------
-
-    def start(self) -> None:
-        """Record the first frame and start the simulation thread."""
-        assert self._thread is None, "the session runs already"
-        self._record()
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name="xabsl-simulation", daemon=True)
-        self._thread.start()
-
-    def stop(self) -> None:
-        """Stop the simulation thread (waits for the tick in progress)."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
-            self._thread = None
+    # -- the simulation process ----------------------------------------------------------------------
 
     @property
     def running(self) -> bool:
-        return self._thread is not None and self._thread.is_alive()
+        return self._process is not None and self._channel is not None and self.crash is None
 
-    def _run(self) -> None:
-        next_due = time.perf_counter()
-        while not self._stop.is_set():
-            if self.paused or self.world.finished:
-                self._drain(0.05)
-                next_due = time.perf_counter()
-                continue
-            now = time.perf_counter()
-            if now < next_due:
-                self._drain(next_due - now)
-                continue
-            self._tick()
-            next_due += 1.0 / (self.behavior_hz * self.speed)
-            if time.perf_counter() - next_due > 0.25:
-                next_due = time.perf_counter()
-            self._drain(0.0)
+    async def start(self) -> None:
+        """Start the simulation process; returns once its first frame is in the ring."""
+        assert self._process is None, "the session runs already"
+        self._loop = asyncio.get_running_loop()
+        self._restart_lock = asyncio.Lock()
+        self._stopping = False
+        await self._spawn(self.seed, HelloReason.CONNECT)
 
-    def _drain(self, timeout: float) -> None:
+    async def _spawn(self, seed: int, reason: str) -> None:
+        loop = self._loop
+        assert loop is not None
+        latest = self.ring.latest
+        config = WorkerConfig(
+            example=self.example,
+            seed=seed,
+            speed=self.speed,
+            paused=self.paused,
+            behavior_hz=self.behavior_hz,
+            physics_hz=self.physics_hz,
+            programs={key: (state.running, state.running_json) if state.running is not None
+                      and state.running_json is not None else None for key, state in self.programs.items()},
+            seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
+            generation=self.generation.number if self.generation is not None else 0,
+            reason=str(reason),
+        )
+        ours, theirs = socket.socketpair()
+        process = _context(self.example).Process(target=worker.main, args=(theirs, config), daemon=True,
+                                                 name="xabsl-simulation")
         try:
-            item = self._commands.get(timeout=timeout) if timeout > 0 else self._commands.get_nowait()
-        except queue.Empty:
+            await asyncio.to_thread(process.start)
+        finally:
+            theirs.close()
+        channel = Channel(ours)
+        self._process, self._channel, self.pid = process, channel, process.pid
+        self._started = loop.create_future()
+        self.crash = None
+        loop.add_reader(channel.fileno(), self._on_readable)
+        try:
+            await asyncio.wait_for(asyncio.shield(self._started), START_TIMEOUT)
+        except TimeoutError:
+            raise RuntimeError("the simulation process did not start") from None
+
+    def _on_readable(self) -> None:
+        channel = self._channel
+        if channel is None:
             return
-        while True:
-            fn, future = item
-            if future.set_running_or_notify_cancel():
-                try:
-                    future.set_result(fn())
-                except BaseException as error:  # handed to the waiting caller, never kills the thread
-                    future.set_exception(error)
-            try:
-                item = self._commands.get_nowait()
-            except queue.Empty:
-                return
+        try:
+            messages = channel.receive()
+        except ChannelClosed:
+            self._ended()
+            return
+        latest: Entry | None = None
+        for message in messages:
+            kind = message[0]
+            if kind == "s":
+                if self.generation is None or message[2] != self.generation.number:
+                    continue  # never expected: a sample always follows its generation
+                latest = self.recorder.record(self.generation, message)
+                self.paused, self.speed = message[5], message[6]
+            elif kind == "r":
+                future = self._pending.pop(message[1], None)
+                if future is not None and not future.done():
+                    future.set_result((message[2], message[3], message[4]))
+            elif kind == "g":
+                self.generation = Generation.from_message(message)
+                self.seed = message[7]
+                for key, error in message[8].items():
+                    if key in self.programs:
+                        self.programs[key].error = error
+            elif kind == "crash":
+                _, text, trace, seq, t = message
+                self.crash = {"message": text, "traceback": trace, "seq": seq, "t": t}
+                log.error("the simulation stopped: %s\n%s", text, trace)
+        if latest is not None:
+            if self._started is not None and not self._started.done():
+                self._started.set_result(None)
+            self.notify(latest)
 
-    def submit(self, fn: Callable[[], T]) -> Future[T]:
-        """Run ``fn`` in the simulation thread between two ticks; its result or error in the future.
+    def _ended(self) -> None:
+        """The simulation process closed its end: asked to (stop) or not (a crash)."""
+        loop, channel, process = self._loop, self._channel, self._process
+        if channel is not None and loop is not None:
+            with contextlib.suppress(Exception):
+                loop.remove_reader(channel.fileno())
+            with contextlib.suppress(Exception):
+                loop.remove_writer(channel.fileno())
+            channel.close()
+        self._channel = None
+        if process is not None:
+            process.join(timeout=1.0)  # it closed the socket on its way out: this is quick
+            code = process.exitcode
+        else:
+            code = None
+        if not self._stopping and self.crash is None:
+            self.crash = {"message": f"the simulation process ended (exit code {code})", "traceback": None,
+                          "seq": self.ring.latest.seq if self.ring.latest else 0, "t": None}
+        if self.crash is not None:
+            self.crash["exit_code"] = code
+        for future in self._pending.values():
+            if not future.done():
+                future.set_exception(CommandError(self._stopped_message()))
+        self._pending.clear()
+        if self._started is not None and not self._started.done():
+            self._started.set_exception(RuntimeError(self._stopped_message()))
+        if not self._stopping and self.crash is not None:
+            self.on_crash(self.crash)
 
-        Before :meth:`start` (and after :meth:`stop`) ``fn`` runs at once in the caller's thread.
-        """
-        future: Future[T] = Future()
-        if not self.running:
-            future.set_running_or_notify_cancel()
-            try:
-                future.set_result(fn())
-            except BaseException as error:
-                future.set_exception(error)
-            return future
-        self._commands.put((fn, future))
-        return future
+    def _stopped_message(self) -> str:
+        if self.crash is None:
+            return "the simulation is stopping"
+        return f"the simulation stopped: {self.crash['message']}; reset starts it again"
 
-    # -- commands (run by the simulation thread through submit) ---------------------------------------
+    async def aclose(self) -> None:
+        """Stop the simulation process (on the loop that started it); no zombie is left."""
+        self._stopping = True
+        channel, loop = self._channel, self._loop
+        if channel is not None and loop is not None:
+            with contextlib.suppress(Exception):
+                loop.remove_reader(channel.fileno())
+            with contextlib.suppress(Exception):
+                loop.remove_writer(channel.fileno())
+            with contextlib.suppress(ChannelClosed, OSError):
+                channel.send(("stop",))
+                channel.flush()
+        await asyncio.to_thread(self.stop)
 
-    def execute(self, op: str, args: Mapping[str, Any], owner: str | None = None) -> Any:
-        """Carry out one command (docs/protocol.md); must run in the simulation thread.
+    def stop(self) -> None:
+        """Stop the simulation process from any thread (waits, then terminates, then kills)."""
+        self._stopping = True
+        process, channel = self._process, self._channel
+        if channel is not None:
+            with contextlib.suppress(ChannelClosed, OSError):
+                channel.send(("stop",))
+                channel.flush()
+        if process is not None:
+            process.join(timeout=STOP_TIMEOUT)
+            if process.is_alive():
+                process.terminate()
+                process.join(timeout=STOP_TIMEOUT)
+            if process.is_alive():
+                process.kill()
+                process.join(timeout=STOP_TIMEOUT)
+        if channel is not None:
+            channel.close()
+        self._channel = None
+        self._process = None
+        for future in list(self._pending.values()):
+            if not future.done() and self._loop is not None and not self._loop.is_closed():
+                with contextlib.suppress(RuntimeError):
+                    self._loop.call_soon_threadsafe(_fail, future, CommandError("the session stopped"))
+        self._pending.clear()
+
+    # -- commands ----------------------------------------------------------------------------------
+
+    async def request(self, op: str, args: Mapping[str, Any], owner: str | None = None) -> Any:
+        """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
-            CommandError: bad arguments; the session is unchanged.
+            CommandError: bad arguments, or the simulation is not running (crashed) and the
+                command needs it.
         """
-        handler = getattr(self, f"_op_{op}", None)
-        if handler is None:
-            raise CommandError(f"unknown op {op!r}")
-        try:
-            return handler(args, owner)
-        except (DebugError, EngineError) as error:
-            raise CommandError(str(error)) from None
-
-    def _op_pause(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        self.paused = True
-        return {"paused": True}
-
-    def _op_resume(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        self.paused = False
-        return {"paused": False}
-
-    def _op_step(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        ticks = args.get("ticks", 1)
-        if isinstance(ticks, bool) or not isinstance(ticks, int) or not 1 <= ticks <= MAX_STEP_TICKS:
-            raise CommandError(f"ticks must be an integer in 1..{MAX_STEP_TICKS}")
-        if not self.paused:
-            raise CommandError("step works while the session is paused")
-        entry = None
-        for _ in range(ticks):
-            if self.world.finished:
-                break
-            entry = self._tick()
-        latest = entry or self.ring.latest
-        return {"seq": latest.seq if latest else 0, "t": latest.t if latest else 0}
-
-    def _op_speed(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        try:
-            self.speed = _check_speed(args.get("speed"))
-        except ValueError as error:
-            raise CommandError(str(error)) from None
-        return {"speed": self.speed}
-
-    def _op_reset(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        seed = args.get("seed", self.seed)
-        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
-            raise CommandError("seed must be an integer in 0..2**32-1")
-        self._build_world(seed)
-        self._new_generation(HelloReason.RESET)
-        self._record()
-        return {"seed": seed}
-
-    def _op_select_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        _, engine, _ = self._agent(args)
-        name = args.get("name")
-        if not isinstance(name, str):
-            raise CommandError("name (an XABSL agent of the program) is required")
-        engine.select_agent(name)
-        return None
-
-    def _op_force_option(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        option = self._named(args.get("option"), codec.option_ids, "option")
-        params = self._params(args.get("params"), codec.program.options[option].params, codec)
-        engine.debug.force_option(option, params)
-        self._own(index, "root", owner)
-        return None
-
-    def _op_force_behavior(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        behavior = self._named(args.get("behavior"), codec.behavior_ids, "basic behavior")
-        params = self._params(args.get("params"), codec.program.behaviors[behavior].params, codec)
-        engine.debug.force_behavior(behavior, params)
-        self._own(index, "root", owner)
-        return None
-
-    def _op_release(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, _ = self._agent(args)
-        engine.debug.release()
-        self._owners.pop((index, "root"), None)
-        return None
-
-    def _op_override_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        ids = {s.name: s.index for s in codec.program.inputs.values()}
-        name = self._named(args.get("symbol"), ids, "input symbol")
-        symbol = codec.program.inputs[name]
-        if "value" not in args:
-            raise CommandError("value is required")
-        engine.debug.override_input(name, self._value(args["value"], symbol.kind, symbol.enum, codec, name))
-        self._own(index, "input:" + name, owner)
-        return None
-
-    def _op_release_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        if args.get("symbol") is None:
-            engine.debug.release_inputs()
-            for key in [k for k in self._owners if k[0] == index and k[1].startswith("input:")]:
-                del self._owners[key]
-            return None
-        ids = {s.name: s.index for s in codec.program.inputs.values()}
-        name = self._named(args.get("symbol"), ids, "input symbol")
-        engine.debug.release_input(name)
-        self._owners.pop((index, "input:" + name), None)
-        return None
-
-    def _op_reset_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        _, engine, _ = self._agent(args)
-        engine.debug.reset()
-        return None
-
-    def _op_explain(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        _, engine, codec = self._agent(args)
-        option = self._named(args.get("option"), codec.option_ids, "option")
-        explanation = engine.debug.explain(option)
-        states = codec.state_ids[option]
-        ir_option = codec.program.options[option]
-        decided = ir_option.state(explanation.decided_in)
-        # The leaf's own span, so the editor can point at the transition that fired.
-        leaf_span = None
-        try:
-            path = leaf_path(decided.decision, explanation.leaf)
-            node: Any = decided.decision
-            for _, branch in path:
-                node = node.then if branch else node.otherwise
-            leaf_span = node.span.as_dict() if node.span else None
-        except KeyError:
-            pass
-        return {
-            "option": codec.option_ids[option],
-            "option_name": option,
-            "decided_in": states[explanation.decided_in],
-            "decided_in_name": explanation.decided_in,
-            "leaf": explanation.leaf,
-            "target": states.get(explanation.target, -1),
-            "target_name": explanation.target,
-            "stay": explanation.stay,
-            "leaf_span": leaf_span,
-            "conditions": [
-                {"text": c.text, "source": c.source, "value": _plain(c.value), "branch": c.branch,
-                 "span": c.span.as_dict() if c.span else None}
-                for c in explanation.conditions
-            ],
-        }
-
-    def _op_status(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        return self.status()
-
-    # -- helpers for commands -----------------------------------------------------------------------
-
-    def _agent(self, args: Mapping[str, Any]) -> tuple[int, Engine, ProgramCodec]:
-        index = args.get("agent")
-        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(self.engines):
-            raise CommandError(f"agent must be an agent id in 0..{len(self.engines) - 1}")
-        engine = self.engines[index]
-        sampler = self.generation.samplers[index]
-        if engine is None or sampler is None:
-            raise CommandError(f"agent {index} runs no XABSL engine")
-        return index, engine, sampler.codec
-
-    @staticmethod
-    def _named(value: Any, ids: Mapping[str, int], what: str) -> str:
-        if isinstance(value, str):
-            if value not in ids:
-                raise CommandError(f"unknown {what} {value!r}")
-            return value
-        if isinstance(value, int) and not isinstance(value, bool):
-            for name, i in ids.items():
-                if i == value:
-                    return name
-            raise CommandError(f"unknown {what} id {value}")
-        raise CommandError(f"{what} must be a name or an id")
-
-    def _params(self, given: Any, declared: Any, codec: ProgramCodec) -> dict[str, Value | str]:
-        if given is None:
-            return {}
-        if not isinstance(given, dict):
-            raise CommandError("params must be an object of parameter values")
-        by_name = {p.name: p for p in declared}
-        by_short = {p.name.rsplit(".", 1)[-1]: p for p in declared}
-        result: dict[str, Value | str] = {}
-        for key, value in given.items():
-            param = by_name.get(key) or by_short.get(key)
-            if param is None:
-                raise CommandError(f"no parameter {key!r}")
-            result[param.name] = self._value(value, param.kind, param.enum, codec, param.name)
+        if op == Op.RESET and self.crash is not None and not self._stopping:
+            return await self._restart(args)
+        if op == Op.STATUS:
+            return await self.status()
+        ok, result, error = await self._send(op, args, owner)
+        if not ok:
+            raise CommandError(error)
         return result
 
-    @staticmethod
-    def _value(value: Any, kind: Kind, enum: str | None, codec: ProgramCodec, name: str) -> Value | str:
-        if kind is Kind.ENUM and isinstance(value, int) and not isinstance(value, bool):
-            element = codec.element(enum, value)
-            if element is None:
-                raise CommandError(f"{name}: no element {value} in enum {enum}")
-            return element
-        if kind is Kind.DECIMAL and isinstance(value, int | float) and not isinstance(value, bool):
-            return float(value)
-        return value
+    async def _send(self, op: str, args: Mapping[str, Any], owner: str | None) -> tuple[bool, Any, str | None]:
+        channel, loop = self._channel, self._loop
+        if channel is None or loop is None or self.crash is not None:
+            raise CommandError(self._stopped_message())
+        ident = next(self._ids)
+        future: asyncio.Future[tuple[bool, Any, str | None]] = loop.create_future()
+        self._pending[ident] = future
+        try:
+            channel.send(("c", ident, str(op), dict(args), owner))
+        except ChannelClosed:
+            self._pending.pop(ident, None)
+            raise CommandError(self._stopped_message()) from None
+        self._watch_backlog()
+        return await future
 
-    def _own(self, agent: int, what: str, owner: str | None) -> None:
-        if owner is None:
-            self._owners.pop((agent, what), None)
-        else:
-            self._owners[(agent, what)] = owner
+    def _watch_backlog(self) -> None:
+        channel, loop = self._channel, self._loop
+        if channel is None or loop is None or not channel.backlog:
+            return
 
-    def release_owner(self, owner: str) -> int:
-        """Release every force and override ``owner`` made and nobody changed since (sim thread)."""
-        released = 0
-        for (agent, what), who in list(self._owners.items()):
-            if who != owner:
-                continue
-            del self._owners[(agent, what)]
-            engine = self.engines[agent]
-            if engine is None:
-                continue
+        def flush() -> None:
             try:
-                if what == "root":
-                    engine.debug.release()
-                else:
-                    engine.debug.release_input(what.removeprefix("input:"))
-                released += 1
-            except (DebugError, EngineError):
-                continue
-        return released
+                done = channel.flush()
+            except ChannelClosed:
+                done = True
+            if done:
+                loop.remove_writer(channel.fileno())
+
+        loop.add_writer(channel.fileno(), flush)
+
+    async def _restart(self, args: Mapping[str, Any]) -> Any:
+        """``reset`` after a crash: a new simulation process (same seed unless given)."""
+        seed = check_seed(args.get("seed", self.seed))
+        assert self._restart_lock is not None
+        async with self._restart_lock:
+            if self.crash is not None:
+                if self._process is not None:
+                    await asyncio.to_thread(self._process.join, STOP_TIMEOUT)
+                self._process = None
+                self.restarts += 1
+                await self._spawn(seed, HelloReason.RESET)
+        return {"seed": seed}
+
+    def release_owner(self, owner: str) -> None:
+        """Release what client ``owner`` forced and overrode (it disconnected); no answer awaited."""
+        channel = self._channel
+        if channel is None or self.crash is not None:
+            return
+        with contextlib.suppress(ChannelClosed):
+            channel.send(("c", None, "release_owner", {}, owner))
+            self._watch_backlog()
 
     # -- hot reload ----------------------------------------------------------------------------------
 
-    def apply(self, key: str, compilation: Compilation) -> str | None:
-        """Store a compile of ``key``; when clean, hot-swap it into the engines (simulation thread).
+    async def apply(self, key: str, compilation: Compilation) -> str | None:
+        """Store a compile of ``key``; when clean, hot-swap it into the simulation's engines.
 
         Returns:
-            None when swapped (or nothing to swap), else why the running behavior was kept.
+            None when swapped (or stored for the next start), else why the running behavior was kept.
         """
-        program = compilation.program
         state = self.programs[key]
         state.compilation = compilation
+        program = compilation.program
         if program is None:
             return "the behavior has errors; the running version is kept"
-        reloaded: list[Engine] = []
-        try:
-            for index, engine in enumerate(self.engines):
-                if self.keys[index] != key:
-                    continue
-                if engine is None:
-                    agent = self.world.agents[index]
-                    controller, engine = self.example.make_controller(agent, program)
-                    agent.controller = controller
-                    self.engines[index] = engine
-                else:
-                    engine.reload(program)
-                reloaded.append(engine)
-        except EngineError as error:
-            # Engines are reloaded one by one; with one host they fail alike, so the first fails.
-            state.error = str(error)
-            return f"the behavior does not run on this host: {error}"
+        program_json = program_to_json(program, compilation.source_text)
+        if self.running:
+            ok, problem, error = await self._send("apply", {"key": key, "program": program, "json": program_json},
+                                                  None)
+            if not ok:
+                raise CommandError(error)
+            if problem is not None:
+                state.error = problem
+                return str(problem)
         state.error = None
         state.running = program
-        state.running_json = program_to_json(program, compilation.source_text)
-        self._new_generation(HelloReason.RELOAD)
-        self._record()
+        state.running_json = program_json
         return None
 
     # -- status ----------------------------------------------------------------------------------------
 
-    def status(self) -> dict[str, Any]:
+    async def status(self) -> dict[str, Any]:
+        """The session status (``GET /api/status``): the simulation's counters and the server's."""
+        if self.running:
+            try:
+                ok, answer, _ = await self._send(Op.STATUS, {}, None)
+                if ok:
+                    self._worker_status = answer
+            except CommandError:
+                pass
+        sim = dict(self._worker_status)
         latest = self.ring.latest
         ring_entries = len(self.ring)
+        gen = self.generation
         return {
             "example": self.example.name,
             "paused": self.paused,
-            "finished": self.world.finished,
+            "finished": sim.get("finished", False),
             "speed": self.speed,
             "seed": self.seed,
             "behavior_hz": self.behavior_hz,
             "seq": latest.seq if latest else 0,
             "t": latest.t if latest else 0,
-            "generation": self.generation.number,
-            "real_time_factor": round(self.timing.real_time_factor(), 3),
-            "tick_ms": round(1000 * self.timing.busy / self.timing.ticks, 3) if self.timing.ticks else 0.0,
-            # raw counters, for windowed measurements (benchmarks/stream_load.py)
-            "timing": {"ticks": self.timing.ticks, "busy_seconds": self.timing.busy,
-                       "sim_seconds": self.loop.sim_seconds, "frame_seconds": self.recorder.sample_seconds},
+            "generation": gen.number if gen is not None else 0,
+            "real_time_factor": sim.get("real_time_factor", 0.0) if self.running else 0.0,
+            "tick_ms": sim.get("tick_ms", 0.0),
+            # raw counters of the simulation process, for windowed measurements (benchmarks/stream_load.py)
+            "timing": sim.get("timing", {}),
             "ring": {"frames": ring_entries, "capacity": self.ring.capacity,
-                     "seconds": round(ring_entries / self.behavior_hz, 1), "bytes": self.ring.nbytes()},
+                     "seconds": round(ring_entries / self.behavior_hz, 1), "bytes": self.ring.nbytes(),
+                     "record_seconds": self.recorder.record_seconds, "recorded": self.recorder.recorded},
+            "simulation": {"running": self.running, "pid": self.pid, "restarts": self.restarts,
+                           "crash": self.crash, "pipe": sim.get("pipe", {})},
             "programs": {key: state.as_dict() for key, state in self.programs.items()},
-            "world": self.world.status(),
+            "world": sim.get("world") or _latest_world(latest),
         }
 
 
-def _check_speed(speed: Any) -> float:
-    if isinstance(speed, bool) or not isinstance(speed, int | float) or not MIN_SPEED <= speed <= MAX_SPEED:
-        raise ValueError(f"speed must be a number in {MIN_SPEED:g}..{MAX_SPEED:g}")
-    return float(speed)
+def _latest_world(latest: Entry | None) -> dict[str, Any]:
+    import orjson
+
+    if latest is None or not latest.status:
+        return {}
+    world: dict[str, Any] = orjson.loads(latest.status)
+    return world
 
 
-def _plain(value: Any) -> Any:
-    return value if isinstance(value, bool | int | float | str) or value is None else str(value)
+def _fail(future: asyncio.Future[Any], error: BaseException) -> None:
+    if not future.done():
+        future.set_exception(error)

@@ -8,15 +8,39 @@ from pathlib import Path
 import orjson
 
 from server.examples import DemoExample
-from server.frames import FrameEncoder, history
+from server.frames import Entry, FrameEncoder, FrameRecorder, Generation, Ring, history
 from server.protocol import FULL_EVERY
 from server.session import Session
+from server.worker import Simulation, WorkerConfig
 
 
-def _session(demo_dir: Path, ring_seconds: float = 120.0) -> Session:
-    session = Session(DemoExample(demo_dir), seed=4, ring_seconds=ring_seconds)
-    session._record()
-    return session
+class _Recorded:
+    """The simulation's core and the server's recorder joined in one process (no pipe between)."""
+
+    def __init__(self, demo_dir: Path, ring_seconds: float) -> None:
+        session = Session(DemoExample(demo_dir), seed=4)  # compiles; its process is never started
+        programs = {k: (s.running, s.running_json) for k, s in session.programs.items()}
+        self.sim = Simulation(WorkerConfig(session.example, seed=4, programs=programs))  # type: ignore[arg-type]
+        self.ring = Ring(ring_seconds, self.sim.behavior_hz)
+        self.recorder = FrameRecorder(self.ring)
+        self.sim.emit = self._emit
+        self._emit(self.sim.generation("connect"))
+        self._emit(self.sim.sample())
+
+    def _emit(self, message: tuple, droppable: bool = False) -> bool:
+        if message[0] == "g":
+            self.generation = Generation.from_message(message)
+        elif message[0] == "s":
+            self.latest = self.recorder.record(self.generation, message)
+        return True
+
+    def _tick(self) -> Entry:
+        self._emit(self.sim.tick())
+        return self.latest
+
+
+def _session(demo_dir: Path, ring_seconds: float = 120.0) -> _Recorded:
+    return _Recorded(demo_dir, ring_seconds)
 
 
 def _apply(state: dict[int, dict[str, dict[str, object]]], frame: dict) -> None:

@@ -1,0 +1,633 @@
+"""The simulation process: one world and its XABSL engines, stepped at real time x speed (§2.2 one tick).
+
+The studio server (``server.session``) starts :func:`main` in a process of its own (forkserver or
+spawn, never a fork of the server) so that websocket clients can never slow the simulation
+through the GIL. This process owns everything that touches the world and the engines:
+
+* :class:`Simulation`: the world, the :class:`~engine.host.BehaviorLoop`, the engines, the
+  hot swap of programs compiled by the server, the commands (``_op_*``) and who forced what;
+* per tick, one compact *sample* (:data:`Sample`): seq, generation, clocks, and per agent the
+  activation path (JSON bytes), the extras (fault, force, overrides), the input and output
+  values as tuples; the dynamic scene and the world status (JSON bytes). Everything per client
+  (masks, deltas, full frames, the ring buffer, history) happens in the server process;
+* a *generation* message (:meth:`Simulation.generation`) whenever the ids change (start, reload,
+  reset): structure bytes, static scene bytes, the symbol id tables, sent before its first sample.
+
+The loop (:func:`run`) ticks when a tick is due and otherwise waits on the channel for commands
+(``("c", id, op, args, owner)``), answered with ``("r", id, ok, result, error)`` after the samples
+the command produced. Samples are droppable (``server.channel``): a server that falls behind
+never blocks a tick. An exception escaping the world ends the process after a ``("crash", ...)``
+message; the server reports it and starts a fresh process on ``reset``.
+
+Timing: ticks are due every ``1 / (behavior_hz x speed)`` wall seconds; more than a quarter of a
+second behind (a slow machine at 20x), the backlog is dropped instead of burst through.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import signal
+import socket
+import sys
+import time
+import traceback
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import orjson
+
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, World
+from engine.ir.model import Program, leaf_path
+from engine.runtime import DebugError, Engine, EngineError
+from engine.types import Kind, Value
+from server.channel import Channel, ChannelClosed
+from server.examples import Example
+from server.frames import AgentSampler, ProgramCodec
+from server.protocol import MAX_SPEED, MAX_STEP_TICKS, MIN_SPEED, HelloReason
+
+#: ``(seq, gen, t, wall_ms, paused, speed, paths, extras, inputs, outputs, scene, status)``:
+#: one tick as the worker sends it (tag ``"s"`` in front); see the module docstring.
+Sample = tuple[Any, ...]
+
+
+class CommandError(ValueError):
+    """A command that cannot be carried out (bad agent, unknown option, wrong value...)."""
+
+
+@dataclass(slots=True)
+class WorkerConfig:
+    """What a simulation process starts from (pickled to it)."""
+
+    example: Example
+    seed: int = 1
+    speed: float = 1.0
+    paused: bool = False
+    behavior_hz: int = DEFAULT_BEHAVIOR_HZ
+    physics_hz: int = DEFAULT_PHYSICS_HZ
+    #: per behavior key: the running program and its program JSON (None: not compiled clean)
+    programs: dict[str, tuple[Program, dict[str, Any]] | None] = field(default_factory=dict)
+    #: the last seq and generation number sent (a restarted worker continues the numbering)
+    seq: int = 0
+    generation: int = 0
+    #: the ``hello`` reason of the first generation (``reset`` when restarted after a crash)
+    reason: str = HelloReason.CONNECT
+
+
+@dataclass(slots=True)
+class _Timing:
+    """Wall and simulated time of the recent ticks, for the real-time factor and tick cost."""
+
+    window: list[tuple[float, float]] = field(default_factory=list)
+    busy: float = 0.0
+    cpu: float = 0.0
+    sample: float = 0.0
+    ticks: int = 0
+
+    def add(self, wall: float, sim: float) -> None:
+        self.window.append((wall, sim))
+        if len(self.window) > 400:
+            del self.window[:200]
+
+    def real_time_factor(self) -> float:
+        if len(self.window) < 2:
+            return 0.0
+        (w0, s0), (w1, s1) = self.window[0], self.window[-1]
+        return (s1 - s0) / (w1 - w0) if w1 > w0 else 0.0
+
+
+class Simulation:
+    """A running example without any client: world, engines, samples, commands.
+
+    Args:
+        config: example, seed, speed, rates, the programs to run and where numbering continues.
+    """
+
+    def __init__(self, config: WorkerConfig) -> None:
+        self.example = config.example
+        self.seed = config.seed
+        self.speed = config.speed
+        self.paused = config.paused
+        self.behavior_hz = config.behavior_hz
+        self.physics_hz = config.physics_hz
+        self.programs = dict(config.programs)
+        self.errors: dict[str, str | None] = dict.fromkeys(self.programs)
+        self.seq = config.seq
+        self.generation_number = config.generation
+        self.timing = _Timing()
+        self._owners: dict[tuple[int, str], str] = {}  # (agent, "root" | input name) -> client
+        self.world: World
+        self.loop: BehaviorLoop
+        self.engines: list[Engine | None] = []
+        self.keys: list[str | None] = []
+        self.samplers: list[AgentSampler | None] = []
+        self.reason = str(config.reason)
+        #: the channel to the server (its counters show in the status), None in tests
+        self.channel: Channel | None = None
+        #: where generation messages and samples produced by commands go: ``emit(message,
+        #: droppable) -> sent``; the process loop sends them, tests may collect them
+        self.emit: Callable[[tuple[Any, ...], bool], bool] = _collect
+        self._build_world(self.seed)
+
+    # -- world and generations ---------------------------------------------------------------------
+
+    def _build_world(self, seed: int) -> None:
+        world = self.example.build_world(seed)
+        engines: list[Engine | None] = []
+        keys: list[str | None] = []
+        for agent in world.agents:
+            key = self.example.program_key(agent)
+            engine = None
+            running = self.programs.get(key) if key is not None else None
+            if running is not None:
+                try:
+                    controller, engine = self.example.make_controller(agent, running[0])
+                    agent.controller = controller
+                except EngineError as error:  # the program does not link with this host
+                    self.errors[key] = str(error)  # type: ignore[index]
+                    engine = None
+            engines.append(engine)
+            keys.append(key)
+        self.world = world
+        self.engines = engines
+        self.keys = keys
+        self.seed = seed
+        self.loop = BehaviorLoop(world, self.physics_hz, self.behavior_hz)
+        self._owners.clear()
+
+    def generation(self, reason: str) -> tuple[Any, ...]:
+        """Start a new generation of ids; returns its message (``"g"``) for the server."""
+        self.generation_number += 1
+        self.reason = str(reason)
+        codecs: dict[str, ProgramCodec] = {}
+        samplers: list[AgentSampler | None] = []
+        input_ids: list[tuple[int, ...]] = []
+        output_ids: list[tuple[int, ...]] = []
+        agents = []
+        for index, (agent, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
+            program_key = key if engine is not None else None
+            agents.append({"id": index, "name": agent.name, "team": agent.team, "number": agent.number,
+                           "program": program_key})
+            if engine is None or key is None:
+                samplers.append(None)
+                input_ids.append(())
+                output_ids.append(())
+                continue
+            codec = codecs.get(key)
+            if codec is None or codec.program is not engine.program:
+                codec = codecs[key] = ProgramCodec.build(key, engine.program, engine)
+            samplers.append(AgentSampler(index, engine, codec))
+            input_ids.append(tuple(i for i, *_ in codec.inputs))
+            output_ids.append(tuple(i for i, *_ in codec.outputs))
+        self.samplers = samplers
+        programs = {key: running[1] for key, running in self.programs.items() if running is not None}
+        structure = {"programs": programs, "agents": agents}
+        return ("g", self.generation_number, self.reason, orjson.dumps(structure),
+                orjson.dumps(self.world.static_scene()), tuple(input_ids), tuple(output_ids), self.seed,
+                dict(self.errors))
+
+    def _tick_time(self) -> int:
+        # The clock of the tick just run (the loop's now_ms is already the next tick's).
+        loop = self.loop
+        return loop.start_ms + round(max(loop.ticks - 1, 0) * 1000 / self.behavior_hz)
+
+    def sample(self) -> Sample:
+        """The sample of the tick just run (without running one: after a reload or reset too)."""
+        started = time.perf_counter()
+        self.seq += 1
+        paths: list[bytes] = []
+        extras: list[bytes] = []
+        inputs: list[tuple[Value | None, ...]] = []
+        outputs: list[tuple[Value | None, ...]] = []
+        dumps = orjson.dumps
+        for sampler in self.samplers:
+            if sampler is None:
+                paths.append(b"[]")
+                extras.append(b"")
+                inputs.append(())
+                outputs.append(())
+                continue
+            try:
+                paths.append(dumps(sampler.path()))
+            except Exception:  # a broken tree (e.g. a fault mid-tick) must not stop the simulation
+                paths.append(b"[]")
+            extras.append(sampler.extras())
+            inputs.append(sampler.inputs())
+            outputs.append(sampler.outputs())
+        world = self.world
+        sample = ("s", self.seq, self.generation_number, self._tick_time(), time.time() * 1000.0, self.paused,
+                  self.speed, tuple(paths), tuple(extras), tuple(inputs), tuple(outputs),
+                  dumps(world.dynamic_scene()), dumps(world.status()))
+        self.timing.sample += time.perf_counter() - started
+        return sample
+
+    def tick(self) -> Sample:
+        """Run one behavior tick (engines + physics) and sample it."""
+        started = time.perf_counter()
+        cpu = time.thread_time()
+        self.loop.tick()
+        sample = self.sample()
+        done = time.perf_counter()
+        timing = self.timing
+        timing.busy += done - started
+        timing.cpu += time.thread_time() - cpu
+        timing.ticks += 1
+        timing.add(done, self.loop.sim_seconds)
+        return sample
+
+    # -- commands ---------------------------------------------------------------------------------
+
+    def execute(self, op: str, args: Mapping[str, Any], owner: str | None = None) -> Any:
+        """Carry out one command (docs/protocol.md); generations and samples it makes go to :attr:`emit`.
+
+        Raises:
+            CommandError: bad arguments; the simulation is unchanged.
+        """
+        handler = getattr(self, f"_op_{op}", None)
+        if handler is None:
+            raise CommandError(f"unknown op {op!r}")
+        try:
+            return handler(args, owner)
+        except (DebugError, EngineError) as error:
+            raise CommandError(str(error)) from None
+
+    def _op_pause(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        self.paused = True
+        return {"paused": True}
+
+    def _op_resume(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        self.paused = False
+        return {"paused": False}
+
+    def _op_step(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        ticks = args.get("ticks", 1)
+        if isinstance(ticks, bool) or not isinstance(ticks, int) or not 1 <= ticks <= MAX_STEP_TICKS:
+            raise CommandError(f"ticks must be an integer in 1..{MAX_STEP_TICKS}")
+        if not self.paused:
+            raise CommandError("step works while the session is paused")
+        sample = None
+        sent = True
+        for _ in range(ticks):
+            if self.world.finished:
+                break
+            sample = self.tick()
+            sent = self.emit(sample, True)
+        if sample is not None and not sent:  # the state a paused client looks at must arrive
+            self.emit(sample, False)
+        if sample is None:
+            return {"seq": self.seq, "t": self._tick_time() if self.loop.ticks else 0}
+        return {"seq": sample[1], "t": sample[3]}
+
+    def _op_speed(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        try:
+            self.speed = check_speed(args.get("speed"))
+        except ValueError as error:
+            raise CommandError(str(error)) from None
+        return {"speed": self.speed}
+
+    def _op_reset(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        seed = check_seed(args.get("seed", self.seed))
+        self._build_world(seed)
+        self.emit(self.generation(HelloReason.RESET), False)
+        self.emit(self.sample(), False)
+        return {"seed": seed}
+
+    def _op_select_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        _, engine, _ = self._agent(args)
+        name = args.get("name")
+        if not isinstance(name, str):
+            raise CommandError("name (an XABSL agent of the program) is required")
+        engine.select_agent(name)
+        return None
+
+    def _op_force_option(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        index, engine, codec = self._agent(args)
+        option = self._named(args.get("option"), codec.option_ids, "option")
+        params = self._params(args.get("params"), codec.program.options[option].params, codec)
+        engine.debug.force_option(option, params)
+        self._own(index, "root", owner)
+        return None
+
+    def _op_force_behavior(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        index, engine, codec = self._agent(args)
+        behavior = self._named(args.get("behavior"), codec.behavior_ids, "basic behavior")
+        params = self._params(args.get("params"), codec.program.behaviors[behavior].params, codec)
+        engine.debug.force_behavior(behavior, params)
+        self._own(index, "root", owner)
+        return None
+
+    def _op_release(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        index, engine, _ = self._agent(args)
+        engine.debug.release()
+        self._owners.pop((index, "root"), None)
+        return None
+
+    def _op_override_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        index, engine, codec = self._agent(args)
+        ids = {s.name: s.index for s in codec.program.inputs.values()}
+        name = self._named(args.get("symbol"), ids, "input symbol")
+        symbol = codec.program.inputs[name]
+        if "value" not in args:
+            raise CommandError("value is required")
+        engine.debug.override_input(name, self._value(args["value"], symbol.kind, symbol.enum, codec, name))
+        self._own(index, "input:" + name, owner)
+        return None
+
+    def _op_release_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        index, engine, codec = self._agent(args)
+        if args.get("symbol") is None:
+            engine.debug.release_inputs()
+            for key in [k for k in self._owners if k[0] == index and k[1].startswith("input:")]:
+                del self._owners[key]
+            return None
+        ids = {s.name: s.index for s in codec.program.inputs.values()}
+        name = self._named(args.get("symbol"), ids, "input symbol")
+        engine.debug.release_input(name)
+        self._owners.pop((index, "input:" + name), None)
+        return None
+
+    def _op_reset_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        _, engine, _ = self._agent(args)
+        engine.debug.reset()
+        return None
+
+    def _op_explain(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        _, engine, codec = self._agent(args)
+        option = self._named(args.get("option"), codec.option_ids, "option")
+        explanation = engine.debug.explain(option)
+        states = codec.state_ids[option]
+        ir_option = codec.program.options[option]
+        decided = ir_option.state(explanation.decided_in)
+        # The leaf's own span, so the editor can point at the transition that fired.
+        leaf_span = None
+        try:
+            path = leaf_path(decided.decision, explanation.leaf)
+            node: Any = decided.decision
+            for _, branch in path:
+                node = node.then if branch else node.otherwise
+            leaf_span = node.span.as_dict() if node.span else None
+        except KeyError:
+            pass
+        return {
+            "option": codec.option_ids[option],
+            "option_name": option,
+            "decided_in": states[explanation.decided_in],
+            "decided_in_name": explanation.decided_in,
+            "leaf": explanation.leaf,
+            "target": states.get(explanation.target, -1),
+            "target_name": explanation.target,
+            "stay": explanation.stay,
+            "leaf_span": leaf_span,
+            "conditions": [
+                {"text": c.text, "source": c.source, "value": _plain(c.value), "branch": c.branch,
+                 "span": c.span.as_dict() if c.span else None}
+                for c in explanation.conditions
+            ],
+        }
+
+    def _op_status(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        return self.status()
+
+    def _op_apply(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        """Internal: hot-swap a program the server compiled clean (``key``, ``program``, ``json``)."""
+        return self.apply(args["key"], args["program"], args["json"])
+
+    def _op_release_owner(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        """Internal: release what the client ``owner`` forced and overrode (it disconnected)."""
+        return self.release_owner(str(owner))
+
+    # -- helpers for commands -----------------------------------------------------------------------
+
+    def _agent(self, args: Mapping[str, Any]) -> tuple[int, Engine, ProgramCodec]:
+        index = args.get("agent")
+        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(self.engines):
+            raise CommandError(f"agent must be an agent id in 0..{len(self.engines) - 1}")
+        engine = self.engines[index]
+        sampler = self.samplers[index]
+        if engine is None or sampler is None:
+            raise CommandError(f"agent {index} runs no XABSL engine")
+        return index, engine, sampler.codec
+
+    @staticmethod
+    def _named(value: Any, ids: Mapping[str, int], what: str) -> str:
+        if isinstance(value, str):
+            if value not in ids:
+                raise CommandError(f"unknown {what} {value!r}")
+            return value
+        if isinstance(value, int) and not isinstance(value, bool):
+            for name, i in ids.items():
+                if i == value:
+                    return name
+            raise CommandError(f"unknown {what} id {value}")
+        raise CommandError(f"{what} must be a name or an id")
+
+    def _params(self, given: Any, declared: Any, codec: ProgramCodec) -> dict[str, Value | str]:
+        if given is None:
+            return {}
+        if not isinstance(given, dict):
+            raise CommandError("params must be an object of parameter values")
+        by_name = {p.name: p for p in declared}
+        by_short = {p.name.rsplit(".", 1)[-1]: p for p in declared}
+        result: dict[str, Value | str] = {}
+        for key, value in given.items():
+            param = by_name.get(key) or by_short.get(key)
+            if param is None:
+                raise CommandError(f"no parameter {key!r}")
+            result[param.name] = self._value(value, param.kind, param.enum, codec, param.name)
+        return result
+
+    @staticmethod
+    def _value(value: Any, kind: Kind, enum: str | None, codec: ProgramCodec, name: str) -> Value | str:
+        if kind is Kind.ENUM and isinstance(value, int) and not isinstance(value, bool):
+            element = codec.element(enum, value)
+            if element is None:
+                raise CommandError(f"{name}: no element {value} in enum {enum}")
+            return element
+        if kind is Kind.DECIMAL and isinstance(value, int | float) and not isinstance(value, bool):
+            return float(value)
+        return value
+
+    def _own(self, agent: int, what: str, owner: str | None) -> None:
+        if owner is None:
+            self._owners.pop((agent, what), None)
+        else:
+            self._owners[(agent, what)] = owner
+
+    def release_owner(self, owner: str) -> int:
+        """Release every force and override ``owner`` made and nobody changed since."""
+        released = 0
+        for (agent, what), who in list(self._owners.items()):
+            if who != owner:
+                continue
+            del self._owners[(agent, what)]
+            engine = self.engines[agent]
+            if engine is None:
+                continue
+            try:
+                if what == "root":
+                    engine.debug.release()
+                else:
+                    engine.debug.release_input(what.removeprefix("input:"))
+                released += 1
+            except (DebugError, EngineError):
+                continue
+        return released
+
+    # -- hot reload ----------------------------------------------------------------------------------
+
+    def apply(self, key: str, program: Program, program_json: dict[str, Any]) -> str | None:
+        """Hot-swap a clean program into the engines of behavior ``key``.
+
+        Returns:
+            None when swapped, else why the running behavior was kept.
+        """
+        try:
+            for index, engine in enumerate(self.engines):
+                if self.keys[index] != key:
+                    continue
+                if engine is None:
+                    agent = self.world.agents[index]
+                    controller, engine = self.example.make_controller(agent, program)
+                    agent.controller = controller
+                    self.engines[index] = engine
+                else:
+                    engine.reload(program)
+        except EngineError as error:
+            # Engines are reloaded one by one; with one host they fail alike, so the first fails.
+            self.errors[key] = str(error)
+            return f"the behavior does not run on this host: {error}"
+        self.errors[key] = None
+        self.programs[key] = (program, program_json)
+        self.emit(self.generation(HelloReason.RELOAD), False)
+        self.emit(self.sample(), False)
+        return None
+
+    # -- status ----------------------------------------------------------------------------------------
+
+    def status(self) -> dict[str, Any]:
+        """The simulation's part of the session status (the server adds ring, clients, programs)."""
+        timing = self.timing
+        return {
+            "paused": self.paused,
+            "finished": self.world.finished,
+            "speed": self.speed,
+            "seed": self.seed,
+            "seq": self.seq,
+            "real_time_factor": round(timing.real_time_factor(), 3),
+            "tick_ms": round(1000 * timing.busy / timing.ticks, 3) if timing.ticks else 0.0,
+            # raw counters, for windowed measurements (benchmarks/stream_load.py)
+            "timing": {"ticks": timing.ticks, "busy_seconds": timing.busy, "cpu_seconds": timing.cpu,
+                       "sim_seconds": self.loop.sim_seconds, "frame_seconds": timing.sample},
+            "errors": dict(self.errors),
+            "pipe": {"sent": self.channel.sent, "dropped": self.channel.dropped, "bytes": self.channel.bytes_sent,
+                     "backlog": self.channel.backlog} if self.channel is not None else {},
+            "world": self.world.status(),
+        }
+
+
+def check_speed(speed: Any) -> float:
+    if isinstance(speed, bool) or not isinstance(speed, int | float) or not MIN_SPEED <= speed <= MAX_SPEED:
+        raise ValueError(f"speed must be a number in {MIN_SPEED:g}..{MAX_SPEED:g}")
+    return float(speed)
+
+
+def check_seed(seed: Any) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
+        raise CommandError("seed must be an integer in 0..2**32-1")
+    return seed
+
+
+def _collect(message: tuple[Any, ...], droppable: bool) -> bool:
+    return True
+
+
+def _plain(value: Any) -> Any:
+    return value if isinstance(value, bool | int | float | str) or value is None else str(value)
+
+
+# -- the process ------------------------------------------------------------------------------------
+
+
+def main(sock: socket.socket, config: WorkerConfig) -> None:
+    """Entry point of the simulation process: run until told to stop or the server goes away."""
+    # Ctrl+C reaches the whole process group; the server decides when this process ends.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    channel = Channel(sock)
+    try:
+        run(channel, Simulation(config))
+    except ChannelClosed:
+        pass
+    finally:
+        channel.close()
+
+
+def run(channel: Channel, sim: Simulation) -> None:
+    """The tick loop (see the module docstring); returns on a ``stop`` message.
+
+    Raises:
+        ChannelClosed: the server went away.
+    """
+    sim.emit = channel.send
+    sim.channel = channel
+    channel.send(sim.generation(sim.reason))
+    channel.send(sim.sample())
+    fd = channel.fileno()
+    next_due = time.perf_counter()
+    while True:
+        if sim.paused or sim.world.finished:
+            wait: float = 0.05
+            next_due = time.perf_counter()
+        else:
+            wait = next_due - time.perf_counter()
+        if wait > 0:
+            writers = [fd] if channel.backlog else []
+            readable, _, _ = select.select([fd], writers, [], wait)
+            if not readable:
+                channel.flush()
+                continue
+        for message in channel.receive():
+            if message[0] == "stop":
+                channel.flush()
+                return
+            _command(channel, sim, message)
+        if sim.paused or sim.world.finished or time.perf_counter() < next_due:
+            continue
+        try:
+            sample = sim.tick()
+        except Exception as error:  # the world broke: report, end this process (reset starts a new one)
+            channel.send(("crash", f"{type(error).__name__}: {error}", traceback.format_exc(), sim.seq,
+                          sim._tick_time()))
+            _drain(channel)
+            raise SystemExit(1) from None
+        channel.send(sample, droppable=True)
+        next_due += 1.0 / (sim.behavior_hz * sim.speed)
+        if time.perf_counter() - next_due > 0.25:
+            next_due = time.perf_counter()
+
+
+def _command(channel: Channel, sim: Simulation, message: tuple[Any, ...]) -> None:
+    _, ident, op, args, owner = message
+    try:
+        result = sim.execute(op, args, owner)
+        ok, error = True, None
+    except CommandError as problem:
+        result, ok, error = None, False, str(problem)
+    except Exception as problem:  # a bug in a command must not end the simulation: answer it
+        traceback.print_exc()
+        result, ok, error = None, False, f"internal error: {type(problem).__name__}: {problem}"
+    channel.send(("r", ident, ok, result, error))
+
+
+def _drain(channel: Channel, timeout: float = 2.0) -> None:
+    deadline = time.monotonic() + timeout
+    fd = channel.fileno()
+    while channel.backlog and time.monotonic() < deadline:
+        select.select([], [fd], [], 0.05)
+        channel.flush()
+
+
+if __name__ == "__main__":  # pragma: no cover - started through multiprocessing
+    print("server.worker runs inside `xabsl serve`", file=sys.stderr)
+    sys.exit(os.EX_USAGE)

@@ -1,0 +1,33 @@
+"""Worlds for the server tests that misbehave on purpose (imported by the simulation process too)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from engine.host import World
+from server.demo_world import DemoWorld
+from server.examples import DemoExample
+
+
+class CrashingWorld(DemoWorld):
+    """The demo world, whose physics raises while the file ``trigger`` exists."""
+
+    def __init__(self, seed: int, n_agents: int, trigger: Path) -> None:
+        super().__init__(seed, n_agents)
+        self.trigger = trigger
+
+    def step(self, dt: float) -> None:
+        if self.trigger.exists():
+            raise RuntimeError("the ball fell off the world")
+        super().step(dt)
+
+
+class CrashingDemo(DemoExample):
+    """The demo example in a :class:`CrashingWorld`."""
+
+    def __init__(self, root: Path, trigger: Path) -> None:
+        super().__init__(root)
+        self.trigger = trigger
+
+    def build_world(self, seed: int) -> World:
+        return CrashingWorld(seed, self.n_agents, self.trigger)
