@@ -9,8 +9,7 @@ import { Backoff } from "./backoff";
 import {
   type ClientMessage,
   type CommandOp,
-  type FileEvent,
-  type CompileEvent,
+  type ServerEvent,
   type Frame,
   type Hello,
   type HistoryChunk,
@@ -35,7 +34,7 @@ export interface SocketLike {
 export interface ConnectionHandlers {
   hello(hello: Hello): void;
   frame(frame: Frame): void;
-  event?(event: FileEvent | CompileEvent): void;
+  event?(event: ServerEvent): void;
   link?(state: LinkState, detail: { retryInMs?: number; code?: number; attempt: number }): void;
 }
 

@@ -19,7 +19,7 @@ import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
 import { TopBar } from "./panels/topbar";
 import { Session, type SessionEvent } from "./session";
-import { h, isTyping } from "./ui";
+import { h, isTyping, toast } from "./ui";
 
 const HISTORY_MS = 60_000;
 
@@ -45,6 +45,8 @@ function main(): void {
       event: (event) => {
         if (event.event === "file") editor.fileEvent(event);
         else if (event.event === "compile") editor.compileEvent(event);
+        else if (event.event === "crash")
+          toast(`The simulation stopped: ${event.message}. Reset (top bar) starts it again.`, "error", 15000);
       },
       link: (state, detail) => topbar.setLink(state, detail),
     },

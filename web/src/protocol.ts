@@ -167,7 +167,18 @@ export interface CompileEvent {
   diagnostics: unknown[];
 }
 
-export type ServerMessage = Hello | Frame | Reply | HistoryChunk | FileEvent | CompileEvent;
+/// The simulation process stopped (the world raised or the process died); `reset` restarts it.
+export interface CrashEvent {
+  type: "event";
+  event: "crash";
+  message: string;
+  seq: number;
+  t: number;
+}
+
+export type ServerEvent = FileEvent | CompileEvent | CrashEvent;
+
+export type ServerMessage = Hello | Frame | Reply | HistoryChunk | ServerEvent;
 
 /// Commands (`{"type": "command", "id", "op", ...arguments}`), by op.
 export type CommandOp =
