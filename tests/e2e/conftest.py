@@ -96,9 +96,10 @@ class StudioServer:
 @pytest.fixture(scope="module")
 def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     if not CHROMIUM.exists():
-        pytest.skip("Debian chromium is not installed (make test-deps installs it)")
+        # fail, never skip: a missing browser must not look like a passing UI
+        pytest.fail("Debian chromium is not installed: `make test` (or `make test-deps`) installs it")
     if not (WEB_DIST / "index.html").is_file():
-        pytest.skip("the web UI is not built (make web builds it)")
+        pytest.fail("the web UI is not built: `make test` (or `make web`) builds it")
     root = tmp_path_factory.mktemp("studio")
     example = root / "soccer"
     example.mkdir()
@@ -116,7 +117,8 @@ def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
     if not CHROMIUM.exists():
-        pytest.skip("Debian chromium is not installed (make test-deps installs it)")
+        # fail, never skip: a missing browser must not look like a passing UI
+        pytest.fail("Debian chromium is not installed: `make test` (or `make test-deps`) installs it")
     from playwright.sync_api import sync_playwright
 
     profile = tmp_path_factory.mktemp("chromium-profile")
