@@ -4,6 +4,7 @@
 * :mod:`engine.runtime.linker`     program + bindings -> storage layout, every missing name at once
 * :mod:`engine.runtime.checks`     option-graph checks at load time (B1/B2 policy, §2.10)
 * :mod:`engine.runtime.engine`     Engine: load, execute(now_ms), faults, agents, hot reload
+* :mod:`engine.runtime.storage`    a program bound to an engine: storage lists, generated functions
 * :mod:`engine.runtime.activation` cheap per-tick snapshots and the activation tree
 * :mod:`engine.runtime.debug`      forcing roots, overriding inputs, explaining decisions
 * :mod:`engine.runtime.coop`       cooperative states and team messages (§2.11)

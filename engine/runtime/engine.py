@@ -28,192 +28,22 @@ from operator import attrgetter
 from types import MappingProxyType, SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
-from engine.codegen.layout import default_value, engine_order
-from engine.codegen.python import CodegenError, GeneratedProgram, generate
-from engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
+from engine.codegen.python import CodegenError, generate
+from engine.codegen.support import MS_MASK
 from engine.ir.model import Agent, Program
 from engine.runtime.activation import Node, PathPlan, Root, Snapshot, build_tree, compact_path, node_to_dict
 from engine.runtime.bindings import Bindings
 from engine.runtime.checks import Policy, check_root
 from engine.runtime.coop import CoopStates
 from engine.runtime.errors import DebugError, DoubleExecutionError, Fault, LoadError
-from engine.runtime.linker import Linked, link
-from engine.types import Kind, Ms, Value
+from engine.runtime.linker import link
+from engine.runtime.storage import NEVER, LoadedProgram, RootAction
+from engine.types import Ms, Value
 
 if TYPE_CHECKING:
     from engine.runtime.debug import Debugger
 
 __all__ = ["Engine"]
-
-#: Tick stamp of "never executed": never equal to ``tick - 1`` for a real tick (ticks start at 1).
-_NEVER = -10
-
-RootAction = Callable[[int, int], None]
-
-
-class _Loaded:
-    """One program bound to one engine: storage lists, generated functions, host objects."""
-
-    def __init__(self, linked: Linked, generated: GeneratedProgram, engine: Engine) -> None:
-        self.linked = linked
-        self.program = linked.program
-        self.layout = linked.layout
-        self.generated = generated
-        n = len(linked.option_names)
-        self.LT = [_NEVER] * n
-        self.PV = [_NEVER] * n
-        self.TA = [0] * n
-        self.S = [linked.layout.options[name].initial for name in linked.option_names]
-        self.TS = [0] * n
-        self.LF: list[tuple[int, int, int] | None] = [None] * n
-        self.SD = [0.0] * n
-        self.PP: list[Value] = [0.0] * linked.n_option_params
-        for name, slot in linked.layout.options.items():
-            for k, (_, kind) in enumerate(slot.params):
-                self.PP[slot.offset + k] = default_value(kind)
-            del name
-        self.BP: list[Value] = [0.0] * linked.n_behavior_params
-        self.behavior_params: dict[str, tuple[tuple[str, Kind, str | None], ...]] = {}
-        for name, bslot in linked.layout.behaviors.items():
-            instance = linked.behaviors[bslot.index]
-            declared = type(instance).declared_parameters()
-            self.behavior_params[name] = tuple((p.name, p.kind, p.enum) for p in declared)
-            for k, (_, kind) in enumerate(bslot.params):
-                self.BP[bslot.offset + k] = default_value(kind)
-            instance._attach(self.BP, bslot.offset, [p[0] for p in bslot.params])
-        nb = len(linked.behaviors)
-        self.BLT = [_NEVER] * nb
-        self.BPV = [_NEVER] * nb
-        self.BTA = [0] * nb
-        self.OV: list[Value] = list(linked.output_initial)
-        self.AV: list[Value | None] = [None] * len(linked.layout.sites)
-        self.coop = CoopStates.of(self.program)
-        self.coop.tick = lambda: engine._tick
-        self.coop.executing = self.executing_coop_states
-        g: dict[str, Any] = dict(SUPPORT_GLOBALS)
-        g.update(
-            LT=self.LT,
-            PV=self.PV,
-            TA=self.TA,
-            S=self.S,
-            TS=self.TS,
-            LF=self.LF,
-            SD=self.SD,
-            PP=self.PP,
-            BP=self.BP,
-            BLT=self.BLT,
-            BPV=self.BPV,
-            BTA=self.BTA,
-            OV=self.OV,
-            AV=self.AV,
-            DX=engine._double_execution,
-            RB=self.run_behavior,
-            CC=self.coop.check,
-            CF=self.coop.conflict,
-        )
-        for k, behavior in enumerate(linked.behaviors):
-            # Generated basic-behavior calls do the bookkeeping of ``run_behavior`` inline.
-            g[f"BB{k}"] = behavior
-            g[f"BE{k}"] = behavior.execute
-        for k, binding in enumerate(linked.inputs):
-            g[f"I{k}"] = binding.read
-            if binding.attribute is not None:
-                g[f"IA{k}"] = binding.source
-            if binding.params:
-                storage = [default_value(p.kind) for p in binding.params]
-                g[f"FP{k}"] = storage
-                g[f"FS{k}"] = storage.__setitem__
-        for k, out in enumerate(linked.outputs):
-            if out is not None and out.setter is not None:
-                g[f"OS{k}"] = out.setter
-                g[f"OG{k}"] = out.getter
-        self.globals = g
-        generated.bind(g)
-        self.functions: list[Callable[[int, int], None]] = [g[f"O{i}"] for i in range(n)]
-        self.input_reads = {name: g[f"I{slot.index}"] for name, slot in linked.layout.inputs.items()}
-        #: built on the first :meth:`Engine.path` call (hosts that never record pay nothing)
-        self.path_plan: PathPlan | None = None
-        self.path_storage = (self.LT, self.S, self.TA, self.TS, self.LF, self.PP, self.BP, self.BLT, self.BTA)
-
-    def run_behavior(self, k: int, now: int, tick: int, changed: bool) -> None:
-        """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set.
-
-        Used for root actions; generated calls inline the same steps (``engine.codegen.python``).
-        """
-        lt = self.BLT[k]
-        if lt != tick:
-            self.BPV[k] = lt
-            self.BLT[k] = tick
-            was = lt == tick - 1
-        else:
-            was = self.BPV[k] == tick - 1
-        behavior = self.linked.behaviors[k]
-        if changed:
-            behavior.parameters_changed()
-        if not was:
-            self.BTA[k] = now
-        behavior.time_of_execution = (now - self.BTA[k]) & MS_MASK
-        behavior.execute()
-
-    def executing_coop_states(self) -> list[tuple[int, int]]:
-        tick = self.coop.tick()
-        return [key for key in self.coop.states if self.LT[key[0]] == tick and self.S[key[0]] == key[1]]
-
-    def root_action(self, root: Root, params: Mapping[str, Value]) -> RootAction:
-        """A root action calling ``root`` with constant ``params`` (others get defaults, §2.5).
-
-        A root of kind ``"output"`` assigns ``params["value"]`` to that output symbol on every
-        tick (``addRootActionDecimalOutputSymbol`` and siblings, §2.9).
-        """
-        if root.kind == "output":
-            oslot = self.layout.outputs[root.name]
-            value = params["value"]
-            if oslot.stored:
-                outputs, position = self.OV, oslot.index
-
-                def assign_stored(now: int, tick: int) -> None:
-                    outputs[position] = value
-
-                return assign_stored
-            binding = self.linked.outputs[oslot.index]
-            assert binding is not None and binding.setter is not None
-            setter = binding.setter
-            return lambda now, tick: setter(value)
-        if root.kind == "option":
-            slot = self.layout.options[root.name]
-            values = [
-                (slot.offset + p, params.get(slot.params[p][0], default_value(slot.params[p][1])))
-                for p in engine_order(slot.params)
-            ]
-            function = self.functions[slot.index]
-            if not values:
-                return function  # nothing to set: the generated option is the root action
-            store = self.PP
-
-            def run_option(now: int, tick: int) -> None:
-                for position, value in values:
-                    store[position] = value
-                function(now, tick)
-
-            return run_option
-        bslot = self.layout.behaviors[root.name]
-        bvalues = [
-            (bslot.offset + p, params.get(bslot.params[p][0], default_value(bslot.params[p][1])))
-            for p in engine_order(bslot.params)
-        ]
-        bstore = self.BP
-        index = bslot.index
-        run = self.run_behavior
-
-        def run_behavior(now: int, tick: int) -> None:
-            changed = False
-            for position, value in bvalues:
-                if bstore[position] != value:
-                    bstore[position] = value
-                    changed = True
-            run(index, now, tick, changed)
-
-        return run_behavior
 
 
 class Engine:
@@ -234,7 +64,7 @@ class Engine:
         self.policy = policy
         self.agent_name = agent_name
         self.warnings: list[str] = []
-        self._loaded: _Loaded | None = None
+        self._loaded: LoadedProgram | None = None
         self._tick = 0
         self._now: Ms = 0
         self._fault: Fault | None = None
@@ -251,7 +81,7 @@ class Engine:
 
     # -- loading ----------------------------------------------------------------------------------
 
-    def _prepare(self, program: Program) -> _Loaded:
+    def _prepare(self, program: Program) -> LoadedProgram:
         reuse = None
         if self._loaded is not None:
             reuse = dict(zip(self._loaded.linked.behavior_names, self._loaded.linked.behaviors, strict=True))
@@ -262,7 +92,7 @@ class Engine:
             generated = generate(program, linked.layout)
         except CodegenError as error:
             raise LoadError(str(error)) from None
-        return _Loaded(linked, generated, self)
+        return LoadedProgram(linked, generated, self)
 
     def load(self, program: Program) -> None:
         """Load ``program`` from scratch: every option starts fresh, the first agent is selected.
@@ -341,7 +171,7 @@ class Engine:
                 self._apply_override(symbol, value)
         self._install_roots()
 
-    def _require(self) -> _Loaded:
+    def _require(self) -> LoadedProgram:
         if self._loaded is None:
             raise DebugError("no program is loaded")
         return self._loaded
@@ -425,7 +255,7 @@ class Engine:
         """Every option restarts in its initial state on the next tick; clears a fault (§2.9)."""
         loaded = self._require()
         for table in (loaded.LT, loaded.PV, loaded.BLT, loaded.BPV):
-            table[:] = [_NEVER] * len(table)
+            table[:] = [NEVER] * len(table)
         self._fault = None
 
     # -- agents ----------------------------------------------------------------------------------
@@ -596,7 +426,7 @@ class Engine:
 
     # -- used by the debugger ---------------------------------------------------------------------
 
-    def _loaded_program(self) -> _Loaded:
+    def _loaded_program(self) -> LoadedProgram:
         return self._require()
 
     def _force(self, root: Root | None, params: dict[str, Value], add: bool = False) -> None:
