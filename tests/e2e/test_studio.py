@@ -61,7 +61,8 @@ def test_watch_robots_move_and_the_activation_path_changes(page: Any) -> None:
     )
     page.mouse.click(box["x"] + target[0], box["y"] + target[1])
     wait_until(page, f"() => {STUDIO}.session.selectedAgent === 2")
-    assert "selected" in (page.locator(".chip[data-agent='2']").get_attribute("class") or "")
+    # panels redraw on the next animation frame after the session changes
+    wait_until(page, "() => document.querySelector(\".chip[data-agent='2']\").classList.contains('selected')")
 
     page.wait_for_timeout(1500)
     stats = page.evaluate(f"{STUDIO}.stats")
@@ -83,7 +84,7 @@ def test_click_an_option_and_see_its_state_machine(page: Any) -> None:
     page.locator(".option-panel").wait_for(state="visible")
     wait_until(page, "() => document.querySelectorAll('.option-panel g.node').length >= 1")
     name = page.evaluate(f"{STUDIO}.session.indexOf({STUDIO}.session.selectedAgent).optionById.get({option_id}).name")
-    assert page.locator(".option-title").inner_text() == name
+    wait_until(page, f"() => document.querySelector('.option-title').innerText === {name!r}")
     # The active state is highlighted (the option may have left the path meanwhile: pick the
     # root option then, which is always active).
     if page.locator(".option-panel g.node.active").count() == 0:
@@ -155,7 +156,7 @@ def test_force_an_option_with_a_parameter_and_see_it_at_the_root(page: Any) -> N
     )
     assert "go_to_position" in first.inner_text()
     assert page.evaluate(f"{STUDIO}.session.agentInView().forced") is not None
-    assert "forced" in page.locator(".chip.selected").get_attribute("class")
+    wait_until(page, "() => document.querySelector('.chip.selected').classList.contains('forced')")
     screenshot(page, "test")
     page.keyboard.press("x")
     page.click("#test-release")
@@ -194,11 +195,11 @@ def test_scrub_the_timeline_and_back_to_live(page: Any) -> None:
     assert box is not None
     page.mouse.click(box["x"] + 150 + (box["width"] - 156) * 0.3, box["y"] + 30)
     wait_until(page, f"() => {STUDIO}.session.cursor !== null")
-    assert page.locator("button.live").inner_text().endswith("Back to live")
+    wait_until(page, "() => document.querySelector('button.live').innerText.trim().endsWith('Back to live')")
     shown = page.evaluate(f"{STUDIO}.session.view.t")
     assert shown < live_t(page) - 300
     page.keyboard.press("a")
-    assert "scrubbed" in page.locator(".activation-panel .toolbar").inner_text()
+    wait_until(page, "() => document.querySelector('.activation-panel .toolbar').innerText.includes('scrubbed')")
     # Arrow keys step through the history; every panel follows.
     canvas.focus()
     page.keyboard.press("ArrowRight")
