@@ -9,7 +9,7 @@ engine storage; internal enum elements get the values 0..n-1 in declaration orde
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -32,6 +32,7 @@ from engine.ir.model import (
     InputRef,
     OptionCall,
     OutputRef,
+    Parameter,
     Program,
     walk,
 )
@@ -156,16 +157,7 @@ def link(
                 f"input symbol {symbol.name} is {symbol.kind.value} in the behavior "
                 f"but registered as {binding.kind.value}"
             )
-        registered = {p.name: p for p in binding.params}
-        for param in symbol.params:
-            have = registered.get(param.name)
-            if have is None:
-                problems.append(f"parameter {param.name} of input symbol {symbol.name} is not registered")
-            elif have.kind is not param.kind:
-                problems.append(
-                    f"parameter {param.name} of input symbol {symbol.name} is {param.kind.value} "
-                    f"but registered as {have.kind.value}"
-                )
+        _check_parameters(f"input symbol {symbol.name}", symbol.params, binding.params, problems)
         input_slots[symbol.name] = InputSlot(
             len(inputs), tuple((p.name, p.kind) for p in binding.params), binding.attribute
         )
@@ -221,16 +213,7 @@ def link(
         else:
             instance = registered_bb()
         params = type(instance).declared_parameters()
-        by_name = {p.name: p for p in params}
-        for param in declared.params:
-            have = by_name.get(param.name)
-            if have is None:
-                problems.append(f"parameter {param.name} of basic behavior {declared.name} is not registered")
-            elif have.kind is not param.kind:
-                problems.append(
-                    f"parameter {param.name} of basic behavior {declared.name} is {param.kind.value} "
-                    f"but registered as {have.kind.value}"
-                )
+        _check_parameters(f"basic behavior {declared.name}", declared.params, params, problems)
         hook = type(instance).parameters_changed is not BasicBehavior.parameters_changed
         behavior_slots[declared.name] = BehaviorSlot(
             len(behaviors), offset, tuple((p.name, p.kind) for p in params), hook
@@ -292,6 +275,21 @@ def link(
         option_offset,
         offset,
     )
+
+
+def _check_parameters(
+    owner: str, declared: Sequence[Parameter], registered: Sequence[Parameter], problems: list[str]
+) -> None:
+    """Report every declared parameter the host did not register, or registered with another type."""
+    by_name = {p.name: p for p in registered}
+    for param in declared:
+        have = by_name.get(param.name)
+        if have is None:
+            problems.append(f"parameter {param.name} of {owner} is not registered")
+        elif have.kind is not param.kind:
+            problems.append(
+                f"parameter {param.name} of {owner} is {param.kind.value} but registered as {have.kind.value}"
+            )
 
 
 def _first_value(
