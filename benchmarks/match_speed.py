@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import argparse
 import cProfile
-import platform
 import pstats
 import time
+
+from _report import print_run  # benchmarks/ is the script's folder
 
 from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, run_headless
 from examples.soccer.run import build_world
@@ -37,15 +38,12 @@ def main() -> None:
 
     agent_ticks = stats.ticks * len(world.agents)
     phases = stats.phases
-    print(f"XABSL match, 5 vs 5 (example team vs chase), seed {args.seed}, python {platform.python_version()}")
-    print(f"rates: physics {DEFAULT_PHYSICS_HZ} Hz, behavior {DEFAULT_BEHAVIOR_HZ} Hz; "
-          f"{stats.ticks} ticks, {stats.physics_steps} physics steps")
-    print(f"simulated {stats.sim_seconds:.1f} s in {stats.wall_seconds:.2f} s wall ({cpu:.2f} s cpu)")
-    print(f"real-time factor: {stats.real_time_factor:.0f}x wall, {stats.sim_seconds / cpu:.0f}x cpu")
-    for name, seconds in (("engine (XABSL)", phases.engine), ("physics", phases.physics),
-                          ("perception", phases.perception), ("actuation", phases.actuation)):
-        share = seconds / phases.total if phases.total else 0.0
-        print(f"  {name:<16} {seconds:6.2f} s  {100 * share:5.1f} %")
+    print_run(
+        f"XABSL match, 5 vs 5 (example team vs chase), seed {args.seed}", stats, cpu,
+        DEFAULT_PHYSICS_HZ, DEFAULT_BEHAVIOR_HZ,
+        [("engine (XABSL)", phases.engine), ("physics", phases.physics),
+         ("perception", phases.perception), ("actuation", phases.actuation)],
+    )
     print(f"engine per agent tick: {1e6 * phases.engine / agent_ticks:.1f} us (both teams)")
     status = world.status()
     print(f"score {status['teams'][0]} {status['score'][0]} : {status['score'][1]} {status['teams'][1]}")

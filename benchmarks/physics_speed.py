@@ -11,8 +11,9 @@ Usage: ``.venv/bin/python benchmarks/physics_speed.py [--seconds 600] [--seed 1]
 from __future__ import annotations
 
 import argparse
-import platform
 import time
+
+from _report import print_run  # benchmarks/ is the script's folder
 
 from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
 from examples.soccer.scripted import plug_scripted_team
@@ -38,15 +39,12 @@ def main() -> None:
 
     agent_ticks = stats.ticks * len(world.agents)
     phases = stats.phases
-    print(f"soccer world, {args.players} vs {args.players}, seed {args.seed}, python {platform.python_version()}")
-    print(f"rates: physics {args.physics_hz} Hz, behavior {args.behavior_hz} Hz; "
-          f"{stats.ticks} ticks, {stats.physics_steps} physics steps")
-    print(f"simulated {stats.sim_seconds:.1f} s in {stats.wall_seconds:.2f} s wall ({cpu:.2f} s cpu)")
-    print(f"real-time factor: {stats.real_time_factor:.0f}x")
-    for name, seconds in (("physics", phases.physics), ("perception", phases.perception),
-                          ("controller (scripted)", phases.engine), ("actuation", phases.actuation)):
-        share = seconds / phases.total if phases.total else 0.0
-        print(f"  {name:<22} {seconds:6.2f} s  {100 * share:5.1f} %")
+    print_run(
+        f"soccer world, {args.players} vs {args.players}, seed {args.seed}", stats, cpu,
+        args.physics_hz, args.behavior_hz,
+        [("physics", phases.physics), ("perception", phases.perception),
+         ("controller (scripted)", phases.engine), ("actuation", phases.actuation)],
+    )
     per_agent_us = 1e6 * (phases.perception + phases.actuation) / agent_ticks
     print(f"world cost per agent tick (perception + actuation): {per_agent_us:.1f} us; "
           f"physics per step: {1e6 * phases.physics / stats.physics_steps:.1f} us")
