@@ -44,9 +44,32 @@ DEFAULT_SEED = 1
 DEFAULT_OPTIONS = 100
 
 _WORDS = [
-    "ball", "goal", "robot", "team", "mate", "opponent", "field", "line", "kick", "pass", "walk", "turn",
-    "stand", "search", "approach", "defend", "attack", "keeper", "striker", "position", "angle",
-    "distance", "speed", "time", "state", "phase",
+    "ball",
+    "goal",
+    "robot",
+    "team",
+    "mate",
+    "opponent",
+    "field",
+    "line",
+    "kick",
+    "pass",
+    "walk",
+    "turn",
+    "stand",
+    "search",
+    "approach",
+    "defend",
+    "attack",
+    "keeper",
+    "striker",
+    "position",
+    "angle",
+    "distance",
+    "speed",
+    "time",
+    "state",
+    "phase",
 ]
 
 
@@ -96,7 +119,7 @@ class _SetWriter:
     # -- namespaces ------------------------------------------------------------------------
 
     def symbols_file(self, index: int, topic: str) -> str:
-        out = [f"/** Symbols about the {topic}. */\nnamespace {topic}_symbols(\"{topic.title()} symbols\") {{\n"]
+        out = [f'/** Symbols about the {topic}. */\nnamespace {topic}_symbols("{topic.title()} symbols") {{\n']
         for i in range(2):
             name = f"{topic}.mode{i}"
             self.enums[name] = [f"{topic}_m{i}_{w}" for w in self.rnd.sample(_WORDS, self.rnd.randint(3, 7))]
@@ -104,7 +127,7 @@ class _SetWriter:
         for i in range(5):
             name = f"{topic}.k{i}"
             self.constants.append(name)
-            out.append(f"{self.doc('  ')}  float const {name} = {self.number()} \"mm\";\n")
+            out.append(f'{self.doc("  ")}  float const {name} = {self.number()} "mm";\n')
         for block, io in enumerate(("input", "input", "output", "internal")):
             for i in range(8):
                 kind = self.kind()
@@ -203,9 +226,11 @@ class _SetWriter:
         if depth <= 0 or self.rnd.random() < 0.15:
             return f"{indent}stay;\n" if self.rnd.random() < 0.3 else f"{indent}goto {self.rnd.choice(states)};\n"
         inner = indent + "  "
-        return (f"{self.doc(indent, 0.25)}{indent}if ({self.boolean(1)}) {{\n"
-                f"{self.dtree(states, depth - 1, inner)}{indent}}}\n"
-                f"{self.doc(indent, 0.1)}{indent}else {{\n{self.dtree(states, depth - 1, inner)}{indent}}}\n")
+        return (
+            f"{self.doc(indent, 0.25)}{indent}if ({self.boolean(1)}) {{\n"
+            f"{self.dtree(states, depth - 1, inner)}{indent}}}\n"
+            f"{self.doc(indent, 0.1)}{indent}else {{\n{self.dtree(states, depth - 1, inner)}{indent}}}\n"
+        )
 
     def actions(self, index: int, indent: str) -> str:
         out = []
@@ -255,8 +280,11 @@ class _SetWriter:
         # group files hold only includes, as real sets do
         for group, members in groups.items():
             files[f"options/group{group}.xabsl"] = "".join(f'include "{m}";\n' for m in members)
-        includes = [*(f"symbols/{t}.xabsl" for t in topics), "skills.xabsl",
-                    *(f"options/group{g}.xabsl" for g in groups)]
+        includes = [
+            *(f"symbols/{t}.xabsl" for t in topics),
+            "skills.xabsl",
+            *(f"options/group{g}.xabsl" for g in groups),
+        ]
         roots = ["opt000", *(f"opt{i:03d}" for i in range(1, self.option_count) if i % 20 == 0)]
         files["agents.xabsl"] = (
             "/*** Title: Benchmark set\n     Platform: any\n     Software-Environment: compile_speed.py\n*/\n"
@@ -350,15 +378,21 @@ def main(argv: list[str] | None = None) -> int:
         best, compilation = measure(agents, args.runs)
         assert compilation.program is not None
         files = len(compilation.files)
-        print(f"behavior set: {len(compilation.program.options)} options, {files} files, {size_kb:.0f} KB "
-              f"(seed {args.seed}), best of {args.runs} runs")
+        print(
+            f"behavior set: {len(compilation.program.options)} options, {files} files, {size_kb:.0f} KB "
+            f"(seed {args.seed}), best of {args.runs} runs"
+        )
         for stage in ("parse", "check", "emit"):
             print(f"  {stage:<6} {best[stage] * 1000:8.1f} ms")
-        print(f"  {'total':<6} {best['total'] * 1000:8.1f} ms   (goal < {GOAL_SECONDS * 1000:.0f} ms: "
-              f"{'met' if best['total'] < GOAL_SECONDS else 'MISSED'})")
+        print(
+            f"  {'total':<6} {best['total'] * 1000:8.1f} ms   (goal < {GOAL_SECONDS * 1000:.0f} ms: "
+            f"{'met' if best['total'] < GOAL_SECONDS else 'MISSED'})"
+        )
         ratio = RUBY_REFERENCE_SECONDS / best["total"]
-        print(f"original Ruby compiler on a real set of this size: ~{RUBY_REFERENCE_SECONDS:.1f} s "
-              f"-> this compiler is {ratio:.1f}x {'faster' if ratio >= 1 else 'slower'}")
+        print(
+            f"original Ruby compiler on a real set of this size: ~{RUBY_REFERENCE_SECONDS:.1f} s "
+            f"-> this compiler is {ratio:.1f}x {'faster' if ratio >= 1 else 'slower'}"
+        )
         if args.profile:
             lexing = tokenize_time(compilation, args.runs)
             print(f"  of which tokenizing {lexing * 1000:.1f} ms ({lexing / best['parse']:.0%} of parse)")

@@ -39,10 +39,17 @@ def main() -> None:
     agent_ticks = stats.ticks * len(world.agents)
     phases = stats.phases
     print_run(
-        f"XABSL match, 5 vs 5 (example team vs chase), seed {args.seed}", stats, cpu,
-        DEFAULT_PHYSICS_HZ, DEFAULT_BEHAVIOR_HZ,
-        [("engine (XABSL)", phases.engine), ("physics", phases.physics),
-         ("perception", phases.perception), ("actuation", phases.actuation)],
+        f"XABSL match, 5 vs 5 (example team vs chase), seed {args.seed}",
+        stats,
+        cpu,
+        DEFAULT_PHYSICS_HZ,
+        DEFAULT_BEHAVIOR_HZ,
+        [
+            ("engine (XABSL)", phases.engine),
+            ("physics", phases.physics),
+            ("perception", phases.perception),
+            ("actuation", phases.actuation),
+        ],
     )
     print(f"engine per agent tick: {1e6 * phases.engine / agent_ticks:.1f} us (both teams)")
     status = world.status()
@@ -61,7 +68,7 @@ def main() -> None:
             agent.sense(now)
         for team in (0, 1):
             t0 = time.perf_counter()
-            for agent in world.agents[5 * team:5 * team + 5]:
+            for agent in world.agents[5 * team : 5 * team + 5]:
                 agent.controller.execute(now)
             per_team[team] += time.perf_counter() - t0
         for agent in world.agents:

@@ -33,27 +33,41 @@ def main() -> None:
     world = build_world(args.seed, players_per_team=args.players, half_duration_s=args.seconds / 2)
     plug_scripted_team(world)
     cpu_start = time.process_time()
-    stats = run_headless(world, args.seconds, physics_hz=args.physics_hz, behavior_hz=args.behavior_hz,
-                         stop_when_finished=False)
+    stats = run_headless(
+        world, args.seconds, physics_hz=args.physics_hz, behavior_hz=args.behavior_hz, stop_when_finished=False
+    )
     cpu = time.process_time() - cpu_start
 
     agent_ticks = stats.ticks * len(world.agents)
     phases = stats.phases
     print_run(
-        f"soccer world, {args.players} vs {args.players}, seed {args.seed}", stats, cpu,
-        args.physics_hz, args.behavior_hz,
-        [("physics", phases.physics), ("perception", phases.perception),
-         ("controller (scripted)", phases.engine), ("actuation", phases.actuation)],
+        f"soccer world, {args.players} vs {args.players}, seed {args.seed}",
+        stats,
+        cpu,
+        args.physics_hz,
+        args.behavior_hz,
+        [
+            ("physics", phases.physics),
+            ("perception", phases.perception),
+            ("controller (scripted)", phases.engine),
+            ("actuation", phases.actuation),
+        ],
     )
     per_agent_us = 1e6 * (phases.perception + phases.actuation) / agent_ticks
-    print(f"world cost per agent tick (perception + actuation): {per_agent_us:.1f} us; "
-          f"physics per step: {1e6 * phases.physics / stats.physics_steps:.1f} us")
+    print(
+        f"world cost per agent tick (perception + actuation): {per_agent_us:.1f} us; "
+        f"physics per step: {1e6 * phases.physics / stats.physics_steps:.1f} us"
+    )
     budget = args.seconds / 100.0 - (phases.physics + phases.perception + phases.actuation)
-    print(f"left for the XABSL engine at 100x real time: {budget:.2f} s "
-          f"= {1e6 * budget / agent_ticks:.1f} us per agent tick")
+    print(
+        f"left for the XABSL engine at 100x real time: {budget:.2f} s "
+        f"= {1e6 * budget / agent_ticks:.1f} us per agent tick"
+    )
     status = world.status()
-    print(f"score {status['teams'][0]} {status['score'][0]} : {status['score'][1]} {status['teams'][1]}, "
-          f"outs {status['outs']}, state {status['game_state']}")
+    print(
+        f"score {status['teams'][0]} {status['score'][0]} : {status['score'][1]} {status['teams'][1]}, "
+        f"outs {status['outs']}, state {status['game_state']}"
+    )
 
 
 if __name__ == "__main__":

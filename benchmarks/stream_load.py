@@ -153,8 +153,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--duration", type=float, default=60.0, help="seconds with clients (default 60)")
     parser.add_argument("--baseline", type=float, default=15.0, help="seconds without clients (default 15)")
-    parser.add_argument("--rounds", type=int, default=3,
-                        help="load phases, each between two phases without clients (default 3)")
+    parser.add_argument(
+        "--rounds", type=int, default=3, help="load phases, each between two phases without clients (default 3)"
+    )
     parser.add_argument("--warmup", type=float, default=5.0, help="seconds before measuring (default 5)")
     parser.add_argument("--clients", type=int, default=20)
     parser.add_argument("--rate", type=float, default=30.0, help="frames per second per client")
@@ -163,10 +164,26 @@ def main() -> int:
     args = parser.parse_args()
 
     port = free_port()
-    command = [sys.executable, "-m", "engine.cli", "serve", str(REPO / "examples" / "soccer"), "--port", str(port),
-               "--speed", str(args.speed), "--players", str(args.players)]
-    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=REPO,
-                              env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    command = [
+        sys.executable,
+        "-m",
+        "engine.cli",
+        "serve",
+        str(REPO / "examples" / "soccer"),
+        "--port",
+        str(port),
+        "--speed",
+        str(args.speed),
+        "--players",
+        str(args.players),
+    ]
+    server = subprocess.Popen(
+        command,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        cwd=REPO,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
     idle: list[dict[str, float]] = []
     loaded: list[dict[str, float]] = []
     groups: list[tuple[list[Client], float]] = []
@@ -185,8 +202,10 @@ def main() -> int:
         first = status(port)
         behavior_hz = first["behavior_hz"]
         agents = len(first["world"].get("teams", [])) and args.players * 2
-        print(f"soccer, {agents} agents, speed {args.speed:g}x; {args.clients} clients at {args.rate:g} Hz; "
-              f"{args.rounds} load phases of {args.duration / args.rounds:g} s between phases without clients")
+        print(
+            f"soccer, {agents} agents, speed {args.speed:g}x; {args.clients} clients at {args.rate:g} Hz; "
+            f"{args.rounds} load phases of {args.duration / args.rounds:g} s between phases without clients"
+        )
 
         def idle_phase(seconds: float) -> None:
             before, started = status(port), time.monotonic()
@@ -208,10 +227,16 @@ def main() -> int:
     # The tick cost drifts with the match (kick-off, play, ...): compare each load phase with the
     # phases without clients right before and after it, not with one baseline at the start.
     baseline, with_clients = summary(idle, behavior_hz), summary(loaded, behavior_hz)
-    rows = [("real-time factor", "rtf", 3), ("simulation ms/tick (wall)", "tick_ms", 3),
-            ("simulation ms/tick (CPU)", "cpu_ms", 3), ("  of which sampling", "frame_ms", 3),
-            ("capacity (x real time)", "capacity", 2), ("  from CPU time", "cpu_capacity", 2),
-            ("server ms/sample (ring)", "record_ms", 3), ("samples dropped", "dropped", 0)]
+    rows = [
+        ("real-time factor", "rtf", 3),
+        ("simulation ms/tick (wall)", "tick_ms", 3),
+        ("simulation ms/tick (CPU)", "cpu_ms", 3),
+        ("  of which sampling", "frame_ms", 3),
+        ("capacity (x real time)", "capacity", 2),
+        ("  from CPU time", "cpu_capacity", 2),
+        ("server ms/sample (ring)", "record_ms", 3),
+        ("samples dropped", "dropped", 0),
+    ]
     print(f"{'':28}{'no clients':>14}{'with clients':>14}")
     for label, key, digits in rows:
         print(f"{label:28}{baseline[key]:>14.{digits}f}{with_clients[key]:>14.{digits}f}")
@@ -220,21 +245,29 @@ def main() -> int:
         around = summary([idle[k], idle[k + 1]], behavior_hz)["tick_ms"]
         costs.append(summary([window], behavior_hz)["tick_ms"] / around - 1.0)
     cost = sum(costs) / len(costs)
-    print(f"clients cost the simulation {100 * cost:+.1f} % per tick (goal < 10 %; per load phase, against the "
-          f"phases around it: {', '.join(f'{100 * c:+.1f} %' for c in costs)})")
+    print(
+        f"clients cost the simulation {100 * cost:+.1f} % per tick (goal < 10 %; per load phase, against the "
+        f"phases around it: {', '.join(f'{100 * c:+.1f} %' for c in costs)})"
+    )
     clients = [c for group, _ in groups for c in group]
     latencies = [x for c in clients for x in c.latencies]
     deltas = [x for c in clients for x in c.delta_sizes]
     fulls = [x for c in clients for x in c.full_sizes]
-    print(f"frame latency tick -> client: median {statistics.median(latencies):.1f} ms, "
-          f"p99 {percentile(latencies, 99):.1f} ms, max {max(latencies):.1f} ms (goal p99 < 50 ms)")
-    print(f"bytes per frame: delta median {statistics.median(deltas):.0f}, mean {statistics.mean(deltas):.0f}, "
-          f"p99 {percentile(deltas, 99):.0f}; full {statistics.median(fulls) if fulls else float('nan'):.0f} "
-          f"(goal < 4096)")
+    print(
+        f"frame latency tick -> client: median {statistics.median(latencies):.1f} ms, "
+        f"p99 {percentile(latencies, 99):.1f} ms, max {max(latencies):.1f} ms (goal p99 < 50 ms)"
+    )
+    print(
+        f"bytes per frame: delta median {statistics.median(deltas):.0f}, mean {statistics.mean(deltas):.0f}, "
+        f"p99 {percentile(deltas, 99):.0f}; full {statistics.median(fulls) if fulls else float('nan'):.0f} "
+        f"(goal < 4096)"
+    )
     per_client = [c.frames / wall for group, wall in groups for c in group]
     print(f"frames per client per second: median {statistics.median(per_client):.1f} (asked {args.rate:g})")
-    print(f"ring buffer: {final['ring']['frames']} frames, {final['ring']['bytes'] / 1e6:.1f} MB "
-          f"({final['ring']['seconds']} s)")
+    print(
+        f"ring buffer: {final['ring']['frames']} frames, {final['ring']['bytes'] / 1e6:.1f} MB "
+        f"({final['ring']['seconds']} s)"
+    )
     return 0
 
 

@@ -189,8 +189,7 @@ class BehaviorLoop:
         ValueError: if the rates are out of range or do not divide.
     """
 
-    __slots__ = ("_period_ms", "_physics_dt", "_substeps", "phases", "physics_steps", "start_ms",
-                 "ticks", "world")
+    __slots__ = ("_period_ms", "_physics_dt", "_substeps", "phases", "physics_steps", "start_ms", "ticks", "world")
 
     def __init__(
         self,

@@ -44,8 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         ),
     )
     parser.add_argument("example", metavar="EXAMPLE", help="example folder, e.g. examples/soccer")
-    parser.add_argument("example_args", nargs=argparse.REMAINDER, metavar="...",
-                        help="the example's own flags")
+    parser.add_argument("example_args", nargs=argparse.REMAINDER, metavar="...", help="the example's own flags")
     parser.set_defaults(func=run)
 
 

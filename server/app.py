@@ -146,8 +146,17 @@ class Studio:
             diagnostics = [d.as_dict() for d in compilation.diagnostics]
             results[key] = {"ok": problem is None, "diagnostics": diagnostics, "error": problem}
             if self.hub is not None:
-                self.hub.broadcast(orjson.dumps({"type": "event", "event": "compile", "program": key,
-                                                 "ok": problem is None, "diagnostics": diagnostics}))
+                self.hub.broadcast(
+                    orjson.dumps(
+                        {
+                            "type": "event",
+                            "event": "compile",
+                            "program": key,
+                            "ok": problem is None,
+                            "diagnostics": diagnostics,
+                        }
+                    )
+                )
         return results
 
     def programs_of(self, path: str) -> list[str]:
@@ -172,9 +181,17 @@ class Studio:
         diagnostics = [dict(d, program=k) for k, r in results.items() for d in r["diagnostics"]]
         if self.hub is not None:
             for path in paths:
-                self.hub.broadcast(orjson.dumps({"type": "event", "event": "file", "path": path,
-                                                 "version": None if path == deleted else version,
-                                                 "deleted": path == deleted}))
+                self.hub.broadcast(
+                    orjson.dumps(
+                        {
+                            "type": "event",
+                            "event": "file",
+                            "path": path,
+                            "version": None if path == deleted else version,
+                            "deleted": path == deleted,
+                        }
+                    )
+                )
         body: dict[str, Any] = {
             "path": paths[-1],
             "version": version,
@@ -211,7 +228,11 @@ def _count_history(session: Session, t0: int, t1: int, every: int) -> int:
 
 def _history_message(command_id: Any, index: int, last: bool, chunk: list[bytes]) -> bytes:
     return b'{"type":"history","id":%s,"chunk":%d,"last":%s,"frames":[%s]}' % (
-        orjson.dumps(command_id), index, b"true" if last else b"false", b",".join(chunk))
+        orjson.dumps(command_id),
+        index,
+        b"true" if last else b"false",
+        b",".join(chunk),
+    )
 
 
 def _studio(request: Request) -> Studio:
@@ -259,8 +280,10 @@ async def command(studio: StudioDep, body: dict[str, Any]) -> JSONResponse:
     try:
         parsed = parse_command(body)
     except ProtocolError as error:
-        return JSONResponse({"type": "reply", "id": body.get("id"), "ok": False, "error": str(error),
-                             "detail": str(error)}, status_code=400)
+        return JSONResponse(
+            {"type": "reply", "id": body.get("id"), "ok": False, "error": str(error), "detail": str(error)},
+            status_code=400,
+        )
     ok, result, error = await studio.run_command(parsed, None)
     payload: dict[str, Any] = {"type": "reply", "id": parsed.id, "ok": ok}
     if result is not None:
@@ -304,8 +327,9 @@ async def read_file(studio: StudioDep, path: str) -> JSONResponse:
 
 
 @router.put("/api/files/{path:path}", tags=["files"])
-async def write_file(studio: StudioDep, path: str, body: FileBody,
-                     if_match: str | None = Header(default=None)) -> Response:
+async def write_file(
+    studio: StudioDep, path: str, body: FileBody, if_match: str | None = Header(default=None)
+) -> Response:
     """Replace a file (If-Match: its version); compile; hot-swap when clean, else 422."""
     expected = _etag(if_match) or body.version
     async with studio.write_lock:
@@ -322,8 +346,9 @@ async def create_file(studio: StudioDep, path: str, body: FileBody) -> Response:
 
 
 @router.patch("/api/files/{path:path}", tags=["files"])
-async def rename_file(studio: StudioDep, path: str, body: RenameBody,
-                      if_match: str | None = Header(default=None)) -> Response:
+async def rename_file(
+    studio: StudioDep, path: str, body: RenameBody, if_match: str | None = Header(default=None)
+) -> Response:
     """Rename a file to ``body.path`` (409 if that exists)."""
     async with studio.write_lock:
         version = await asyncio.to_thread(studio.files.rename, path, body.path, _etag(if_match))
@@ -474,14 +499,16 @@ def _log_lines(encoded: Iterator[bytes], gen: frames.Generation) -> Iterator[byt
             if table is None:
                 agents.append({"id": index, "name": gen.structure["agents"][index]["name"], "path": []})
                 continue
-            agents.append({
-                "id": index,
-                "name": gen.structure["agents"][index]["name"],
-                "path": [table.node(node) for node in agent["path"]],
-                "outputs": {table.outputs.get(int(k), k): v for k, v in values["outputs"].items()},
-                "inputs": {table.inputs.get(int(k), k): v for k, v in values["inputs"].items()},
-                **{k: agent[k] for k in ("fault", "forced", "overrides") if k in agent},
-            })
+            agents.append(
+                {
+                    "id": index,
+                    "name": gen.structure["agents"][index]["name"],
+                    "path": [table.node(node) for node in agent["path"]],
+                    "outputs": {table.outputs.get(int(k), k): v for k, v in values["outputs"].items()},
+                    "inputs": {table.inputs.get(int(k), k): v for k, v in values["inputs"].items()},
+                    **{k: agent[k] for k in ("fault", "forced", "overrides") if k in agent},
+                }
+            )
         yield orjson.dumps({"seq": frame["seq"], "t": frame["t"], "agents": agents}) + b"\n"
 
 
@@ -499,10 +526,16 @@ class _Names:
             _, depth, option_id, state_id, option_time, state_time, decided_in, leaf, params = node
             option = self.options[option_id]
             states = option["states"]
-            return {"depth": depth, "option": option["name"], "state": states[state_id]["name"],
-                    "option_time": option_time, "state_time": state_time,
-                    "decided_in": states[decided_in]["name"] if decided_in >= 0 else None, "leaf": leaf,
-                    "params": dict(zip((p["name"] for p in option["params"]), params, strict=False))}
+            return {
+                "depth": depth,
+                "option": option["name"],
+                "state": states[state_id]["name"],
+                "option_time": option_time,
+                "state_time": state_time,
+                "decided_in": states[decided_in]["name"] if decided_in >= 0 else None,
+                "leaf": leaf,
+                "params": dict(zip((p["name"] for p in option["params"]), params, strict=False)),
+            }
         _, depth, behavior_id, time, params = node
         return {"depth": depth, "behavior": self.behaviors[behavior_id], "time": time, "params": params}
 

@@ -26,16 +26,22 @@ def register(subparsers: Any) -> None:
         "the REST API under /api (schema at /api/openapi.json), the live session on the websocket /ws "
         "(docs/protocol.md).",
     )
-    parser.add_argument("example", nargs="?", default=str(DEFAULT_EXAMPLE),
-                        help="example folder (default: examples/soccer)")
+    parser.add_argument(
+        "example", nargs="?", default=str(DEFAULT_EXAMPLE), help="example folder (default: examples/soccer)"
+    )
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     parser.add_argument("--port", type=int, default=8000, help="port (default 8000; 0 picks a free one)")
     parser.add_argument("--token", default=None, help="token clients must present (generated off loopback)")
     parser.add_argument("--speed", type=float, default=1.0, help="simulation speed, x real time (0.1..20)")
     parser.add_argument("--seed", type=int, default=1, help="the world's seed")
     parser.add_argument("--paused", action="store_true", help="start paused")
-    parser.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
-                        help="also accept this Origin (e.g. http://localhost:5173 for the Vite dev server)")
+    parser.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="also accept this Origin (e.g. http://localhost:5173 for the Vite dev server)",
+    )
     parser.add_argument("--players", type=int, default=None, help="players per team (soccer)")
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")

@@ -292,16 +292,18 @@ class Hub:
             "t": latest.t if latest else 0,
             "token_required": self.token_required,
         }
-        return b"".join([
-            b'{"type":"%s","version":%d,"reason":%s,"generation":%d,"session":' % (
-                ServerMessage.HELLO.value.encode(), VERSION, orjson.dumps(reason), gen.number),
-            orjson.dumps(info),
-            b',"structure":',
-            gen.structure_bytes,
-            b',"scene":',
-            gen.scene_bytes,
-            b"}",
-        ])
+        return b"".join(
+            [
+                b'{"type":"%s","version":%d,"reason":%s,"generation":%d,"session":'
+                % (ServerMessage.HELLO.value.encode(), VERSION, orjson.dumps(reason), gen.number),
+                orjson.dumps(info),
+                b',"structure":',
+                gen.structure_bytes,
+                b',"scene":',
+                gen.scene_bytes,
+                b"}",
+            ]
+        )
 
     token_required = False
 

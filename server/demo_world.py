@@ -65,7 +65,7 @@ class DemoAgent:
         self.x = -1000.0 + 600.0 * index
         self.y = -800.0 + 500.0 * index
         self.heading = 90.0 * index
-        self.last_seen_ms = -10**9
+        self.last_seen_ms = -(10**9)
         self.speed = 0.0  # mm/s forward
         self.turn_to: float | None = None  # relative direction to turn towards, deg
         self.rate = 0.0  # deg/s
@@ -204,8 +204,11 @@ class DemoController:
             run = _SKILLS.get(behavior.name)
             if run is None:
                 continue
-            cls: Any = type(f"Demo_{behavior.name}", (_Skill,), {
-                "name": behavior.name, "parameters": behavior.params, "run": staticmethod(run)})
+            cls: Any = type(
+                f"Demo_{behavior.name}",
+                (_Skill,),
+                {"name": behavior.name, "parameters": behavior.params, "run": staticmethod(run)},
+            )
             bindings.behavior(cls(agent))
         enum = program.enums.get("game.state")
         if enum is not None and not enum.internal:

@@ -241,9 +241,16 @@ class Generation:
         """The generation announced by the simulation process (``("g", number, reason, ...)``)."""
         _, number, reason, structure_bytes, scene_bytes, input_ids, output_ids, *_ = message
         structure = orjson.loads(structure_bytes)
-        return cls(number=number, reason=reason, structure=structure, structure_bytes=structure_bytes,
-                   scene_bytes=scene_bytes, input_ids=input_ids, output_ids=output_ids,
-                   engines=tuple(a["program"] is not None for a in structure["agents"]))
+        return cls(
+            number=number,
+            reason=reason,
+            structure=structure,
+            structure_bytes=structure_bytes,
+            scene_bytes=scene_bytes,
+            input_ids=input_ids,
+            output_ids=output_ids,
+            engines=tuple(a["program"] is not None for a in structure["agents"]),
+        )
 
 
 @dataclass(slots=True, eq=False)

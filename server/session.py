@@ -177,15 +177,20 @@ class Session:
             paused=self.paused,
             behavior_hz=self.behavior_hz,
             physics_hz=self.physics_hz,
-            programs={key: (state.running, state.running_json) if state.running is not None
-                      and state.running_json is not None else None for key, state in self.programs.items()},
+            programs={
+                key: (state.running, state.running_json)
+                if state.running is not None and state.running_json is not None
+                else None
+                for key, state in self.programs.items()
+            },
             seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
             generation=self.generation.number if self.generation is not None else 0,
             reason=str(reason),
         )
         ours, theirs = socket.socketpair()
-        process = _context(self.example).Process(target=worker.main, args=(theirs, config), daemon=True,
-                                                 name="xabsl-simulation")
+        process = _context(self.example).Process(
+            target=worker.main, args=(theirs, config), daemon=True, name="xabsl-simulation"
+        )
         try:
             await asyncio.to_thread(process.start)
         finally:
@@ -252,8 +257,12 @@ class Session:
         else:
             code = None
         if not self._stopping and self.crash is None:
-            self.crash = {"message": f"the simulation process ended (exit code {code})", "traceback": None,
-                          "seq": self.ring.latest.seq if self.ring.latest else 0, "t": None}
+            self.crash = {
+                "message": f"the simulation process ended (exit code {code})",
+                "traceback": None,
+                "seq": self.ring.latest.seq if self.ring.latest else 0,
+                "t": None,
+            }
         if self.crash is not None:
             self.crash["exit_code"] = code
         for future in self._pending.values():
@@ -395,8 +404,7 @@ class Session:
             return "the behavior has errors; the running version is kept"
         program_json = program_to_json(program, compilation.source_text)
         if self.running:
-            ok, problem, error = await self._send("apply", {"key": key, "program": program, "json": program_json},
-                                                  None)
+            ok, problem, error = await self._send("apply", {"key": key, "program": program, "json": program_json}, None)
             if not ok:
                 raise CommandError(error)
             if problem is not None:
@@ -436,11 +444,21 @@ class Session:
             "tick_ms": sim.get("tick_ms", 0.0),
             # raw counters of the simulation process, for windowed measurements (benchmarks/stream_load.py)
             "timing": sim.get("timing", {}),
-            "ring": {"frames": ring_entries, "capacity": self.ring.capacity,
-                     "seconds": round(ring_entries / self.behavior_hz, 1), "bytes": self.ring.nbytes(),
-                     "record_seconds": self.recorder.record_seconds, "recorded": self.recorder.recorded},
-            "simulation": {"running": self.running, "pid": self.pid, "restarts": self.restarts,
-                           "crash": self.crash, "pipe": sim.get("pipe", {})},
+            "ring": {
+                "frames": ring_entries,
+                "capacity": self.ring.capacity,
+                "seconds": round(ring_entries / self.behavior_hz, 1),
+                "bytes": self.ring.nbytes(),
+                "record_seconds": self.recorder.record_seconds,
+                "recorded": self.recorder.recorded,
+            },
+            "simulation": {
+                "running": self.running,
+                "pid": self.pid,
+                "restarts": self.restarts,
+                "crash": self.crash,
+                "pipe": sim.get("pipe", {}),
+            },
             "programs": {key: state.as_dict() for key, state in self.programs.items()},
             "world": sim.get("world") or _latest_world(latest),
         }

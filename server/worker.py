@@ -167,8 +167,9 @@ class Simulation:
         agents = []
         for index, (agent, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
             program_key = key if engine is not None else None
-            agents.append({"id": index, "name": agent.name, "team": agent.team, "number": agent.number,
-                           "program": program_key})
+            agents.append(
+                {"id": index, "name": agent.name, "team": agent.team, "number": agent.number, "program": program_key}
+            )
             if engine is None or key is None:
                 samplers.append(None)
                 input_ids.append(())
@@ -183,9 +184,17 @@ class Simulation:
         self.samplers = samplers
         programs = {key: running[1] for key, running in self.programs.items() if running is not None}
         structure = {"programs": programs, "agents": agents}
-        return ("g", self.generation_number, self.reason, orjson.dumps(structure),
-                orjson.dumps(self.world.static_scene()), tuple(input_ids), tuple(output_ids), self.seed,
-                dict(self.errors))
+        return (
+            "g",
+            self.generation_number,
+            self.reason,
+            orjson.dumps(structure),
+            orjson.dumps(self.world.static_scene()),
+            tuple(input_ids),
+            tuple(output_ids),
+            self.seed,
+            dict(self.errors),
+        )
 
     def _tick_time(self) -> int:
         # The clock of the tick just run (the loop's now_ms is already the next tick's).
@@ -216,9 +225,21 @@ class Simulation:
             inputs.append(sampler.inputs())
             outputs.append(sampler.outputs())
         world = self.world
-        sample = ("s", self.seq, self.generation_number, self._tick_time(), time.time() * 1000.0, self.paused,
-                  self.speed, tuple(paths), tuple(extras), tuple(inputs), tuple(outputs),
-                  dumps(world.dynamic_scene()), dumps(world.status()))
+        sample = (
+            "s",
+            self.seq,
+            self.generation_number,
+            self._tick_time(),
+            time.time() * 1000.0,
+            self.paused,
+            self.speed,
+            tuple(paths),
+            tuple(extras),
+            tuple(inputs),
+            tuple(outputs),
+            dumps(world.dynamic_scene()),
+            dumps(world.status()),
+        )
         self.timing.sample += time.perf_counter() - started
         return sample
 
@@ -380,8 +401,13 @@ class Simulation:
             "stay": explanation.stay,
             "leaf_span": leaf_span,
             "conditions": [
-                {"text": c.text, "source": c.source, "value": _plain(c.value), "branch": c.branch,
-                 "span": c.span.as_dict() if c.span else None}
+                {
+                    "text": c.text,
+                    "source": c.source,
+                    "value": _plain(c.value),
+                    "branch": c.branch,
+                    "span": c.span.as_dict() if c.span else None,
+                }
                 for c in explanation.conditions
             ],
         }
@@ -517,11 +543,22 @@ class Simulation:
             "real_time_factor": round(timing.real_time_factor(), 3),
             "tick_ms": round(1000 * timing.busy / timing.ticks, 3) if timing.ticks else 0.0,
             # raw counters, for windowed measurements (benchmarks/stream_load.py)
-            "timing": {"ticks": timing.ticks, "busy_seconds": timing.busy, "cpu_seconds": timing.cpu,
-                       "sim_seconds": self.loop.sim_seconds, "frame_seconds": timing.sample},
+            "timing": {
+                "ticks": timing.ticks,
+                "busy_seconds": timing.busy,
+                "cpu_seconds": timing.cpu,
+                "sim_seconds": self.loop.sim_seconds,
+                "frame_seconds": timing.sample,
+            },
             "errors": dict(self.errors),
-            "pipe": {"sent": self.channel.sent, "dropped": self.channel.dropped, "bytes": self.channel.bytes_sent,
-                     "backlog": self.channel.backlog} if self.channel is not None else {},
+            "pipe": {
+                "sent": self.channel.sent,
+                "dropped": self.channel.dropped,
+                "bytes": self.channel.bytes_sent,
+                "backlog": self.channel.backlog,
+            }
+            if self.channel is not None
+            else {},
             "world": self.world.status(),
         }
 
@@ -597,8 +634,9 @@ def run(channel: Channel, sim: Simulation) -> None:
         try:
             sample = sim.tick()
         except Exception as error:  # the world broke: report, end this process (reset starts a new one)
-            channel.send(("crash", f"{type(error).__name__}: {error}", traceback.format_exc(), sim.seq,
-                          sim._tick_time()))
+            channel.send(
+                ("crash", f"{type(error).__name__}: {error}", traceback.format_exc(), sim.seq, sim._tick_time())
+            )
             _drain(channel)
             raise SystemExit(1) from None
         channel.send(sample, droppable=True)

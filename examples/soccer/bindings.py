@@ -71,10 +71,16 @@ class Role(enum.IntEnum):
 
 def register_enums(bindings: Bindings) -> None:
     """Register the external enumerations with the host values of the world."""
-    bindings.enum("game.state", {
-        "init": GameState.INITIAL, "ready": GameState.READY, "set": GameState.SET,
-        "playing": GameState.PLAYING, "finished": GameState.FINISHED,
-    })
+    bindings.enum(
+        "game.state",
+        {
+            "init": GameState.INITIAL,
+            "ready": GameState.READY,
+            "set": GameState.SET,
+            "playing": GameState.PLAYING,
+            "finished": GameState.FINISHED,
+        },
+    )
     bindings.enum("role", {r.name.lower(): int(r) for r in Role})
 
 
@@ -168,8 +174,7 @@ class SoccerSymbols:
 
     def opponent_in_corridor(self, from_x: float, from_y: float, to_x: float, to_y: float, width: float) -> bool:
         """``opponent_in_corridor(...)``: an opponent is seen within ``width`` of the segment from-to."""
-        return any(_segment_distance(ox, oy, from_x, from_y, to_x, to_y) < width
-                   for ox, oy in self._field_opponents())
+        return any(_segment_distance(ox, oy, from_x, from_y, to_x, to_y) < width for ox, oy in self._field_opponents())
 
     # -- teammates (team messages) ----------------------------------------------------------------
 
@@ -247,8 +252,11 @@ class SoccerSymbols:
             if message.sender == GOALIE_NUMBER or x < bx + 300.0 or x <= best_pass_x:
                 continue
             d = math.hypot(x - bx, y - by)
-            if 800.0 < d < 4000.0 and not self.opponent_in_corridor(bx, by, x, y, 350.0) \
-                    and not self.opponent_near(x, y, 500.0):
+            if (
+                800.0 < d < 4000.0
+                and not self.opponent_in_corridor(bx, by, x, y, 350.0)
+                and not self.opponent_near(x, y, 500.0)
+            ):
                 best_pass_x = x
                 self.pass_available, self.pass_x, self.pass_y = True, x, y
 
@@ -375,10 +383,15 @@ def make_bindings(perception: WorldModel, motion: MotionRequest) -> tuple[Bindin
     out = wm.outgoing
     out.setdefault("role", int(Role.NONE))
     out.setdefault("time_to_ball", NO_TIME_TO_BALL)
-    b.output("team.role", E, enum="role", setter=partial(out.__setitem__, "role"),
-             getter=partial(out.__getitem__, "role"))
-    b.output("team.time_to_ball", D, setter=partial(out.__setitem__, "time_to_ball"),
-             getter=partial(out.__getitem__, "time_to_ball"))
+    b.output(
+        "team.role", E, enum="role", setter=partial(out.__setitem__, "role"), getter=partial(out.__getitem__, "role")
+    )
+    b.output(
+        "team.time_to_ball",
+        D,
+        setter=partial(out.__setitem__, "time_to_ball"),
+        getter=partial(out.__getitem__, "time_to_ball"),
+    )
 
     for skill in SKILLS:
         b.behavior(skill(perception, motion))

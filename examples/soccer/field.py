@@ -82,11 +82,12 @@ class FieldDimensions:
     def lines(self) -> list[tuple[float, float, float, float]]:
         """Every straight field line as a segment (x1, y1, x2, y2) along its centre."""
         hx, hy = self.half_length, self.half_width
-        segments = [(-hx, -hy, hx, -hy), (hx, -hy, hx, hy), (hx, hy, -hx, hy), (-hx, hy, -hx, -hy),
-                    (0.0, -hy, 0.0, hy)]
+        segments = [(-hx, -hy, hx, -hy), (hx, -hy, hx, hy), (hx, hy, -hx, hy), (-hx, hy, -hx, -hy), (0.0, -hy, 0.0, hy)]
         for side in (-1, 1):
-            for depth, half in ((self.goal_area_length, self.goal_area_width / 2.0),
-                                (self.penalty_area_length, self.penalty_area_width / 2.0)):
+            for depth, half in (
+                (self.goal_area_length, self.goal_area_width / 2.0),
+                (self.penalty_area_length, self.penalty_area_width / 2.0),
+            ):
                 x0 = side * hx
                 x1 = side * (hx - depth)
                 segments += [(x0, -half, x1, -half), (x1, -half, x1, half), (x1, half, x0, half)]

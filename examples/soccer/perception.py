@@ -57,8 +57,12 @@ class SensorModel:
     @classmethod
     def exact(cls, **overrides: Any) -> SensorModel:
         """Return a sensor model without noise (other fields as given)."""
-        values: dict[str, Any] = {"pose_xy_noise": 0.0, "pose_rot_noise": 0.0,
-                                  "ball_distance_noise": 0.0, "ball_angle_noise": 0.0}
+        values: dict[str, Any] = {
+            "pose_xy_noise": 0.0,
+            "pose_rot_noise": 0.0,
+            "ball_distance_noise": 0.0,
+            "ball_angle_noise": 0.0,
+        }
         values.update(overrides)
         return cls(**values)
 
@@ -124,7 +128,8 @@ class WorldModel:
     # What ``opponents`` needs, kept by ``perceive`` so that the list is only built for
     # behaviors that ask for it (most ticks of most options never look at opponents).
     _view: tuple[Snapshot, range, float, float, float, float, float, float] | None = field(
-        default=None, init=False, repr=False)
+        default=None, init=False, repr=False
+    )
     _opponents: list[SeenRobot] | None = field(default=None, init=False, repr=False)
 
     @property

@@ -105,8 +105,7 @@ class Robot:
         limits: walk and kick limits.
     """
 
-    __slots__ = ("_driven", "_last_act_ms", "index", "last_kick_ms", "limits", "physics", "vrot", "vx",
-                 "vy")
+    __slots__ = ("_driven", "_last_act_ms", "index", "last_kick_ms", "limits", "physics", "vrot", "vx", "vy")
 
     def __init__(self, physics: SoccerPhysics, index: int, limits: WalkLimits | None = None) -> None:
         self.physics = physics
@@ -172,8 +171,7 @@ class Robot:
             else:
                 want_x, want_y, want_rot = self._walk_to(request, x, y, theta, side)
             # Elliptic limit: the walk cannot reach full forward and full sideways speed together.
-            r = math.hypot(want_x / (lim.max_forward if want_x >= 0.0 else lim.max_backward),
-                           want_y / lim.max_sideways)
+            r = math.hypot(want_x / (lim.max_forward if want_x >= 0.0 else lim.max_backward), want_y / lim.max_sideways)
             if r > 1.0:
                 want_x /= r
                 want_y /= r

@@ -303,18 +303,30 @@ def play_match(
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The soccer example's own flags (``xabsl run examples/soccer --help``)."""
-    parser.add_argument("--home", metavar="DIR", default=str(DEFAULT_HOME),
-                        help="home team behavior folder with agents.xabsl (default: the example team)")
-    parser.add_argument("--away", metavar="DIR", default=str(DEFAULT_AWAY),
-                        help="away team behavior folder (default: the chase team)")
-    parser.add_argument("--duration", metavar="S", type=float, default=1200.0,
-                        help="playing time of the match in simulated seconds, two halves (default 1200)")
+    parser.add_argument(
+        "--home",
+        metavar="DIR",
+        default=str(DEFAULT_HOME),
+        help="home team behavior folder with agents.xabsl (default: the example team)",
+    )
+    parser.add_argument(
+        "--away", metavar="DIR", default=str(DEFAULT_AWAY), help="away team behavior folder (default: the chase team)"
+    )
+    parser.add_argument(
+        "--duration",
+        metavar="S",
+        type=float,
+        default=1200.0,
+        help="playing time of the match in simulated seconds, two halves (default 1200)",
+    )
     parser.add_argument("--seed", metavar="N", type=int, default=1, help="random seed (default 1)")
     parser.add_argument("--players", metavar="N", type=int, default=5, help="robots per team, 1..7 (default 5)")
-    parser.add_argument("--json", action="store_true",
-                        help="print one JSON object: score, per-team statistics, option activations")
-    parser.add_argument("--render", metavar="OUT.dot",
-                        help="write the home team's option graph as Graphviz DOT and exit")
+    parser.add_argument(
+        "--json", action="store_true", help="print one JSON object: score, per-team statistics, option activations"
+    )
+    parser.add_argument(
+        "--render", metavar="OUT.dot", help="write the home team's option graph as Graphviz DOT and exit"
+    )
 
 
 def main(args: argparse.Namespace) -> int:
@@ -349,12 +361,16 @@ def main(args: argparse.Namespace) -> int:
         return 0
     result = report.as_dict()
     h, a = report.score
-    print(f"home {h} : {a} away   (seed {args.seed}, {args.duration:.0f} s of play, "
-          f"{result['real_time_factor']}x real time)")
+    print(
+        f"home {h} : {a} away   (seed {args.seed}, {args.duration:.0f} s of play, "
+        f"{result['real_time_factor']}x real time)"
+    )
     for key in TEAM_KEYS:
         t = result["teams"][key]
-        print(f"  {key:<4} possession {100 * t['possession']:4.1f} %  shots {t['shots']:3d}  "
-              f"passes {t['passes']:3d}  kicks {t['kicks']:3d}")
+        print(
+            f"  {key:<4} possession {100 * t['possession']:4.1f} %  shots {t['shots']:3d}  "
+            f"passes {t['passes']:3d}  kicks {t['kicks']:3d}"
+        )
     for fault in report.faults:
         print(f"  fault: {fault}")
     return 0
@@ -364,13 +380,22 @@ def _play_with_progress(seed: int, home: Program, away: Program, players: int, h
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     total_ms = 2 * half * 1000.0
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[score]}"),
-                  TimeElapsedColumn(), transient=True) as bar:
+    with Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.fields[score]}"),
+        TimeElapsedColumn(),
+        transient=True,
+    ) as bar:
         task = bar.add_task("match", total=total_ms, score="0 : 0")
 
         def progress(_time_ms: int, game: Any) -> None:
             played = (game.half - 1) * half * 1000.0 + (half * 1000.0 - game.half_time_left_ms)
-            bar.update(task, completed=played, score=f"{game.score[0]} : {game.score[1]}",
-                       description=f"half {game.half} {game.state.name.lower():<8}")
+            bar.update(
+                task,
+                completed=played,
+                score=f"{game.score[0]} : {game.score[1]}",
+                description=f"half {game.half} {game.state.name.lower():<8}",
+            )
 
         return play_match(seed, home, away, players=players, half_duration_s=half, progress=progress)

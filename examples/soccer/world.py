@@ -46,8 +46,18 @@ class SoccerAgent:
     ``name`` is the team name and the player number (``"blue3"``); number 1 is the goalie.
     """
 
-    __slots__ = ("_world", "controller", "index", "motion", "name", "number", "perception", "robot",
-                 "team", "team_index")
+    __slots__ = (
+        "_world",
+        "controller",
+        "index",
+        "motion",
+        "name",
+        "number",
+        "perception",
+        "robot",
+        "team",
+        "team_index",
+    )
 
     def __init__(self, world: SoccerWorld, index: int, team_index: int, number: int, robot: Robot) -> None:
         self._world = world
@@ -129,8 +139,10 @@ class SoccerWorld:
         # Per agent: its kick-off position [mm] when the other team kicks off, and when its own
         # team does (indexed by ``own_kickoff``: a tuple index, not a dict lookup, every sense).
         self._kickoff_mm = [
-            tuple((kickoff_position(a.number, kicking)[0] * MM_PER_M, kickoff_position(a.number, kicking)[1] * MM_PER_M)
-                  for kicking in (False, True))
+            tuple(
+                (kickoff_position(a.number, kicking)[0] * MM_PER_M, kickoff_position(a.number, kicking)[1] * MM_PER_M)
+                for kicking in (False, True)
+            )
             for a in agents
         ]
         self._snapshot = Snapshot(len(agents))
@@ -183,8 +195,7 @@ class SoccerWorld:
         robots = []
         for body in physics.robots:
             x, y = body.position
-            robots.append([round(x * MM_PER_M), round(y * MM_PER_M),
-                           round(normalize_rad(body.angle) * DEG_PER_RAD, 1)])
+            robots.append([round(x * MM_PER_M), round(y * MM_PER_M), round(normalize_rad(body.angle) * DEG_PER_RAD, 1)])
         return {
             "t": self.time_ms,
             "ball": [round(bx * MM_PER_M), round(by * MM_PER_M)],
@@ -255,8 +266,15 @@ class SoccerWorld:
             self._delivered_ms[team] = now_ms
             self.channels[team].deliver(now_ms, self._team_models[team])
             game = self.game
-            self._game_info[team] = (int(game.state), game.half, game.kickoff_team == team, game.score[team],
-                                     game.score[1 - team], game.half_time_left_ms, game.side[team])
+            self._game_info[team] = (
+                int(game.state),
+                game.half,
+                game.kickoff_team == team,
+                game.score[team],
+                game.score[1 - team],
+                game.half_time_left_ms,
+                game.side[team],
+            )
         state, half, own_kickoff, own_score, opponent_score, time_left, side = self._game_info[team]
         wm = agent.perception
         perceive(wm, snap, agent.index, side, self._opponents[team], self.sensor, self.noise, now_ms)
@@ -279,8 +297,7 @@ class SoccerWorld:
         # ``game.may_move`` / ``game.may_kick``, without two property calls per robot and tick.
         state = game.state
         may_kick = state == _PLAYING
-        agent.robot.act(agent.motion, now_ms, pose, game.side[agent.team_index], may_kick or state == _READY,
-                        may_kick)
+        agent.robot.act(agent.motion, now_ms, pose, game.side[agent.team_index], may_kick or state == _READY, may_kick)
         if now_ms - self._last_sent_ms[index] >= self.sensor.message_interval_ms:
             self._last_sent_ms[index] = now_ms
             self.channels[agent.team_index].send(now_ms, agent.number, agent.perception.outgoing)

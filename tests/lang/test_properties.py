@@ -52,8 +52,7 @@ from tests.kit import KIT, SETS
 
 
 #: Precedence levels of §1.3 (higher binds looser); atoms are 0, unary operators 1.
-LEVEL = {"*": 2, "/": 2, "%": 2, "+": 3, "-": 3, "<": 4, ">": 4, "<=": 4, ">=": 4, "==": 4, "!=": 4,
-         "&&": 5, "||": 6}
+LEVEL = {"*": 2, "/": 2, "%": 2, "+": 3, "-": 3, "<": 4, ">": 4, "<=": 4, ">=": 4, "==": 4, "!=": 4, "&&": 5, "||": 6}
 CONDITIONAL_LEVEL = 7
 
 
@@ -395,8 +394,7 @@ class Generator:
             return self.pick(candidates)
         if choice == 3:
             return self.call(enum, depth) or self.enum_value(enum, depth - 1)
-        return Conditional(self.boolean(depth - 1), self.enum_value(enum, depth - 1),
-                           self.enum_value(enum, depth - 1))
+        return Conditional(self.boolean(depth - 1), self.enum_value(enum, depth - 1), self.enum_value(enum, depth - 1))
 
     def depth(self) -> int:
         return self.rnd.randint(0, self.max_depth)
@@ -419,16 +417,29 @@ class Generator:
         else:  # braces are optional: with a mandatory else, nested ifs never dangle
             then = ["\n", inner, *then]
             other = ["\n", inner, *other]
-        return [f"\n{self.doc(indent)}{indent}if (", self.boolean(self.depth()), ") ", *then,
-                f"\n{self.doc(indent)}{indent}else ", *other]
+        return [
+            f"\n{self.doc(indent)}{indent}if (",
+            self.boolean(self.depth()),
+            ") ",
+            *then,
+            f"\n{self.doc(indent)}{indent}else ",
+            *other,
+        ]
 
     def common_tree(self, states: list[str], indent: str) -> list[str | Expr]:
         """A common decision tree: an ``if``/``else if`` chain without a final ``else``."""
         parts: list[str | Expr] = []
         for i in range(self.rnd.randint(1, 3)):
             prefix = f"{indent}else " if i else indent
-            parts += [f"{self.doc(indent)}{prefix}if (", self.boolean(self.depth()), ")\n",
-                      indent, "  ", *self.dtree(states, self.rnd.randint(0, 2), indent + "  "), "\n"]
+            parts += [
+                f"{self.doc(indent)}{prefix}if (",
+                self.boolean(self.depth()),
+                ")\n",
+                indent,
+                "  ",
+                *self.dtree(states, self.rnd.randint(0, 2), indent + "  "),
+                "\n",
+            ]
         return parts
 
     def actions(self, index: int, indent: str) -> list[str | Expr]:
@@ -491,9 +502,7 @@ class Generator:
         includes = ["symbols.xabsl", "skills.xabsl", *(f"options/opt{i}.xabsl" for i in range(self.option_count))]
         roots = ["opt0", *(f"opt{i}" for i in range(1, self.option_count) if self.chance(0.3))]
         agents = "".join(f'{self.doc()}agent a{i}("Agent {i}", {root});\n' for i, root in enumerate(roots))
-        files["agents.xabsl"] = [
-            "/*** Title: Generated\n     Platform: hypothesis\n*/\n@@INCLUDES@@\n", agents
-        ]
+        files["agents.xabsl"] = ["/*** Title: Generated\n     Platform: hypothesis\n*/\n@@INCLUDES@@\n", agents]
         return GeneratedSet(files, includes)
 
 
@@ -569,8 +578,12 @@ def check_diagnostics(compilation: Compilation) -> None:
 # valid programs
 
 #: Each property is a separate budget; the file as a whole stays well under a minute.
-VALID = settings(max_examples=60, deadline=None, derandomize=True,
-                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+VALID = settings(
+    max_examples=60,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 
 
 @st.composite
@@ -643,11 +656,62 @@ def test_printer_parenthesises_only_where_the_grammar_needs_it() -> None:
 # mutations
 
 _TOKEN = re.compile(rb"@?[A-Za-z_][A-Za-z0-9_.]*|[0-9]+(?:\.[0-9]*)?|&&|\|\||[<>=!]=|\s+|.", re.DOTALL)
-_NOISE = [b"{", b"}", b"(", b")", b";", b"/*", b"/**", b"*/", b"//", b'"', b"[", b"@", b"?", b":",
-          b"\xff", b"\xc3", "é".encode(), "→".encode(), b"\x00", b"\r", b"\t", b"#", b"$", b"`", b"\\",
-          b"else", b"if", b"state", b"option", b"include", b"1.5E3", b"-", b"!", b"==", b"&&"]
-_NAMES = [b"state_time", b"action_done", b"goto", b"stay", b"enum", b"input", b"x", b"@p", b"initial",
-          b"agent", b"common", b"decision", b"namespace", b"behavior", b"s0", b"opt1", b"true"]
+_NOISE = [
+    b"{",
+    b"}",
+    b"(",
+    b")",
+    b";",
+    b"/*",
+    b"/**",
+    b"*/",
+    b"//",
+    b'"',
+    b"[",
+    b"@",
+    b"?",
+    b":",
+    b"\xff",
+    b"\xc3",
+    "é".encode(),
+    "→".encode(),
+    b"\x00",
+    b"\r",
+    b"\t",
+    b"#",
+    b"$",
+    b"`",
+    b"\\",
+    b"else",
+    b"if",
+    b"state",
+    b"option",
+    b"include",
+    b"1.5E3",
+    b"-",
+    b"!",
+    b"==",
+    b"&&",
+]
+_NAMES = [
+    b"state_time",
+    b"action_done",
+    b"goto",
+    b"stay",
+    b"enum",
+    b"input",
+    b"x",
+    b"@p",
+    b"initial",
+    b"agent",
+    b"common",
+    b"decision",
+    b"namespace",
+    b"behavior",
+    b"s0",
+    b"opt1",
+    b"true",
+]
 
 
 def mutate(data: bytes, rnd: random.Random) -> bytes:
@@ -657,7 +721,7 @@ def mutate(data: bytes, rnd: random.Random) -> bytes:
     kind = rnd.randrange(10)
     at = rnd.randrange(len(data) + 1)
     if kind == 0:  # delete characters
-        return data[:at] + data[at + rnd.randint(1, 3):]
+        return data[:at] + data[at + rnd.randint(1, 3) :]
     if kind == 1:  # duplicate a slice
         end = min(len(data), at + rnd.randint(1, 40))
         return data[:end] + data[at:end] + data[end:]
@@ -669,11 +733,10 @@ def mutate(data: bytes, rnd: random.Random) -> bytes:
         positions = [i for i, byte in enumerate(data) if byte in b"{}()"]
         if positions:
             i = rnd.choice(positions)
-            return data[:i] + data[i + 1:]
+            return data[:i] + data[i + 1 :]
         return data
     if kind == 5:  # line ends: LF -> CRLF, CRLF -> LF, or a lone CR
-        return rnd.choice([data.replace(b"\n", b"\r\n"), data.replace(b"\r\n", b"\n"),
-                           data[:at] + b"\r" + data[at:]])
+        return rnd.choice([data.replace(b"\n", b"\r\n"), data.replace(b"\r\n", b"\n"), data[:at] + b"\r" + data[at:]])
     tokens = _TOKEN.findall(data)
     i = rnd.randrange(len(tokens))
     if kind == 6:  # delete a token
@@ -701,8 +764,12 @@ def kit_set(name: str) -> dict[str, bytes]:
 KIT_SETS = {name: kit_set(name) for name in SETS}
 #: a compile of a small mutated set takes milliseconds; this only catches hangs
 HANG_GUARD_SECONDS = 2.0
-MUTATIONS = settings(max_examples=200, deadline=None, derandomize=True,
-                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+MUTATIONS = settings(
+    max_examples=200,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 
 
 def check_mutant(files: dict[str, bytes], rnd: random.Random) -> None:
@@ -732,9 +799,7 @@ def test_mutated_kit_sets_give_diagnostics_not_exceptions(name: str, rnd: random
 
 @settings(MUTATIONS, max_examples=120)
 @given(behavior_sets(), st.randoms(use_true_random=False))
-def test_mutated_generated_sets_give_diagnostics_not_exceptions(
-    generated: GeneratedSet, rnd: random.Random
-) -> None:
+def test_mutated_generated_sets_give_diagnostics_not_exceptions(generated: GeneratedSet, rnd: random.Random) -> None:
     files = {name: text.encode("utf-8") for name, text in generated.render().items()}
     check_mutant(files, rnd)
 
@@ -767,8 +832,12 @@ def test_output_does_not_depend_on_the_hash_seed() -> None:
     for hash_seed in ("1", "12345"):
         script = "from tests.lang.test_properties import fingerprints_for_seeds as f; print(f(20))"
         result = subprocess.run(
-            [sys.executable, "-c", script], cwd=root, env={**os.environ, "PYTHONHASHSEED": hash_seed},
-            capture_output=True, text=True, check=True,
+            [sys.executable, "-c", script],
+            cwd=root,
+            env={**os.environ, "PYTHONHASHSEED": hash_seed},
+            capture_output=True,
+            text=True,
+            check=True,
         )
         assert result.stdout.strip() == expected, f"PYTHONHASHSEED={hash_seed} changes the output"
 
@@ -776,9 +845,40 @@ def test_output_does_not_depend_on_the_hash_seed() -> None:
 # --------------------------------------------------------------------------------------------
 # the tokenizer
 
-_LEXEMES = ["option", "state", "@p", "a.b", "state_time-500", "1.5E3", "007", "1.", "/**/", "/***",
-            "/*", "*/", "//", "\n", "\r\n", " ", '"', "[", "]", "&&", "||", "<=", "!", "é", "\x00",
-            "\ufeff", "#", "{", "}", ";", "-", "/"]
+_LEXEMES = [
+    "option",
+    "state",
+    "@p",
+    "a.b",
+    "state_time-500",
+    "1.5E3",
+    "007",
+    "1.",
+    "/**/",
+    "/***",
+    "/*",
+    "*/",
+    "//",
+    "\n",
+    "\r\n",
+    " ",
+    '"',
+    "[",
+    "]",
+    "&&",
+    "||",
+    "<=",
+    "!",
+    "é",
+    "\x00",
+    "\ufeff",
+    "#",
+    "{",
+    "}",
+    ";",
+    "-",
+    "/",
+]
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)

@@ -48,8 +48,13 @@ class OptionState:
 class Interpreter:
     """Runs a program; ``execute(now)`` returns the tick's nodes and outputs."""
 
-    def __init__(self, program: ir.Program, functions: dict[str, Callable[..., Any]],
-                 values: dict[str, Any], enum_values: dict[str, int]) -> None:
+    def __init__(
+        self,
+        program: ir.Program,
+        functions: dict[str, Callable[..., Any]],
+        values: dict[str, Any],
+        enum_values: dict[str, int],
+    ) -> None:
         self.program = program
         self.functions = functions
         self.values = values
@@ -104,7 +109,10 @@ class Interpreter:
                 self.call_option(action.option, action.args, (name, st.active))
         st.is_active = True
         self.nodes[node_index] = (
-            name, st.active, (self.now - st.activated) & MASK, (self.now - st.state_entered) & MASK,
+            name,
+            st.active,
+            (self.now - st.activated) & MASK,
+            (self.now - st.state_entered) & MASK,
             dict(st.params),
         )
 
@@ -160,9 +168,17 @@ class Interpreter:
             if e.op == "%":
                 return float(int(math.fmod(cpp_int(a), cpp_int(b))))
             return {
-                "+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b,
-                "<": lambda: a < b, "<=": lambda: a <= b, ">": lambda: a > b, ">=": lambda: a >= b,
-                "==": lambda: a == b, "!=": lambda: a != b, "enum==": lambda: a == b, "enum!=": lambda: a != b,
+                "+": lambda: a + b,
+                "-": lambda: a - b,
+                "*": lambda: a * b,
+                "<": lambda: a < b,
+                "<=": lambda: a <= b,
+                ">": lambda: a > b,
+                ">=": lambda: a >= b,
+                "==": lambda: a == b,
+                "!=": lambda: a != b,
+                "enum==": lambda: a == b,
+                "enum!=": lambda: a != b,
             }[e.op]()
         if isinstance(e, ir.Logical):
             if e.op == "&&":

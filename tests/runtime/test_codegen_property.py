@@ -128,8 +128,9 @@ class Builder:
                 if self.draw(st.booleans()):
                     actions.append(ir.Assignment("out1", D, None, ir.OutputRef("out0", D)))
             decision = self.tree(params, states, state, 3, [0])
-            built.append(ir.State(state, k, decision, tuple(actions), initial=state == initial,
-                                  target=self.draw(st.booleans())))
+            built.append(
+                ir.State(state, k, decision, tuple(actions), initial=state == initial, target=self.draw(st.booleans()))
+            )
         return ir.Option(name, index, tuple(params), tuple(built), initial)
 
 

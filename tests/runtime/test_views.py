@@ -24,12 +24,19 @@ class Act(BasicBehavior):
 
 def program() -> ir.Program:
     x = ir.InputRef("x", D)
-    to_b = ir.If(ir.Binary(">", x, ir.Number(0.5), Kind.BOOLEAN), ir.Transition("b", leaf=0),
-                 ir.Transition("a", leaf=1))
-    main = ir.Option("main", 0, (), (
-        ir.State("a", 0, to_b, (ir.OptionCall("child"),), initial=True),
-        ir.State("b", 1, to_b, (ir.BehaviorCall("act", (ir.Argument("act.q", D, None, x),)),)),
-    ), "a")
+    to_b = ir.If(
+        ir.Binary(">", x, ir.Number(0.5), Kind.BOOLEAN), ir.Transition("b", leaf=0), ir.Transition("a", leaf=1)
+    )
+    main = ir.Option(
+        "main",
+        0,
+        (),
+        (
+            ir.State("a", 0, to_b, (ir.OptionCall("child"),), initial=True),
+            ir.State("b", 1, to_b, (ir.BehaviorCall("act", (ir.Argument("act.q", D, None, x),)),)),
+        ),
+        "a",
+    )
     child = ir.Option("child", 1, (), (ir.State("c", 0, ir.Transition("c", leaf=0), ()),), "c")
     inputs = {"x": ir.InputSymbol("x", D)}
     behaviors = {"act": ir.BasicBehavior("act", (ir.Parameter("act.p", D), ir.Parameter("act.q", D)))}

@@ -64,8 +64,15 @@ class LiveServer:
         self.policy = policy or SecurityPolicy(token=None)
         self.app = create_app(session, self.policy, web_dist=None)
         self.port = free_port()
-        config = uvicorn.Config(self.app, host="127.0.0.1", port=self.port, log_level="warning",
-                                ws_max_size=MAX_MESSAGE_BYTES, ws_per_message_deflate=False, lifespan="on")
+        config = uvicorn.Config(
+            self.app,
+            host="127.0.0.1",
+            port=self.port,
+            log_level="warning",
+            ws_max_size=MAX_MESSAGE_BYTES,
+            ws_per_message_deflate=False,
+            lifespan="on",
+        )
         self.server = uvicorn.Server(config)
         self.thread = threading.Thread(target=self.server.run, daemon=True)
 
@@ -152,8 +159,9 @@ class WsClient:
             if predicate(message):
                 return message
 
-    def frame_after(self, predicate: Callable[[dict[str, Any]], bool] = lambda f: True,
-                    timeout: float = 10.0) -> dict[str, Any]:
+    def frame_after(
+        self, predicate: Callable[[dict[str, Any]], bool] = lambda f: True, timeout: float = 10.0
+    ) -> dict[str, Any]:
         return self.until(lambda m: m["type"] == "frame" and predicate(m), timeout)
 
     def wait_frame(self, predicate: Callable[[dict[str, Any]], bool], timeout: float = 10.0) -> dict[str, Any]:

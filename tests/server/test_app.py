@@ -71,13 +71,18 @@ def test_write_conflict_create_rename_delete_over_http(api: TestClient, demo_dir
     text = current["text"].replace("rate = 45", "rate = 30")
     ok = api.put("/api/files/options/search_ball.xabsl", json={"text": text}, headers={"If-Match": current["version"]})
     assert ok.status_code == 200 and ok.json()["reloaded"] == ["demo"], ok.text
-    conflict = api.put("/api/files/options/search_ball.xabsl", json={"text": "x"},
-                       headers={"If-Match": current["version"]})
+    conflict = api.put(
+        "/api/files/options/search_ball.xabsl", json={"text": "x"}, headers={"If-Match": current["version"]}
+    )
     assert conflict.status_code == 409 and conflict.json()["version"] == ok.json()["version"]
     assert api.put("/api/files/options/search_ball.xabsl", json={"text": "x"}).status_code == 428
     assert api.put("/api/files/options/search_ball.xabsl", json={"txt": "x"}).status_code == 422
-    assert api.put("/api/files/options/search_ball.xabsl", content=b"{nope",
-                   headers={"content-type": "application/json"}).status_code == 422
+    assert (
+        api.put(
+            "/api/files/options/search_ball.xabsl", content=b"{nope", headers={"content-type": "application/json"}
+        ).status_code
+        == 422
+    )
 
     created = api.post("/api/files/options/extra.xabsl", json={"text": "/** unused */\n"})
     assert created.status_code == 201 and created.json()["ok"] is True
@@ -180,8 +185,11 @@ def test_security_middleware(demo_dir: Path) -> None:
         assert client.get("/api/status", headers={**auth, "Host": "evil.example"}).status_code == 403
         # Cross-site writes.
         text = {"text": "x"}
-        foreign = client.put("/api/files/options/play.xabsl", json=text,
-                             headers={**auth, "Origin": "http://evil.example", "If-Match": "0"})
+        foreign = client.put(
+            "/api/files/options/play.xabsl",
+            json=text,
+            headers={**auth, "Origin": "http://evil.example", "If-Match": "0"},
+        )
         assert foreign.status_code == 403
         dev = client.post("/api/command", json={"op": "status"}, headers={**auth, "Origin": "http://localhost:5173"})
         assert dev.status_code == 200
@@ -200,9 +208,10 @@ def test_security_middleware(demo_dir: Path) -> None:
             ws.receive_text()
         with client.websocket_connect("ws://127.0.0.1/ws?token=s3cret") as ws:
             assert orjson.loads(ws.receive_text())["type"] == "hello"
-        with pytest.raises(WebSocketDisconnect), client.websocket_connect(
-            "/ws?token=s3cret", headers={"Origin": "http://evil.example"}
-        ) as ws:
+        with (
+            pytest.raises(WebSocketDisconnect),
+            client.websocket_connect("/ws?token=s3cret", headers={"Origin": "http://evil.example"}) as ws,
+        ):
             ws.receive_text()
 
 

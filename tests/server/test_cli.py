@@ -20,9 +20,22 @@ def test_serve_is_registered() -> None:
 def test_serve_runs_an_example_and_prints_the_url(demo_dir: Path) -> None:
     port = free_port()
     process = subprocess.Popen(
-        [sys.executable, "-m", "engine.cli", "serve", str(demo_dir), "--port", str(port), "--token", "t0k",
-         "--speed", "2"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-m",
+            "engine.cli",
+            "serve",
+            str(demo_dir),
+            "--port",
+            str(port),
+            "--token",
+            "t0k",
+            "--speed",
+            "2",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         deadline = time.monotonic() + 30
@@ -43,6 +56,7 @@ def test_serve_runs_an_example_and_prints_the_url(demo_dir: Path) -> None:
 
 
 def test_serve_refuses_a_bad_example(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "serve", str(tmp_path / "nope")],
-                            capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-m", "engine.cli", "serve", str(tmp_path / "nope")], capture_output=True, text=True
+    )
     assert result.returncode == 2 and "no such folder" in result.stderr

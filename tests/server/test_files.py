@@ -14,7 +14,7 @@ from server.files import BehaviorFiles, FileError, version_of
 def files(tmp_path: Path) -> BehaviorFiles:
     root = tmp_path / "example"
     (root / "behavior" / "options").mkdir(parents=True)
-    (root / "behavior" / "agents.xabsl").write_text("agent a(\"A\", o);\n")
+    (root / "behavior" / "agents.xabsl").write_text('agent a("A", o);\n')
     (root / "behavior" / "options" / "o.xabsl").write_text("option o {}\n")
     (root / "secret.xabsl").write_text("outside the behavior folder\n")
     (tmp_path / "outside.xabsl").write_text("outside the example\n")

@@ -360,8 +360,9 @@ def test_broken_file_is_saved_with_422_and_the_old_behavior_keeps_running(
     with httpx.Client(base_url=live_demo.url) as http:
         current = http.get("/api/files/options/play.xabsl").json()
         broken = current["text"].replace("goto search;", "goto serch;", 1)
-        response = http.put("/api/files/options/play.xabsl", json={"text": broken},
-                            headers={"If-Match": f'"{current["version"]}"'})
+        response = http.put(
+            "/api/files/options/play.xabsl", json={"text": broken}, headers={"If-Match": f'"{current["version"]}"'}
+        )
         assert response.status_code == 422, response.text
         body = response.json()
         assert body["saved"] is True and body["ok"] is False and body["reloaded"] == []
@@ -375,8 +376,11 @@ def test_broken_file_is_saved_with_422_and_the_old_behavior_keeps_running(
         seq = client.frame_after()["seq"]
         frame = client.wait_frame(lambda f: f["seq"] > seq + 20)
         assert frame["gen"] == generation and _names(client, 0)[0] == "play"
-        file_event = client.until(lambda m: m.get("event") == "file") if not any(
-            m.get("event") == "file" for m in client.other) else None
+        file_event = (
+            client.until(lambda m: m.get("event") == "file")
+            if not any(m.get("event") == "file" for m in client.other)
+            else None
+        )
         assert file_event is None or file_event["path"] == "options/play.xabsl"
         status = http.get("/api/status").json()
         assert status["programs"]["demo"]["ok"] is False and status["programs"]["demo"]["running"] is True
@@ -387,8 +391,9 @@ def test_good_edit_sends_hello_and_the_new_state_shows(live_demo: LiveServer, cl
     client.wait_frame(lambda f: f["t"] > 600)
     with httpx.Client(base_url=live_demo.url) as http:
         version = http.get("/api/files/options/play.xabsl").headers["etag"]
-        response = http.put("/api/files/options/play.xabsl", json={"text": PLAY_WITH_SPIN},
-                            headers={"If-Match": version})
+        response = http.put(
+            "/api/files/options/play.xabsl", json={"text": PLAY_WITH_SPIN}, headers={"If-Match": version}
+        )
         assert response.status_code == 200, response.text
         assert response.json()["reloaded"] == ["demo"]
     hello = client.wait_hello("reload")
@@ -402,11 +407,15 @@ def test_good_edit_sends_hello_and_the_new_state_shows(live_demo: LiveServer, cl
 def test_conflicting_write_gets_409(live_demo: LiveServer) -> None:
     with httpx.Client(base_url=live_demo.url) as http:
         old = http.get("/api/files/options/search_ball.xabsl").json()
-        first = http.put("/api/files/options/search_ball.xabsl",
-                         json={"text": old["text"] + "\n", "version": old["version"]})
+        first = http.put(
+            "/api/files/options/search_ball.xabsl", json={"text": old["text"] + "\n", "version": old["version"]}
+        )
         assert first.status_code == 200
-        second = http.put("/api/files/options/search_ball.xabsl",
-                          json={"text": old["text"] + "// mine\n"}, headers={"If-Match": old["version"]})
+        second = http.put(
+            "/api/files/options/search_ball.xabsl",
+            json={"text": old["text"] + "// mine\n"},
+            headers={"If-Match": old["version"]},
+        )
         assert second.status_code == 409
         assert second.json()["version"] == first.json()["version"]
         assert http.put("/api/files/options/search_ball.xabsl", json={"text": "x"}).status_code == 428
@@ -506,8 +515,10 @@ def test_a_client_that_never_reads_does_not_slow_the_simulation_or_grow_memory(
         seq1, t1 = session.ring.latest.seq, time.monotonic()
         rate = (seq1 - seq0) / (t1 - t0)
         expected = session.behavior_hz * session.speed
-        print(f"ticks/s {rate:.1f} of {expected}, frames sent to the stuck client {stuck_client.frames_sent}, "
-              f"pending {len(stuck_client.control)}, rss +{_rss_mb() - rss0:.1f} MB")
+        print(
+            f"ticks/s {rate:.1f} of {expected}, frames sent to the stuck client {stuck_client.frames_sent}, "
+            f"pending {len(stuck_client.control)}, rss +{_rss_mb() - rss0:.1f} MB"
+        )
         assert rate > 0.8 * expected, "the stuck client slowed the simulation"
         assert stuck_client.frames_sent - sent0 < 0.5 * (seq1 - seq0), "frames are not being skipped"
         assert len(stuck_client.control) <= 20

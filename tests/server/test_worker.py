@@ -33,8 +33,9 @@ def test_the_simulation_runs_in_another_process_and_stops_without_a_zombie(
     assert not Path(f"/proc/{pid}").exists(), "joined: no zombie left"
 
 
-def test_a_crash_in_the_world_is_reported_and_reset_restarts_it(demo_dir: Path, tmp_path: Path,
-                                                                client_for: Any) -> None:
+def test_a_crash_in_the_world_is_reported_and_reset_restarts_it(
+    demo_dir: Path, tmp_path: Path, client_for: Any
+) -> None:
     trigger = tmp_path / "crash-now"
     session = Session(CrashingDemo(demo_dir, trigger), seed=7, speed=5.0)
     with LiveServer(session) as server, httpx.Client(base_url=server.url) as http:

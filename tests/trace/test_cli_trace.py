@@ -32,8 +32,13 @@ def test_trace_writes_the_expected_trace(source: str, tmp_path: Path, capsys: py
 def test_trace_to_stdout_with_declarations(capsys: pytest.CaptureFixture[str]) -> None:
     folder = KIT / "input-functions"
     status, out, err = run(
-        capsys, "trace", str(folder / "expected.ic"), "--inputs", str(folder / "in.jsonl"),
-        "--declarations", str(folder / "agents.xabsl"),
+        capsys,
+        "trace",
+        str(folder / "expected.ic"),
+        "--inputs",
+        str(folder / "in.jsonl"),
+        "--declarations",
+        str(folder / "agents.xabsl"),
     )
     assert status == 0, err
     got = [json.loads(line) for line in out.splitlines()]
@@ -43,8 +48,9 @@ def test_trace_to_stdout_with_declarations(capsys: pytest.CaptureFixture[str]) -
 def test_agent_option_selects_before_the_first_tick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = KIT / "agents"
     (tmp_path / "in.jsonl").write_text('{"t": 0}\n')
-    status, out, _ = run(capsys, "trace", str(folder / "expected.ic"), "--inputs", str(tmp_path / "in.jsonl"),
-                         "--agent", "other")
+    status, out, _ = run(
+        capsys, "trace", str(folder / "expected.ic"), "--inputs", str(tmp_path / "in.jsonl"), "--agent", "other"
+    )
     assert status == 0
     assert json.loads(out)["tree"][0]["option"] == "beta"
 
