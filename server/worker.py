@@ -38,12 +38,11 @@ from typing import Any
 
 import orjson
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, World
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, Example, World
 from engine.ir.model import Program, leaf_path
 from engine.runtime import DebugError, Engine, EngineError
 from engine.types import Kind, Value
 from server.channel import Channel, ChannelClosed
-from server.examples import Example
 from server.frames import AgentSampler, ProgramCodec
 from server.protocol import MAX_SPEED, MAX_STEP_TICKS, MIN_SPEED, HelloReason
 
