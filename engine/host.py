@@ -212,6 +212,7 @@ def common_root(sources: Sequence[BehaviorSource]) -> Path:
     return Path(os.path.commonpath(folders)) if folders else Path.cwd()
 
 
+@runtime_checkable
 class Example(Protocol):
     """A world plug-in: what the studio needs to run one world whose robots run XABSL agents.
 
