@@ -46,7 +46,16 @@ if TYPE_CHECKING:  # the loop itself needs neither the IR nor the runtime
     from engine.runtime import Engine
 
 #: A scene or status: JSON-able plain data (dicts, lists, str, int, float, bool, None) that
-#: ``orjson.dumps`` accepts without options. Worlds document their own keys.
+#: ``orjson.dumps`` accepts without options. Worlds document their own keys; the studio's field
+#: draws these without knowing the world (lengths in the scene's ``units``, mm by default):
+#:
+#: * static: ``field`` ``{"x": [lo, hi], "y": [lo, hi]}`` (the rectangle shown), ``walls``
+#:   ``[[x1, y1, x2, y2], ...]``, ``teams`` ``[{"name", "color"}]``, ``agents``, ``robot_radius``;
+#: * dynamic: ``robots`` ``[[x, y, heading_deg], ...]`` in agent order;
+#: * both: ``shapes``, a list of ``{"shape": "circle", "x", "y", "r"}``, ``{"shape": "rect",
+#:   "x", "y", "w", "h"}`` (centre and size) or ``{"shape": "segment", "x1", "y1", "x2", "y2"}``,
+#:   each with optional ``fill``, ``stroke`` (CSS colours), ``dash`` (bool), ``label`` (text on
+#:   the shape) and ``caption`` (text below it).
 Scene: TypeAlias = dict[str, Any]
 
 #: The default physics rate. 120 Hz keeps a kicked ball (at most ~5 m/s) under one ball radius

@@ -441,7 +441,7 @@ class ErrandsWorld:
             shapes.append(
                 {"shape": "circle", "x": _mm(x), "y": _mm(y), "r": _mm(g.near), "stroke": BEACON, "dash": True}
             )
-            shapes.append({"shape": "circle", "x": _mm(x), "y": _mm(y), "r": 100, "fill": BEACON, "label": name})
+            shapes.append({"shape": "circle", "x": _mm(x), "y": _mm(y), "r": 150, "fill": BEACON, "label": name})
         return {
             "kind": "errands",
             "units": {"length": "mm", "angle": "deg", "time": "ms"},
@@ -488,7 +488,7 @@ class ErrandsWorld:
                     "r": 90,
                     "fill": ITEM_COLORS.get(name, "#ccc"),
                 }
-                shape["label"] = name
+                shape["caption"] = name
                 if item.held:
                     shape["stroke"] = "#ffffff"
                 shapes.append(shape)

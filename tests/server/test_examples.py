@@ -144,12 +144,12 @@ def test_world_option_picks_an_installed_entry_point(monkeypatch: pytest.MonkeyP
     points = importlib.metadata.EntryPoints(
         [importlib.metadata.EntryPoint("football", "examples.soccer.studio:example", "xabsl.worlds")]
     )
-    monkeypatch.setattr(importlib.metadata, "entry_points", lambda **kw: points if kw.get("group") else points)
+    monkeypatch.setattr(importlib.metadata, "entry_points", lambda **kw: points.select(**kw))
     plugin = load_example(tmp_path, "football", robots=2)
     assert isinstance(plugin.example, SoccerExample) and plugin.example.players_per_team == 2
     assert pickle.loads(pickle.dumps(plugin)).example.players_per_team == 2
     assert isinstance(load_example(tmp_path / "behavior", "bench").example, BenchExample)
-    with pytest.raises(ExampleError, match="unknown world 'nope'.*football"):
+    with pytest.raises(ExampleError, match=r"unknown world 'nope'.*football"):
         load_example(tmp_path, "nope")
 
 
@@ -236,7 +236,7 @@ def test_errands_runs_live_with_the_plan_monitor_as_the_robots_engine(
         frame = client.frame_after(lambda f: f["scene"]["op"] == "goto a c", timeout=30)
         assert _names(client)[0] == "execute_plan" and "run_goto" in str(client.program(0)["options"])
         dynamic = frame["scene"]
-        shapes = {s.get("label"): s for s in dynamic["shapes"] if "label" in s}
+        shapes = {s.get("caption"): s for s in dynamic["shapes"] if "caption" in s}
         assert shapes["book"]["x"] == 6500 and shapes["mug"]["x"] == 4000
         assert sum(s["shape"] == "segment" for s in dynamic["shapes"]) == 3  # two rays and the gripper
         assert client.values[0]["outputs"], "the monitor's output symbols are in the frames"
