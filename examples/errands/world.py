@@ -24,8 +24,9 @@ One behavior tick follows doc §4.1 inside the host loop's sense / execute / act
 ``program=None`` builds the world without a controller (the studio attaches the program it
 compiled with :meth:`ErrandsWorld.attach`; until then the robot roams with no operator).
 The monitor's symbols and basic behaviors are bound in :mod:`examples.errands.bindings`; the
-host side of the plan (queue, next executable operator, replanning) is
-:class:`examples.errands.plan.PlanBoard`.
+host side of the plan (queue, next executable operator, replanning) is an
+:class:`engine.planning.monitor.PlanBoard` with the errands' partial-plan rule
+(:func:`examples.errands.plan.errands_board`).
 
 Ground truth (the arena) and what the robot believes (derived facts) are kept apart; the world
 compares them every tick (:class:`examples.errands.facts.Agreement`) and counts what the §4.4
@@ -64,7 +65,7 @@ from examples.errands.bindings import (
     monitor_bindings,
 )
 from examples.errands.facts import Agreement, Truth, evidence_signals, fact_rules, truth_facts
-from examples.errands.plan import PlanBoard
+from examples.errands.plan import errands_board
 
 HERE = Path(__file__).resolve().parent
 MODEL_PATH = HERE / "model" / "errands_dd.json"
@@ -193,7 +194,7 @@ class ErrandsWorld:
         self.behaviors = self.dd.model.behaviors
         self._roam = self.behaviors.index("roam") if "roam" in self.behaviors else -1
         self.task = _task(str(domain_path), str(problem_path))
-        self.board = PlanBoard(self.task)
+        self.board = errands_board(self.task)
         self.deriver = FactDeriver(fact_rules(LOCATIONS, ITEMS))
         self.deriver.reset(self.task.init)
         self.facts: frozenset[Fact] = self.deriver.facts

@@ -107,7 +107,9 @@ def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
         shutil.copytree(REPO / "examples" / "soccer" / name, example / name)
     # The copy says how the studio runs it as any example folder does: a studio.py (here the
     # soccer plug-in's factory, applied to the copy; the world's code comes from the package).
-    (example / "studio.py").write_text('"""The soccer world plug-in."""\n\nfrom examples.soccer.studio import example\n')
+    (example / "studio.py").write_text(
+        '"""The soccer world plug-in."""\n\nfrom examples.soccer.studio import example\n'
+    )
     server = StudioServer(example, free_port(), root / "serve.log")
     server.start()
     yield server

@@ -23,8 +23,8 @@ import pytest
 import uvicorn
 from websockets.sync.client import ClientConnection, connect
 
-from server.app import create_app
 from examples.soccer.studio import SoccerExample
+from server.app import create_app
 from server.bench_world import BenchExample
 from server.protocol import MAX_MESSAGE_BYTES
 from server.security import SecurityPolicy
