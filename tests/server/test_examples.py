@@ -248,3 +248,23 @@ def test_errands_runs_live_with_the_plan_monitor_as_the_robots_engine(
         assert reply["ok"], reply
         status = httpx.get(server.url + "/api/status").json()
         assert status["example"] == "errands" and status["programs"]["behavior"]["ok"]
+
+
+def test_a_save_hot_reloads_the_plan_monitor_and_the_errand_goes_on(errands_session: Session, client_for: Any) -> None:
+    with LiveServer(errands_session) as server:
+        client = client_for(server)
+        client.frame_after(lambda f: f["scene"]["op"] == "goto a c", timeout=30)
+        with httpx.Client(base_url=server.url) as http:
+            got = http.get("/api/files/behavior/symbols.xabsl")
+            text = got.json()["text"].replace("goto_timeout = 60000", "goto_timeout = 61000")
+            response = http.put(
+                "/api/files/behavior/symbols.xabsl", json={"text": text}, headers={"If-Match": got.headers["etag"]}
+            )
+            assert response.status_code == 200, response.text
+            assert response.json()["reloaded"] == ["behavior"]
+        hello = client.wait_hello("reload")
+        constants = {c["name"]: c["value"] for c in hello["structure"]["programs"]["behavior"]["constants"]}
+        assert constants["goto_timeout"] == 61000
+        # The same world and the same monitor state: the robot is still on its first operator.
+        frame = client.frame_after(lambda f: f["gen"] == hello["generation"], timeout=10)
+        assert frame["scene"]["op"] == "goto a c" and _names(client)[0] == "execute_plan"
