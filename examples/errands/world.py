@@ -48,7 +48,7 @@ import numpy as np
 
 from engine.dynamics.model import DDModel, load_model
 from engine.dynamics.system import DDSystem
-from engine.host import RunStats, Scene, run_headless
+from engine.host import AgentController, RunStats, Scene, run_headless
 from engine.ir.model import Program
 from engine.planning.facts import FactDeriver, FactEvent
 from engine.planning.strips import Fact, Task, load_task
@@ -140,7 +140,7 @@ class ErrandsAgent:
         self.name = "robot"
         self.team = "errands"
         self.number = 1
-        self.controller: Engine | None = controller
+        self.controller: AgentController | None = controller
 
     @property
     def world(self) -> ErrandsWorld:
