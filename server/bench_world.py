@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import random
+import re
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -254,7 +255,7 @@ class BenchExample:
     """The bench world as a world plug-in: every robot runs the one behavior set of ``path``.
 
     Args:
-        path: a behavior folder (holding ``agents.xabsl``) or an agents file anywhere on disk.
+        path: a behavior folder (see :func:`find_agents_file`) or an agents file anywhere on disk.
         robots: how many robots.
 
     Raises:
@@ -267,15 +268,7 @@ class BenchExample:
 
     def __init__(self, path: Path, robots: int = 2) -> None:
         path = path.resolve()
-        if path.is_dir():
-            agents_file = path / "agents.xabsl"
-            if not agents_file.is_file():
-                raise ExampleError(
-                    f"{path}: no agents.xabsl here and no studio.py saying how to run this folder;"
-                    " give the agents file itself"
-                )
-        else:
-            agents_file = path
+        agents_file = find_agents_file(path) if path.is_dir() else path
         if isinstance(robots, bool) or not isinstance(robots, int) or not 1 <= robots <= 20:
             raise ExampleError(f"robots must be an integer in 1..20, got {robots!r}")
         self.n_agents = robots
@@ -297,6 +290,36 @@ class BenchExample:
             raise TypeError("the bench world runs BenchWorld robots")
         controller = BenchController(agent, program)
         return controller, controller.engine
+
+
+#: An agent declaration at the start of a line: what makes a file an agents file.
+_AGENT_DECLARATION = re.compile(rb"^[ \t]*agent[ \t]+[A-Za-z_]", re.MULTILINE)
+
+
+def find_agents_file(folder: Path) -> Path:
+    """The agents file of a behavior folder: ``agents.xabsl``, else its one file declaring agents.
+
+    Raises:
+        ExampleError: no such file, or several files declare agents (the user must pick one).
+    """
+    conventional = folder / "agents.xabsl"
+    if conventional.is_file():
+        return conventional
+    found = []
+    for candidate in sorted(folder.glob("*.xabsl")):
+        try:
+            if _AGENT_DECLARATION.search(candidate.read_bytes()):
+                found.append(candidate)
+        except OSError:
+            continue
+    if len(found) == 1:
+        return found[0]
+    if found:
+        names = ", ".join(f.name for f in found)
+        raise ExampleError(f"{folder}: several files declare agents ({names}); give the agents file itself")
+    raise ExampleError(
+        f"{folder}: no agents.xabsl here, no file declaring agents and no studio.py saying how to run this folder"
+    )
 
 
 def example(path: Path, robots: int = 2) -> BenchExample:

@@ -157,7 +157,7 @@ def test_world_option_picks_an_installed_entry_point(monkeypatch: pytest.MonkeyP
     ("path", "options", "message"),
     [
         ("examples/nowhere", {}, "no such folder"),
-        ("examples", {}, "no agents.xabsl here and no studio.py"),
+        ("examples", {}, "no agents.xabsl here, no file declaring agents and no studio.py"),
         ("examples/errands", {"robots": 3}, "one robot"),
         ("examples/errands", {"noise": float("nan")}, "noise must be a finite number"),
         ("examples/soccer", {"robots": 0}, r"1\.\.7"),
@@ -268,3 +268,15 @@ def test_a_save_hot_reloads_the_plan_monitor_and_the_errand_goes_on(errands_sess
         # The same world and the same monitor state: the robot is still on its first operator.
         frame = client.frame_after(lambda f: f["gen"] == hello["generation"], timeout=10)
         assert frame["scene"]["op"] == "goto a c" and _names(client)[0] == "execute_plan"
+
+
+def test_a_behavior_folder_without_agents_xabsl_uses_its_one_file_declaring_agents(tmp_path: Path) -> None:
+    folder = tmp_path / "Behavior"
+    shutil.copytree(REPO / "examples" / "demo", folder)
+    (folder / "agents.xabsl").rename(folder / "Soccer.xabsl")
+    plugin = load_example(folder)
+    assert plugin.sources[0].agents_file == folder / "Soccer.xabsl" and plugin.sources[0].key == "Soccer"
+    (folder / "Other.xabsl").write_text((folder / "Soccer.xabsl").read_text())
+    with pytest.raises(ExampleError, match=r"several files declare agents \(Other\.xabsl, Soccer\.xabsl\)"):
+        load_example(folder)
+    assert load_example(folder / "Other.xabsl").sources[0].key == "Other"
