@@ -24,7 +24,7 @@ import importlib
 import importlib.metadata
 import importlib.util
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -197,7 +197,7 @@ def _studio_factory(folder: Path) -> tuple[ExampleFactory, str | None]:
         except ImportError:
             spec = None
         if spec is not None and spec.origin is not None and Path(spec.origin).resolve() == file.resolve():
-            return _factory(_import(name, lambda: importlib.import_module(name), file), STUDIO_FACTORY, str(file)), name
+            return _factory(_import(lambda: importlib.import_module(name), file), STUDIO_FACTORY, str(file)), name
     return _factory(_load_file(folder, file), STUDIO_FACTORY, str(file)), None
 
 
@@ -235,12 +235,12 @@ def _load_file(folder: Path, file: Path) -> ModuleType:
             raise
         return module
 
-    return _import(name, execute, file)
+    return _import(execute, file)
 
 
-def _import(name: str, load: Any, file: Path) -> ModuleType:
+def _import(load: Callable[[], ModuleType], file: Path) -> ModuleType:
     try:
-        module: ModuleType = load()
+        module = load()
     except ExampleError:
         raise
     except Exception as error:  # a broken plug-in is the user's to fix: say where and why
