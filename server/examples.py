@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
+from engine.errors import HostError
 from engine.host import Agent, AgentController, World
 from engine.ir.model import Program
 from engine.runtime import Engine
@@ -28,7 +29,7 @@ from engine.runtime import Engine
 AGENTS_FILE = "agents.xabsl"
 
 
-class ExampleError(ValueError):
+class ExampleError(HostError, ValueError):
     """The folder is not an example the studio can run."""
 
 
