@@ -3,7 +3,7 @@
 This is the Python counterpart of the name resolution in ``Engine::createOptionGraph`` (§2.10):
 every external input/output symbol, enum element, basic behavior and parameter the program
 names must be registered, with the right kind. All problems are collected and raised together
-as one :class:`~engine.runtime.errors.LinkError`. Internal symbols and enumerations (§2.1) get
+as one :class:`~engine.errors.LinkError`. Internal symbols and enumerations (§2.1) get
 engine storage; internal enum elements get the values 0..n-1 in declaration order.
 """
 
@@ -22,6 +22,7 @@ from engine.codegen.layout import (
     assignment_sites,
     default_value,
 )
+from engine.errors import LinkError
 from engine.ir.model import (
     Action,
     BehaviorCall,
@@ -37,7 +38,6 @@ from engine.ir.model import (
     walk,
 )
 from engine.runtime.bindings import BasicBehavior, Bindings, InputBinding, OutputBinding
-from engine.runtime.errors import LinkError
 from engine.types import Kind, Value
 
 __all__ = ["Linked", "link", "program_expressions"]

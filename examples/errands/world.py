@@ -217,7 +217,7 @@ class ErrandsWorld:
         self._at_before: set[str] = set()
         self._monitor_seen: tuple[int, str | None, int] = (-1, None, -1)
         self.engine = Engine(monitor_bindings(self), _program(str(agents_path)), agent_name="robot")
-        self.engine.select_agent("planner" if plan else "reactive")
+        self.engine.root_actions.select_agent("planner" if plan else "reactive")
         self._agents = (ErrandsAgent(self, self.engine),)
         self.sense_hooks: list[Callable[[ErrandsWorld], None]] = []
 
