@@ -256,6 +256,7 @@ class PathPlan:
 
     @classmethod
     def of(cls, program: Program, layout: Layout) -> PathPlan:
+        """The plan of ``program`` loaded with ``layout``."""
         options: list[tuple[int, int, int, tuple[tuple[tuple[bool, int], ...], ...]]] = [None] * len(layout.options)  # type: ignore[list-item]
         for name, slot in layout.options.items():
             option = program.options[name]

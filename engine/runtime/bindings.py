@@ -131,7 +131,8 @@ class BasicBehavior:
 
     def param(self, name: str) -> Value:
         """The current value of parameter ``name`` (qualified or short)."""
-        return self.parameter_values[self.parameter_offset + self._index[name]]
+        value: Value = self.parameter_values[self.parameter_offset + self._index[name]]
+        return value
 
     @property
     def params(self) -> dict[str, Value]:

@@ -168,32 +168,32 @@ def link(
     output_names: list[str] = []
     output_initial: list[Value] = []
     output_slots: dict[str, OutputSlot] = {}
-    for symbol in program.outputs.values():
+    for output in program.outputs.values():
         out_binding: OutputBinding | None
-        if symbol.internal:
-            if symbol.name in bindings.outputs:
-                problems.append(f"internal symbol {symbol.name} must not be registered by the host")
+        if output.internal:
+            if output.name in bindings.outputs:
+                problems.append(f"internal symbol {output.name} must not be registered by the host")
             out_binding = None
-            initial = _first_value(symbol.kind, symbol.enum, program, enum_values)
+            initial = _first_value(output.kind, output.enum, program, enum_values)
         else:
-            out_binding = bindings.outputs.get(symbol.name)
+            out_binding = bindings.outputs.get(output.name)
             if out_binding is None:
-                problems.append(f"output symbol {symbol.name} ({symbol.kind.value}) is not registered")
+                problems.append(f"output symbol {output.name} ({output.kind.value}) is not registered")
                 continue
-            if out_binding.kind is not symbol.kind:
+            if out_binding.kind is not output.kind:
                 problems.append(
-                    f"output symbol {symbol.name} is {symbol.kind.value} in the behavior "
+                    f"output symbol {output.name} is {output.kind.value} in the behavior "
                     f"but registered as {out_binding.kind.value}"
                 )
             initial = (
                 out_binding.initial
                 if out_binding.initial is not None
-                else _first_value(symbol.kind, symbol.enum or out_binding.enum, program, enum_values, bindings)
+                else _first_value(output.kind, output.enum or out_binding.enum, program, enum_values, bindings)
             )
         stored = out_binding is None or out_binding.setter is None
-        output_slots[symbol.name] = OutputSlot(len(outputs), stored)
+        output_slots[output.name] = OutputSlot(len(outputs), stored)
         outputs.append(out_binding)
-        output_names.append(symbol.name)
+        output_names.append(output.name)
         output_initial.append(initial)
 
     # -- basic behaviors ------------------------------------------------------------------------

@@ -44,7 +44,9 @@ class RootActions:
         self._agent: Agent | None = None
         #: root actions forced instead of the agent's root (None: the agent's root runs)
         self._forced: list[tuple[Root, dict[str, Value]]] | None = None
-        self._roots: tuple[Root, ...] = ()
+        #: the root actions a tick runs, in order (the agent's root option, or the forced ones);
+        #: read it, change it through the methods (an attribute: snapshots read it every tick)
+        self.roots: tuple[Root, ...] = ()
         #: what a tick calls, in order (rebuilt whenever the roots or the program change)
         self.actions: list[RootAction] = []
 
@@ -96,7 +98,7 @@ class RootActions:
             chosen = [(Root("option", self._agent.root), {})]
         else:
             chosen = []
-        self._roots = tuple(root for root, _ in chosen)
+        self.roots = tuple(root for root, _ in chosen)
         self.actions = [loaded.root_action(root, params) for root, params in chosen]
 
     # -- reading -------------------------------------------------------------------------------------
@@ -105,11 +107,6 @@ class RootActions:
     def agent(self) -> str | None:
         """The selected agent (None: the program has none)."""
         return self._agent.name if self._agent is not None else None
-
-    @property
-    def roots(self) -> tuple[Root, ...]:
-        """The root actions a tick runs, in order (the agent's root option, or the forced ones)."""
-        return self._roots
 
     @property
     def forced(self) -> tuple[Root, ...]:

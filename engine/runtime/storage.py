@@ -113,6 +113,7 @@ class LoadedProgram:
         #: built on the first :meth:`Engine.path` call (hosts that never record pay nothing)
         self.path_plan: PathPlan | None = None
         self.path_storage = cast(PathStorage, tuple(self.lists[field] for field in PATH_FIELDS))
+        #: what :meth:`Engine.snapshot` copies: the ``snapshot`` lists of STORAGE, in order
         self.snapshot_lists = tuple(self.lists[field] for field in SNAPSHOT_FIELDS)
         self.enums = self._enum_values()
 
@@ -199,10 +200,6 @@ class LoadedProgram:
         return [key for key in self.coop.states if self.last_tick[key[0]] == tick and self.states[key[0]] == key[1]]
 
     # -- copies of the storage ----------------------------------------------------------------------
-
-    def snapshot(self, now: Ms, tick: int, roots: tuple[Root, ...]) -> Snapshot:
-        """The storage copied into tuples (every ``snapshot`` list of STORAGE, in order)."""
-        return Snapshot(now, tick, roots, *map(tuple, self.snapshot_lists))
 
     def reset(self) -> None:
         """Every option and basic behavior restarts when next called (the ``reset`` lists of STORAGE)."""
