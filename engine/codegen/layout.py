@@ -6,6 +6,9 @@ behavior; the code generator (:mod:`engine.codegen.python`) only turns those dec
 global names and list indices. Flat lists (one for all option parameters, one for all basic
 behavior parameters, one for all stored symbols) let the engine snapshot a tick with a few
 C-level tuple copies (§2.12 activation tree, recorded cheaply).
+
+:data:`STORAGE` is the one schema of those lists: their names in Python and in generated code,
+what they hold after a load, and whether snapshots, ``reset()`` and hot reload copy them.
 """
 
 from __future__ import annotations

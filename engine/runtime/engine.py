@@ -7,9 +7,9 @@ and binds that code to this engine's storage. ``execute(now_ms)`` runs one tick 
 actions in every option, outputs written through at once.
 
 Persistent per-option state lives in flat lists indexed by option index (active state, tick
-stamps of the last two executions, activation times, the tick's decision record): a tick stamp
-replaces the original's per-tick ``wasActive``/``isActive`` flag swap, so nothing is reset at
-the end of a tick.
+stamps of the last two executions, activation times, the tick's decision record; the table
+:data:`engine.codegen.layout.STORAGE` names them all): a tick stamp replaces the original's
+per-tick ``wasActive``/``isActive`` flag swap, so nothing is reset at the end of a tick.
 
 Faults (§2.9, architecture "Engine"): a host callable or basic behavior that raises, a ``%`` by
 zero or (policy B2) a double execution marks the engine as errored with a :class:`Fault`
@@ -32,9 +32,9 @@ from operator import attrgetter
 from types import MappingProxyType
 from typing import Any
 
-from engine.codegen.python import CodegenError, generate
+from engine.codegen.python import generate
 from engine.codegen.support import MS_MASK
-from engine.errors import DebugError, DoubleExecutionError, LoadError
+from engine.errors import DebugError, DoubleExecutionError
 from engine.ir.model import Agent, Program
 from engine.runtime.activation import Node, PathPlan, Snapshot, build_tree, compact_path, node_to_dict
 from engine.runtime.bindings import Bindings
@@ -90,10 +90,7 @@ class Engine:
         linked = link(program, self.bindings, double_execution_is_error=self.policy is Policy.B2, reuse=reuse)
         for agent in program.agents:
             check_root(program, agent.root, self.policy)
-        try:
-            generated = generate(program, linked.layout)
-        except CodegenError as error:
-            raise LoadError(str(error)) from None
+        generated = generate(program, linked.layout)  # CodegenError is a LoadError
         return LoadedProgram(linked, generated, tick=lambda: self._tick, warnings=self.warnings)
 
     def load(self, program: Program) -> None:
