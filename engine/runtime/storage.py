@@ -87,7 +87,7 @@ class LoadedProgram:
         self.coop.executing = self.executing_coop_states
         g: dict[str, Any] = dict(SUPPORT_GLOBALS)
         g.update((spec.name, self.lists[spec.field]) for spec in STORAGE)
-        g.update(DX=self.double_execution, RB=self.run_behavior, CC=self.coop.check, CF=self.coop.conflict)
+        g.update(DX=self.double_execution, CC=self.coop.check, CF=self.coop.conflict)
         for k, behavior in enumerate(linked.behaviors):
             # Generated basic-behavior calls do the bookkeeping of ``run_behavior`` inline.
             g[f"BB{k}"] = behavior
