@@ -39,6 +39,7 @@ from pathlib import Path
 from time import perf_counter
 from typing import TYPE_CHECKING, Any, Protocol, TypeAlias, runtime_checkable
 
+from engine.errors import HostError
 from engine.types import Ms
 
 if TYPE_CHECKING:  # the loop itself needs neither the IR nor the runtime
@@ -183,7 +184,7 @@ class BehaviorSource:
         return self.folders or (self.folder,)
 
 
-class ExampleError(ValueError):
+class ExampleError(HostError, ValueError):
     """A path the studio cannot run: no such folder, no behavior, a broken plug-in, bad options."""
 
 

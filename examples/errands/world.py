@@ -245,7 +245,7 @@ class ErrandsWorld:
         engine = Engine(monitor_bindings(self), program, agent_name="robot")
         wanted = "planner" if self.with_plan else "reactive"
         if any(agent.name == wanted for agent in program.agents):
-            engine.select_agent(wanted)
+            engine.root_actions.select_agent(wanted)
         self.engine = engine
         self._agents[0].controller = engine
         return engine
