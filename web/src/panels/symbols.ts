@@ -14,6 +14,8 @@ interface SymbolRow {
   el: HTMLElement;
   value: HTMLElement;
   pin: HTMLButtonElement;
+  /// releases an override with one click (shown while the input is overridden)
+  release: HTMLButtonElement | null;
   text: string;
 }
 
@@ -51,15 +53,19 @@ export class SymbolsPanel {
           kind === "input"
             ? h("button.icon", { title: "Override this input", "aria-label": `override ${symbol.name}`, onclick: () => this.editOverride(row) }, "set…")
             : null;
+        const release =
+          kind === "input"
+            ? h("button.icon.release", { title: "Release the override: read the world's value again", "aria-label": `release ${symbol.name}`, hidden: true, onclick: () => this.releaseInput(symbol) }, "release")
+            : null;
         const el = h(
           "div.symbol-row",
           { role: "row", "data-symbol": symbol.name, "data-kind": kind, title: symbol.doc ?? "" },
           h("span.name", {}, symbol.name, h("span.facts", {}, facts)),
           value,
-          h("span.actions", {}, pin, override),
+          h("span.actions", {}, pin, override, release),
           symbol.doc ? h("div.sdoc", {}, symbol.doc) : null,
         );
-        const row: SymbolRow = { kind, symbol, el, value, pin, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
+        const row: SymbolRow = { kind, symbol, el, value, pin, release, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
         this.rows.push(row);
         sections.push(el);
       }
@@ -91,9 +97,19 @@ export class SymbolsPanel {
       if (row.el.hidden) continue;
       const values = row.kind === "input" ? agent?.inputs : agent?.outputs;
       setText(row.value, formatValue(values?.[row.symbol.id], row.symbol.type, row.symbol.enum, index));
-      toggleClass(row.el, "overridden", row.kind === "input" && String(row.symbol.id) in overrides);
+      const overridden = row.kind === "input" && String(row.symbol.id) in overrides;
+      toggleClass(row.el, "overridden", overridden);
+      if (row.release && row.release.hidden === overridden) row.release.hidden = !overridden;
       toggleClass(row.pin, "on", this.plot.has(session.selectedAgent, row.kind, row.symbol.id));
     }
+  }
+
+  /// Release the override of `symbol` on agent `agentId` (the selected one by default).
+  private releaseInput(symbol: InputSymbol | OutputSymbol, agentId = this.session.selectedAgent): void {
+    this.connection
+      .command("release_input", { agent: agentId, symbol: symbol.id })
+      .then(() => toast(`${symbol.name} reads the world again`, "ok"))
+      .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
   }
 
   /// The inline override editor of an input row: a typed control, Enter applies, Escape cancels.
@@ -123,10 +139,7 @@ export class SymbolsPanel {
       editor.remove();
     };
     const release = (): void => {
-      this.connection
-        .command("release_input", { agent: agentId, symbol: symbol.id })
-        .then(() => toast(`${symbol.name} reads the world again`, "ok"))
-        .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
+      this.releaseInput(symbol, agentId);
       editor.remove();
     };
     const editor = h(
