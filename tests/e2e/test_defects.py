@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.conftest import StudioServer
+from tests.e2e.conftest import StudioServer, screenshot
 
 STUDIO = "window.xabslStudio"
 
@@ -248,3 +248,130 @@ def test_an_override_is_released_with_one_click_and_its_row_fits(page: Any) -> N
     row_of = f"document.querySelector(\".symbol-row[data-symbol='{name}']\")"
     wait_until(page, f"() => !{row_of}.classList.contains('overridden')")
     assert page.evaluate(f"Object.keys({STUDIO}.session.agentInView().overrides ?? {{}}).length") == 0
+
+
+# -- layout at common sizes (issue 13, deliverable 5) ------------------------------------------------
+
+
+@pytest.fixture
+def desktop(page: Any) -> Iterator[None]:
+    """Restore the 1600x1000 window after a test that resizes it."""
+    yield
+    page.set_viewport_size({"width": 1600, "height": 1000})
+
+
+def box_of(page: Any, selector: str) -> dict[str, float]:
+    box = page.locator(selector).first.bounding_box()
+    assert box is not None, f"{selector} is not shown"
+    return dict(box)
+
+
+def inside(inner: dict[str, float], outer: dict[str, float], slack: float = 1.0) -> bool:
+    return (
+        inner["x"] >= outer["x"] - slack
+        and inner["y"] >= outer["y"] - slack
+        and inner["x"] + inner["width"] <= outer["x"] + outer["width"] + slack
+        and inner["y"] + inner["height"] <= outer["y"] + outer["height"] + slack
+    )
+
+
+def test_the_option_graph_refits_when_the_window_is_resized(page: Any, desktop: None) -> None:
+    page.keyboard.press("g")
+    wait_until(page, "() => document.querySelectorAll('.graph-panel g.node').length >= 10")
+    page.locator(".graph-panel button", has_text="Fit").click()
+    page.wait_for_timeout(200)
+    view = box_of(page, ".graph-panel .svg-view")
+    graph = box_of(page, ".graph-panel .svg-view svg")
+    assert inside(graph, view), (graph, view)
+    for width, height in ((1100, 760), (1600, 1000)):
+        page.set_viewport_size({"width": width, "height": height})
+        page.wait_for_timeout(400)
+        view = box_of(page, ".graph-panel .svg-view")
+        graph = box_of(page, ".graph-panel .svg-view svg")
+        assert inside(graph, view), f"at {width}x{height} the graph {graph} leaves the view {view}"
+        fill = max(graph["width"] / view["width"], graph["height"] / view["height"])
+        assert fill > 0.85, f"at {width}x{height} the graph fills only {fill:.0%} of the view"
+
+
+def test_at_1280x720_the_team_strip_shows_every_robot(page: Any, desktop: None) -> None:
+    page.set_viewport_size({"width": 1280, "height": 720})
+    page.wait_for_timeout(400)
+    strip = box_of(page, ".team-strip")
+    chips = page.locator(".team-strip .chip")
+    assert chips.count() == 10
+    previous_bottom = 0.0
+    for i in range(10):
+        chip = chips.nth(i).bounding_box()
+        assert chip is not None and inside(chip, strip), f"robot {i + 1} is cut off: {chip} outside {strip}"
+        assert chip["height"] >= 18 and chip["y"] >= previous_bottom - 0.5, f"robot {i + 1} is squeezed: {chip}"
+        previous_bottom = chip["y"] + chip["height"]
+    screenshot(page, "layout-1280x720")
+    field = box_of(page, ".field-canvas")
+    assert field["height"] >= 150, f"the field shrank to {field['height']} px"
+
+
+def test_at_1024x700_no_tab_or_button_is_clipped(page: Any, desktop: None) -> None:
+    page.set_viewport_size({"width": 1024, "height": 700})
+    page.wait_for_timeout(400)
+    window = {"x": 0, "y": 0, "width": 1024, "height": 700}
+    screenshot(page, "layout-1024x700")
+    for bar in page.locator(".tabbar").all():
+        bar_box = bar.bounding_box()
+        assert bar_box is not None
+        for tab in bar.locator(".tab").all():
+            box = tab.bounding_box()
+            assert box is not None and inside(box, bar_box) and inside(box, window), f"{tab.inner_text()!r} clipped"
+            assert tab.evaluate("t => t.scrollWidth <= t.clientWidth + 1"), f"{tab.inner_text()!r} text cut"
+    for button in page.locator(".topbar button, .topbar select").all():
+        box = button.bounding_box()
+        assert box is not None and inside(box, window), f"top bar control {box} is off screen"
+
+
+def test_activation_tree_lines_are_never_cut(page: Any, desktop: None) -> None:
+    page.set_viewport_size({"width": 1280, "height": 720})
+    page.keyboard.press("a")
+    wait_until(page, "() => document.querySelectorAll('.activation-panel .row').length >= 3")
+    page.wait_for_timeout(300)
+    cut = page.evaluate(
+        """() => {
+            const tree = document.querySelector('.activation-panel .tree');
+            const right = tree.getBoundingClientRect().right;
+            const out = [];
+            for (const el of tree.querySelectorAll('.row > *, .assign > *')) {
+                const r = el.getBoundingClientRect();
+                if (r.width && r.right > right + 1) out.push(el.textContent);
+            }
+            return out;
+        }"""
+    )
+    assert not cut, f"cut at the right edge: {cut[:5]}"
+
+
+def boxes_overlap(a: dict[str, float], b: dict[str, float]) -> bool:
+    return (
+        a["x"] < b["x"] + b["w"] and b["x"] < a["x"] + a["w"] and a["y"] < b["y"] + b["h"] and b["y"] < a["y"] + a["h"]
+    )
+
+
+def test_robot_labels_on_the_field_do_not_overlap(page: Any, studio: StudioServer) -> None:
+    # Crowd three robots of the home team on one spot: their labels ("forced", roles) meet.
+    agents = page.evaluate(f"{STUDIO}.session.agents.slice(0, 3).map(a => a.id)")
+    for agent in agents:
+        command(studio, "force_option", agent=agent, option="go_to_position", params={"x": -1500, "y": 0, "rot": 0})
+    overlaps: list[Any] = []
+    closest = float("inf")
+    try:
+        for _ in range(60):
+            boxes, robots = page.evaluate(f"[{STUDIO}.field.labelBoxes, {STUDIO}.session.live.scene.robots]")
+            crowd = robots[: len(agents)]
+            closest = min(
+                [closest]
+                + [max(abs(p[0] - q[0]), abs(p[1] - q[1])) for i, p in enumerate(crowd) for q in crowd[i + 1 :]]
+            )
+            overlaps.extend((a, b) for i, a in enumerate(boxes) for b in boxes[i + 1 :] if boxes_overlap(a, b))
+            page.wait_for_timeout(200)
+    finally:
+        for agent in agents:
+            command(studio, "release", agent=agent)
+    assert closest < 500, f"the robots did not crowd (closest {closest} mm): the test proves nothing"
+    assert not overlaps, f"{len(overlaps)} overlapping labels, e.g. {overlaps[0]}"

@@ -15,6 +15,10 @@ export class SvgView {
   private readonly ids = new Map<string, Element>();
   /// class name -> ids currently carrying it.
   private readonly marked = new Map<string, Set<string>>();
+  /// Whether the picture is at Fit (then a resize fits it again; else it keeps its centre).
+  private fitted = true;
+  private viewW = 0;
+  private viewH = 0;
   onClick: ((id: string, ev: MouseEvent) => void) | null = null;
 
   constructor(label: string) {
@@ -34,11 +38,31 @@ export class SvgView {
         ev.preventDefault();
         this.x += m[0];
         this.y += m[1];
+        this.fitted = false;
         this.apply();
       } else if (ev.key === "+" || ev.key === "=") this.zoomBy(1.25);
       else if (ev.key === "-") this.zoomBy(0.8);
       else if (ev.key === "f") this.fit();
     });
+    new ResizeObserver(() => this.resized()).observe(this.element);
+  }
+
+  /// The viewport changed size (window, splitter, a tab shown again).
+  private resized(): void {
+    const rect = this.element.getBoundingClientRect();
+    if (!rect.width || !rect.height) return; // hidden: handled when shown again
+    const dw = rect.width - this.viewW;
+    const dh = rect.height - this.viewH;
+    const first = !this.viewW;
+    this.viewW = rect.width;
+    this.viewH = rect.height;
+    if (!this.svg || (!dw && !dh)) return;
+    if (this.fitted || first) this.fit();
+    else {
+      this.x += dw / 2;
+      this.y += dh / 2;
+      this.apply();
+    }
   }
 
   /// Show a new SVG (text from the server); returns false when it cannot be read.
@@ -104,6 +128,7 @@ export class SvgView {
       requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit());
       return;
     }
+    this.fitted = true;
     this.zoom = Math.min(2, Math.min(rect.width / this.width, rect.height / this.height) * 0.95);
     this.x = (rect.width - this.width * this.zoom) / 2;
     this.y = (rect.height - this.height * this.zoom) / 2;
@@ -115,6 +140,7 @@ export class SvgView {
     const px = cx ?? rect.width / 2;
     const py = cy ?? rect.height / 2;
     const zoom = Math.max(0.05, Math.min(8, this.zoom * factor));
+    this.fitted = false;
     this.x = px - ((px - this.x) * zoom) / this.zoom;
     this.y = py - ((py - this.y) * zoom) / this.zoom;
     this.zoom = zoom;
@@ -137,6 +163,7 @@ export class SvgView {
     const ux = (box.left + box.width / 2 - stageBox.left) / this.zoom;
     const uy = (box.top + box.height / 2 - stageBox.top) / this.zoom;
     if (this.zoom < 0.8) this.zoom = 1;
+    this.fitted = false;
     this.x = rect.width / 2 - ux * this.zoom;
     this.y = rect.height / 2 - uy * this.zoom;
     this.apply();
@@ -167,6 +194,7 @@ export class SvgView {
       if (moved) {
         this.x = x0 + dx;
         this.y = y0 + dy;
+        this.fitted = false;
         this.apply();
       }
     };
