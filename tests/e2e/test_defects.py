@@ -375,3 +375,115 @@ def test_robot_labels_on_the_field_do_not_overlap(page: Any, studio: StudioServe
             command(studio, "release", agent=agent)
     assert closest < 500, f"the robots did not crowd (closest {closest} mm): the test proves nothing"
     assert not overlaps, f"{len(overlaps)} overlapping labels, e.g. {overlaps[0]}"
+
+
+# -- a readable state-machine view (issue 13, deliverable 4) -------------------------------------------
+
+STATES = [
+    "wait_for_ball", "approach_slowly", "approach_fast", "turn_to_goal", "align_left", "align_right",
+    "dribble_forward", "prepare_kick", "kick_hard", "recover", "search_left", "search_right",
+]  # fmt: skip
+
+
+def many_states_option() -> str:
+    """A 12-state option whose transitions share a long first condition (their old labels were
+    all cut to the same prefix); each state moves on after 300 ms, so transitions fire."""
+    lines = ["/** Twelve states in a ring, for the option view's legibility. */", "option many_states {"]
+    for i, name in enumerate(STATES):
+        nxt = STATES[(i + 1) % len(STATES)]
+        far = STATES[(i + 5) % len(STATES)]
+        lines += [
+            f"  {'initial ' if i == 0 else ''}state {name} {{",
+            "    decision {",
+            "      if (ball.time_since_seen > 99999999 && ball.distance > 10999 && robot.x > 99999)",
+            f"        goto {far};",
+            f"      else if (state_time > 300 && ball.distance >= 0 && abs(value = ball.angle) <= 180 + {i})",
+            f"        goto {nxt};",
+            "      else",
+            "        stay;",
+            "    }",
+            "    action {",
+            "    }",
+            "  }",
+        ]
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def state_name_sizes(page: Any) -> list[float]:
+    """The on-screen font size (px) of every state name in the option view."""
+    sizes: list[float] = page.evaluate(
+        """() => [...document.querySelectorAll('.option-panel g.node[id^="state_"] text')].map(t => {
+            const svg = t.ownerSVGElement;
+            const scale = svg.getBoundingClientRect().width / svg.width.baseVal.value;
+            return parseFloat(getComputedStyle(t).fontSize) * scale;
+        })"""
+    )
+    return sizes
+
+
+def zoom_of(page: Any) -> float:
+    transform = page.evaluate("() => document.querySelector('.option-panel .svg-stage').style.transform")
+    return float(transform.split("scale(")[1].rstrip(")"))
+
+
+def test_a_twelve_state_option_is_legible_at_fit(page: Any, studio: StudioServer) -> None:
+    agents_file = studio.example / "behavior" / "agents.xabsl"
+    (studio.example / "behavior" / "options" / "many_states.xabsl").write_text(many_states_option())
+    original = agents_file.read_text()
+    if "many_states" not in original:
+        anchor = original.index("include ")
+        agents_file.write_text(original[:anchor] + 'include "options/many_states.xabsl";\n' + original[anchor:])
+    generation = page.evaluate(f"{STUDIO}.session.hello.generation")
+    assert command(studio, "reload")["ok"]
+    wait_until(page, f"() => {STUDIO}.session.hello.generation > {generation}")
+    agent = page.evaluate(f"{STUDIO}.session.selectedAgent")
+    command(studio, "force_option", agent=agent, option="many_states", params={})
+    try:
+        open_option_view(page, "many_states")
+        wait_until(page, "() => document.querySelectorAll('.option-panel g.node[id^=\"state_\"]').length === 12")
+        page.locator(".option-panel button", has_text="Fit").click()
+        page.wait_for_timeout(300)
+        sizes = state_name_sizes(page)
+        assert len(sizes) >= 12 and min(sizes) >= 11, f"state names at Fit: {min(sizes):.1f} px"
+        # The active state and the last transition are marked.
+        wait_until(page, "() => document.querySelectorAll('.option-panel g.node.active').length === 1")
+        wait_until(page, "() => document.querySelectorAll('.option-panel g.edge.fired').length === 1")
+        screenshot(page, "option-12-states")
+        # ... also at a moment of the history (found in the buffered ticks).
+        page.evaluate(f"{STUDIO}.session.setCursor({STUDIO}.session.live.t - 200)")
+        wait_until(page, "() => document.querySelectorAll('.option-panel g.edge.fired').length === 1")
+        wait_until(page, "() => document.querySelectorAll('.option-panel .transitions li.fired').length === 1")
+        page.evaluate(f"{STUDIO}.session.setCursor(null)")
+        # Every condition is there in full: on the edge (hover) and in the transition list.
+        conditions = page.evaluate(
+            """() => [...document.querySelectorAll('.option-panel .transitions li code')].map(c => c.textContent)"""
+        )
+        assert len(conditions) == 24, conditions
+        assert all("…" not in c for c in conditions)
+        assert any("abs(value = ball.angle) <= 180 + 11" in c for c in conditions)
+        titles = page.evaluate(
+            """() => [...document.querySelectorAll('.option-panel g.edge[id^="leaf_"]')].map(e =>
+                [...e.querySelectorAll('title, a')]
+                    .map(x => x.getAttribute('xlink:title') || x.textContent).join(' '))"""
+        )
+        assert len(titles) == 24 and all("state_time > 300" in t or "99999999" in t for t in titles), titles
+        labels = page.evaluate(
+            """() => [...document.querySelectorAll('.option-panel g.edge[id^="leaf_"] text')].map(t => t.textContent)"""
+        )
+        firsts = {label for label in labels if label}
+        assert len(firsts) > 2, f"every transition label reads the same: {sorted(firsts)[:3]}"
+        # The zoom is reset per option: zoom in here, open another option, it is at Fit.
+        page.locator(".option-panel button", has_text="Fit").click()
+        fit = zoom_of(page)
+        page.locator(".option-panel .svg-view").hover()
+        page.mouse.wheel(0, -600)
+        page.wait_for_timeout(200)
+        assert zoom_of(page) != fit
+        open_option_view(page, "striker")
+        page.wait_for_timeout(500)
+        open_option_view(page, "many_states")
+        page.wait_for_timeout(500)
+        assert zoom_of(page) == fit
+    finally:
+        command(studio, "release", agent=agent)

@@ -20,6 +20,11 @@ export class SvgView {
   private viewW = 0;
   private viewH = 0;
   onClick: ((id: string, ev: MouseEvent) => void) | null = null;
+  /// Smallest on-screen size (px) of the text matching `legibleText` that Fit allows (0: none):
+  /// a picture too large to be read whole is shown at that size, centred on `focus()`.
+  minTextPx = 0;
+  legibleText = "g.node text";
+  focus: (() => string | null) | null = null;
 
   constructor(label: string) {
     this.stage = h("div.svg-stage");
@@ -122,17 +127,55 @@ export class SvgView {
     this.stage.style.transform = `translate(${this.x}px, ${this.y}px) scale(${this.zoom})`;
   }
 
-  fit(): void {
+  /// Fit the picture into the view; `overview`: the whole of it, however small its text gets.
+  fit(overview = false): void {
     const rect = this.element.getBoundingClientRect();
     if (!this.width || !rect.width) {
-      requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit());
+      requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit(overview));
       return;
     }
     this.fitted = true;
+    const applied = this.zoom; // the stage is still drawn at this zoom
     this.zoom = Math.min(2, Math.min(rect.width / this.width, rect.height / this.height) * 0.95);
     this.x = (rect.width - this.width * this.zoom) / 2;
     this.y = (rect.height - this.height * this.zoom) / 2;
+    const legible = overview ? 0 : this.legibleZoom();
+    if (this.zoom < legible) {
+      this.zoom = legible;
+      const id = this.focus?.() ?? null;
+      const target = id ? this.unscaledCentre(id, applied) : null;
+      const [ux, uy] = target ?? [this.width / 2, this.height / 2];
+      // centred on the focus, but never showing more empty space than needed
+      this.x = Math.min(0, Math.max(rect.width - this.width * this.zoom, rect.width / 2 - ux * this.zoom));
+      this.y = this.height * this.zoom <= rect.height ? (rect.height - this.height * this.zoom) / 2 : Math.min(0, Math.max(rect.height - this.height * this.zoom, rect.height / 2 - uy * this.zoom));
+    }
     this.apply();
+  }
+
+  /// The zoom at which the smallest legible-class text is `minTextPx` on screen (0: no floor).
+  private legibleZoom(): number {
+    if (!this.minTextPx || !this.svg) return 0;
+    let size = Infinity;
+    for (const t of this.svg.querySelectorAll(this.legibleText)) {
+      const px = parseFloat(t.getAttribute("font-size") ?? "");
+      if (px > 0) size = Math.min(size, px);
+    }
+    return Number.isFinite(size) ? this.minTextPx / size : 0;
+  }
+
+  /// The centre of element `id` in unscaled picture pixels.
+  private unscaledCentre(id: string, zoom: number): [number, number] | null {
+    const el = this.ids.get(id);
+    if (!el) return null;
+    const box = el.getBoundingClientRect();
+    const stageBox = this.stage.getBoundingClientRect();
+    if (!box.width && !box.height) return null;
+    return [(box.left + box.width / 2 - stageBox.left) / zoom, (box.top + box.height / 2 - stageBox.top) / zoom];
+  }
+
+  /// The current zoom (tests and the option view read it).
+  get scale(): number {
+    return this.zoom;
   }
 
   zoomBy(factor: number, cx?: number, cy?: number): void {
