@@ -7,8 +7,9 @@ and leave it as they found it: running, at 1x, nothing forced or overridden.
 from __future__ import annotations
 
 import json
+import time
 import urllib.request
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -35,6 +36,16 @@ def command(studio: StudioServer, op: str, **args: Any) -> Any:
     )
     with urllib.request.urlopen(request, timeout=10) as response:
         return json.loads(response.read())
+
+
+def eventually(check: Callable[[], bool], seconds: float = 10.0) -> bool:
+    """Whether ``check()`` becomes true within ``seconds`` (asked every 100 ms)."""
+    deadline = time.monotonic() + seconds
+    while not check():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.1)
+    return True
 
 
 @pytest.fixture
@@ -119,9 +130,7 @@ def test_the_speeds_of_the_docs_are_offered_and_the_clock_shows_one_step(
     values = page.eval_on_selector_all("#speed option", "os => os.map(o => Number(o.value))")
     assert min(values) == 0.1 and max(values) == 20, values
     page.select_option("#speed", "20")
-    wait_until(page, "() => true")
-    page.wait_for_timeout(300)
-    assert api_status(studio)["speed"] == 20
+    assert eventually(lambda: api_status(studio)["speed"] == 20)
     # Choosing a speed hands the keys back: Space pauses instead of opening the dropdown.
     page.keyboard.press("Space")
     wait_until(page, "() => document.querySelector('#pause').innerText.includes('Resume')")
