@@ -459,6 +459,11 @@ def test_a_twelve_state_option_is_legible_at_fit(page: Any, studio: StudioServer
         wait_until(page, "() => document.querySelectorAll('.option-panel g.node.active').length === 1")
         wait_until(page, "() => document.querySelectorAll('.option-panel g.edge.fired').length === 1")
         screenshot(page, "option-12-states")
+        # At Fit the view follows the active state (the ring moves on every 300 ms).
+        for _ in range(3):
+            page.wait_for_timeout(700)
+            active = box_of(page, ".option-panel g.node.active")
+            assert inside(active, box_of(page, ".option-panel .svg-view"), slack=2), "the active state is out of view"
         # ... also at a moment of the history (found in the buffered ticks).
         page.evaluate(f"{STUDIO}.session.setCursor({STUDIO}.session.live.t - 200)")
         wait_until(page, "() => document.querySelectorAll('.option-panel g.edge.fired').length === 1")

@@ -26,6 +26,8 @@ export class OptionView {
   private explaining = false;
   private lastWhy = "";
   private readonly transitions: HTMLElement;
+  /// The active state last brought into view.
+  private followed = "";
   private transitionsKey = "";
   private transitionItems = new Map<string, HTMLElement>();
   /// The last transition at the scrubbed moment: [cursor|agent|option] -> result.
@@ -160,6 +162,9 @@ export class OptionView {
   private highlight(option: Option): void {
     const node = this.node(option);
     this.view.setClasses("active", node ? [`state_${node.state}`] : []);
+    const active = node ? `state_${node.state}` : "";
+    if (active && active !== this.followed) this.view.keepInView(active);
+    this.followed = active;
     const last = this.lastTransition(option);
     const fired = last ? `leaf_${last.from}_${last.leaf}` : null;
     this.view.setClasses("fired", fired ? [fired] : []);

@@ -145,9 +145,8 @@ export class SvgView {
       const id = this.focus?.() ?? null;
       const target = id ? this.unscaledCentre(id, applied) : null;
       const [ux, uy] = target ?? [this.width / 2, this.height / 2];
-      // centred on the focus, but never showing more empty space than needed
-      this.x = Math.min(0, Math.max(rect.width - this.width * this.zoom, rect.width / 2 - ux * this.zoom));
-      this.y = this.height * this.zoom <= rect.height ? (rect.height - this.height * this.zoom) / 2 : Math.min(0, Math.max(rect.height - this.height * this.zoom, rect.height / 2 - uy * this.zoom));
+      this.x = place(this.width * this.zoom, rect.width, ux * this.zoom);
+      this.y = place(this.height * this.zoom, rect.height, uy * this.zoom);
     }
     this.apply();
   }
@@ -171,6 +170,23 @@ export class SvgView {
     const stageBox = this.stage.getBoundingClientRect();
     if (!box.width && !box.height) return null;
     return [(box.left + box.width / 2 - stageBox.left) / zoom, (box.top + box.height / 2 - stageBox.top) / zoom];
+  }
+
+  /// While at Fit, bring element `id` into view when it is outside (same zoom): a machine shown
+  /// at a legible size around its active state follows that state. Once panned, it stays put.
+  keepInView(id: string): void {
+    if (!this.fitted || !this.svg) return;
+    const el = this.ids.get(id);
+    if (!el) return;
+    const view = this.element.getBoundingClientRect();
+    const box = el.getBoundingClientRect();
+    if (!view.width || (box.left >= view.left && box.right <= view.right && box.top >= view.top && box.bottom <= view.bottom)) return;
+    const target = this.unscaledCentre(id, this.zoom);
+    if (!target) return;
+    const [ux, uy] = target;
+    this.x = place(this.width * this.zoom, view.width, ux * this.zoom);
+    this.y = place(this.height * this.zoom, view.height, uy * this.zoom);
+    this.apply();
   }
 
   /// The current zoom (tests and the option view read it).
@@ -251,4 +267,11 @@ export class SvgView {
     this.element.addEventListener("pointermove", move);
     this.element.addEventListener("pointerup", up);
   }
+}
+
+/// The offset that shows a picture `size` long in a view `view` long with point `at` of it in the
+/// middle: centred when it fits, else as close to `at` as its edges allow (no empty margin).
+export function place(size: number, view: number, at: number): number {
+  if (size <= view) return (view - size) / 2;
+  return Math.min(0, Math.max(view - size, view / 2 - at));
 }
