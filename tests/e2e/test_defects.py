@@ -237,8 +237,8 @@ def test_the_tester_says_what_is_wrong_with_a_parameter(page: Any) -> None:
 def test_an_override_is_released_with_one_click_and_its_row_fits(page: Any) -> None:
     page.keyboard.press("s")
     page.keyboard.press("Escape")
-    row = page.locator(".symbol-row[data-kind='input']").first
-    name = row.get_attribute("data-symbol")
+    name = "ball.distance"  # declared 0..11000 mm
+    row = page.locator(f".symbol-row[data-kind='input'][data-symbol='{name}']")
     row.locator("button", has_text="set…").click()
     editor = row.locator(".override-editor")
     editor.wait_for()
@@ -249,6 +249,14 @@ def test_an_override_is_released_with_one_click_and_its_row_fits(page: Any) -> N
         assert box["x"] >= panel["x"] and box["x"] + box["width"] <= panel["x"] + panel["width"] + 0.5, (
             f"{label} is clipped: {box} outside {panel}"
         )
+    # An empty or out-of-range value is said, not sent (an empty field used to override with 0).
+    for text, message in (("", "a number is required"), ("-5", "outside the declared range 0..11000")):
+        editor.locator("input").fill(text)
+        editor.locator("button", has_text="Override").click()
+        editor.locator(".param-error", has_text=message).wait_for()
+        page.wait_for_timeout(300)
+        assert page.locator(f".symbol-row.overridden[data-symbol='{name}']").count() == 0
+    editor.locator("input").fill("1234")
     editor.locator("button", has_text="Override").click()
     overridden = page.locator(f".symbol-row.overridden[data-symbol='{name}']")
     overridden.wait_for()

@@ -4,6 +4,7 @@
 import type { Connection } from "../connection";
 import type { DescriptionIndex, InputSymbol, OutputSymbol } from "../description";
 import { rangeText } from "../description";
+import { checkNumber } from "../params";
 import type { Session, SessionEvent } from "../session";
 import { formatValue, h, setText, shortElement, toast, toggleClass } from "../ui";
 import type { PlotPanel } from "./plot";
@@ -130,10 +131,26 @@ export class SymbolsPanel {
     } else {
       control = h("input", { type: "number", step: "any", value: typeof current === "number" ? current : 0 });
     }
-    const value = (): number | boolean => (symbol.type === "boolean" ? control.value === "true" : Number(control.value));
+    const problem = h("div.param-error", { role: "alert", hidden: true });
     const apply = (): void => {
+      let value: number | boolean;
+      if (symbol.type === "boolean") value = control.value === "true";
+      else if (symbol.type === "enum") value = Number(control.value);
+      else {
+        // an empty or out-of-range number is said, not sent (it used to become 0)
+        const input = control as HTMLInputElement;
+        const checked = input.validity.badInput ? ({ ok: false, error: "not a number" } as const) : checkNumber(input.value, symbol.range);
+        problem.hidden = checked.ok;
+        problem.textContent = checked.ok ? "" : `${symbol.name}: ${checked.error}${symbol.unit ? ` (${symbol.unit})` : ""}`;
+        if (!checked.ok) {
+          control.setAttribute("aria-invalid", "true");
+          control.focus();
+          return;
+        }
+        value = checked.value;
+      }
       this.connection
-        .command("override_input", { agent: agentId, symbol: symbol.id, value: value() })
+        .command("override_input", { agent: agentId, symbol: symbol.id, value })
         .then(() => toast(`${symbol.name} overridden on ${session.agentInfo(agentId)?.name}`, "ok"))
         .catch((e: Error) => toast(`Override failed: ${e.message}`, "error"));
       editor.remove();
@@ -149,6 +166,7 @@ export class SymbolsPanel {
       h("button.primary", { onclick: apply }, "Override"),
       h("button", { onclick: release, title: "Back to the world's value" }, "Release"),
       h("button", { onclick: () => editor.remove() }, "Cancel"),
+      problem,
     );
     control.addEventListener("keydown", (ev) => {
       const key = (ev as KeyboardEvent).key;
