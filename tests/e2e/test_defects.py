@@ -295,6 +295,15 @@ def inside(inner: dict[str, float], outer: dict[str, float], slack: float = 1.0)
 def test_the_option_graph_refits_when_the_window_is_resized(page: Any, desktop: None) -> None:
     page.keyboard.press("g")
     wait_until(page, "() => document.querySelectorAll('.graph-panel g.node').length >= 10")
+    # As opened (fitted, or zoomed to a readable size around the active option when the whole
+    # graph is too small to read): a resize places it the same way again.
+    page.set_viewport_size({"width": 1100, "height": 760})
+    page.wait_for_timeout(400)
+    view = box_of(page, ".graph-panel .svg-view")
+    graph = box_of(page, ".graph-panel .svg-view svg")
+    shown = [b for b in (n.bounding_box() for n in page.locator(".graph-panel g.node.active").all()) if b]
+    assert inside(graph, view) or any(inside(b, view) for b in shown), f"nothing active in view {view}: {shown}"
+    page.set_viewport_size({"width": 1600, "height": 1000})
     page.locator(".graph-panel button", has_text="Fit").click()
     page.wait_for_timeout(200)
     view = box_of(page, ".graph-panel .svg-view")

@@ -17,6 +17,9 @@ export class SvgView {
   private readonly marked = new Map<string, Set<string>>();
   /// Whether the picture is at Fit (then a resize fits it again; else it keeps its centre).
   private fitted = true;
+  /// The automatic placement to redo after a resize while `fitted` (Fit, or Fit then the
+  /// readable zoom around the active option of `focusIfTiny`).
+  private refit: () => void = () => this.fit();
   private viewW = 0;
   private viewH = 0;
   onClick: ((id: string, ev: MouseEvent) => void) | null = null;
@@ -62,7 +65,7 @@ export class SvgView {
     this.viewW = rect.width;
     this.viewH = rect.height;
     if (!this.svg || (!dw && !dh)) return;
-    if (this.fitted || first) this.fit();
+    if (this.fitted || first) this.refit();
     else {
       this.x += dw / 2;
       this.y += dh / 2;
@@ -135,6 +138,7 @@ export class SvgView {
       return;
     }
     this.fitted = true;
+    this.refit = () => this.fit(overview);
     const applied = this.zoom; // the stage is still drawn at this zoom
     this.zoom = Math.min(2, Math.min(rect.width / this.width, rect.height / this.height) * 0.95);
     this.x = (rect.width - this.width * this.zoom) / 2;
@@ -208,7 +212,16 @@ export class SvgView {
 
   /// After `fit`: when the whole graph is too small to read, centre `id` at a readable zoom.
   focusIfTiny(id: string | null): void {
-    if (id && this.zoom < 0.55) requestAnimationFrame(() => this.centerOn(id));
+    if (!id || this.zoom >= 0.55) return;
+    requestAnimationFrame(() => {
+      this.centerOn(id);
+      // still an automatic placement: a resize does it again
+      this.fitted = true;
+      this.refit = () => {
+        this.fit();
+        this.focusIfTiny(id);
+      };
+    });
   }
 
   /// Centre the element `id` in the view (zooming in to a readable size if needed).
