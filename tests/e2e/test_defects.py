@@ -131,6 +131,11 @@ def test_the_speeds_of_the_docs_are_offered_and_the_clock_shows_one_step(
     assert min(values) == 0.1 and max(values) == 20, values
     page.select_option("#speed", "20")
     assert eventually(lambda: api_status(studio)["speed"] == 20)
+    # A tab switch redraws the top bar: it keeps showing the speed chosen (not the hello's).
+    page.keyboard.press("x")
+    page.keyboard.press("a")
+    page.wait_for_timeout(200)
+    assert page.eval_on_selector("#speed", "s => s.value") == "20"
     # Choosing a speed hands the keys back: Space pauses instead of opening the dropdown.
     page.keyboard.press("Space")
     wait_until(page, "() => document.querySelector('#pause').innerText.includes('Resume')")
