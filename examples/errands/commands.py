@@ -101,6 +101,31 @@ def describe(world: ErrandsWorld) -> list[dict[str, Any]]:
             "args": [{"name": "since", "type": "number", "default": 0}],
         },
         {"name": "model", "label": "DD model", "group": "query", "doc": "The Dual Dynamics model.", "args": []},
+        {
+            "name": "model_source",
+            "label": "Model file",
+            "group": "model",
+            "doc": "The model file's text and version.",
+            "args": [],
+        },
+        {
+            "name": "model_check",
+            "label": "Check model",
+            "group": "model",
+            "doc": "Diagnostics (file, key, line, column) for model text; nothing is saved.",
+            "args": [{"name": "text", "type": "string", "default": ""}],
+        },
+        {
+            "name": "model_save",
+            "label": "Save model",
+            "group": "model",
+            "doc": "Save the model text atomically (refused if the file changed since `version`); "
+            "hot reload when clean.",
+            "args": [
+                {"name": "text", "type": "string", "default": ""},
+                {"name": "version", "type": "string", "default": ""},
+            ],
+        },
     ]
 
 
@@ -171,6 +196,20 @@ def run(world: ErrandsWorld, name: str, args: dict[str, Any]) -> Any:
         return {"total": len(events), "events": [event_json(i, e) for i, e in enumerate(events[since:], since)]}
     if name == "model":
         return model_json(world)
+    if name in ("model_source", "model_check", "model_save"):
+        from examples.errands import model_edit
+
+        if name == "model_source":
+            return model_edit.source(world)
+        if name == "model_check":
+            text = args.get("text")
+            if not isinstance(text, str):
+                raise WorldCommandError("text (the model file's text) is required")
+            diagnostics, _ = model_edit.check(world, text)
+            return {"ok": not diagnostics, "diagnostics": diagnostics}
+        result = model_edit.save(world, args.get("text"), args.get("version"))
+        world.note_intervention(f"saved {world.model_name}" + (" and hot-reloaded it" if result["reloaded"] else ""))
+        return result
     raise WorldCommandError(
         f"unknown world command {name!r} (expected one of: {', '.join(c['name'] for c in describe(world))})"
     )

@@ -221,6 +221,9 @@ class ErrandsWorld:
         self.dt = float(dt)
         physics_rate(self.dt)  # reject a tick the loop cannot run before building anything
         self.arena = Arena(layout)
+        self.model_path = Path(model_path)
+        #: the model file's name as the studio shows it (relative to the example folder)
+        self.model_name = f"{self.model_path.parent.name}/{self.model_path.name}"
         self.dd = DDSystem(_model(str(model_path), self.dt), seed=self.seed, dt=self.dt, noise=noise)
         self.behaviors = self.dd.model.behaviors
         self._roam = self.behaviors.index("roam") if "roam" in self.behaviors else -1
@@ -488,6 +491,25 @@ class ErrandsWorld:
             self.dd.set_current_operator(op)  # validates before anything changes
         self.forced_op = op
         self._op_key = (-1, -1, -1, -1)  # re-read the monitor's choice (or the force) next tick
+
+    def swap_model(self, model: DDModel) -> str | None:
+        """Run ``model`` from now on, keeping α, actuators, slow variables, switches and the noise stream.
+
+        Returns:
+            None when swapped; else why not (other behavior, actuator or slow-variable names: the
+            model runs after a reset).
+        """
+        old = self.dd
+        om = old.model
+        if (model.behaviors, model.actuators, model.slow) != (om.behaviors, om.actuators, om.slow):
+            return "saved; the model names other behaviors, actuators or slow variables: Reset to run it"
+        new = DDSystem(model, seed=self.seed, dt=self.dt, noise=old.noise)
+        new.alpha, new.act, new.slow = old.alpha, old.act, old.slow
+        new.rng, new.t, new.s, new.sigma_op, new.pinned = old.rng, old.t, old.s, old.sigma_op, old.pinned
+        new.last = old.last
+        self.dd = new
+        _model.cache_clear()  # a reset builds from the file, which now holds this model
+        return None
 
     def set_fact(self, fact: Fact, value: bool) -> None:
         """Set or clear a derived fact by hand; logged as a fact event with the cause ``by hand``."""

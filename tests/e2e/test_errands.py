@@ -32,6 +32,7 @@ def errands(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     example = root / "errands"
     example.mkdir()
     shutil.copytree(REPO / "examples" / "errands" / "behavior", example / "behavior")
+    shutil.copytree(REPO / "examples" / "errands" / "model", example / "model")
     (example / "studio.py").write_text('"""The errands plug-in."""\n\nfrom examples.errands.studio import example\n')
     server = StudioServer(example, free_port(), root / "serve.log")
     server.start()
@@ -144,3 +145,27 @@ def test_why_for_a_fact_names_its_cause(page: Any) -> None:
     page.keyboard.press("End")
     page.wait_for_timeout(1500)
     screenshot(page, "errands-dynamics")
+
+
+def test_the_model_editor_shows_the_loaders_error_at_its_line_and_column(page: Any, errands: StudioServer) -> None:
+    page.keyboard.press("d")
+    page.locator(".model-editor summary").click()
+    text = page.locator(".model-text")
+    page.wait_for_function("() => document.querySelector('.model-text').value.includes('xabsl-dd-model/1')")
+    original = text.input_value()
+    text.fill(original.replace('"drive": "1 - 1.2*max(', '"drive": "1 - zork*max(', 1))
+    diagnostic = page.locator(".model-diagnostic")
+    diagnostic.wait_for(timeout=10000)
+    assert "behaviors.roam.drive: unknown name 'zork'" in diagnostic.inner_text()
+    assert diagnostic.inner_text().startswith("model/errands_dd.json:")
+    diagnostic.locator("button").click()
+    selected = page.evaluate(
+        "() => { const t = document.querySelector('.model-text');"
+        " return t.value.slice(t.selectionStart, t.selectionStart + 4); }"
+    )
+    assert selected == "zork"
+    text.fill(original.replace('"c_oct": 10.0', '"c_oct": 9.5'))
+    page.wait_for_function("() => !document.querySelector('.model-diagnostic')")
+    page.locator(".model-editor button[data-run='model_save']").click()
+    page.locator(".toast", has_text="Model saved and hot-reloaded").wait_for(timeout=10000)
+    assert '"c_oct": 9.5' in (errands.example / "model" / "errands_dd.json").read_text()

@@ -27,6 +27,7 @@ def errands_session(tmp_path: Path) -> Iterator[Session]:
     root = tmp_path / "errands"
     root.mkdir()
     shutil.copytree(REPO / "examples" / "errands" / "behavior", root / "behavior")
+    shutil.copytree(REPO / "examples" / "errands" / "model", root / "model")
     (root / "studio.py").write_text('"""The errands plug-in."""\n\nfrom examples.errands.studio import example\n')
     plugin = load_example(root)
     session = Session(plugin, seed=1, speed=20.0, behavior_hz=plugin.behavior_hz, physics_hz=plugin.physics_hz)
@@ -128,6 +129,44 @@ def test_forcing_an_operator_a_replan_and_a_fact_by_hand(errands_session: Sessio
         events = world(client, "fact_events")["events"]
         forced = [e for e in events if e["fact"] == "has-robot book"]
         assert forced and forced[0]["value"] is True and forced[0]["cause"] == {"rule": "by hand", "phase": "forced"}
+
+
+def test_the_model_file_is_checked_with_key_line_and_column_saved_atomically_and_hot_reloaded(
+    errands_session: Session, client_for: Any
+) -> None:
+    path = errands_session.example.root / "model" / "errands_dd.json"
+    with LiveServer(errands_session) as server:
+        client = client_for(server)
+        client.frame_after(lambda f: f["scene"]["op"] == "goto a c")
+        source = world(client, "model_source")
+        assert source["path"] == "model/errands_dd.json" and source["text"] == path.read_text()
+        text = source["text"]
+        assert world(client, "model_check", text=text) == {"ok": True, "diagnostics": []}
+        # An unknown name in roam's drive: the diagnostic points at it, inside the expression.
+        broken = text.replace('"drive": "1 - 1.2*max(', '"drive": "1 - zork*max(', 1)
+        (diagnostic,) = world(client, "model_check", text=broken)["diagnostics"]
+        assert diagnostic["key"] == "behaviors.roam.drive" and "unknown name 'zork'" in diagnostic["message"]
+        span = diagnostic["span"]
+        assert broken[span["start"] : span["start"] + 4] == "zork"
+        line = broken.splitlines()[span["line"] - 1]
+        assert line[span["col"] - 1 :].startswith("zork")
+        (bad_json,) = world(client, "model_check", text=text.replace('"dt": 0.02,', '"dt": 0.02,,'))["diagnostics"]
+        assert bad_json["message"].startswith("not valid JSON") and bad_json["span"]["line"] == 5
+
+        # A broken save keeps the file (the text is never lost) and the running model.
+        saved = world(client, "model_save", text=broken, version=source["version"])
+        assert saved["saved"] and not saved["ok"] and not saved["reloaded"] and path.read_text() == broken
+        # Saving against an old version is refused; against the current one it hot-reloads.
+        stale = client.command("world_command", name="model_save", args={"text": text, "version": source["version"]})
+        assert stale["ok"] is False and "changed on disk" in stale["error"]
+        tuned = text.replace('"c_oct": 10.0', '"c_oct": 9.0')
+        assert tuned != text
+        saved = world(client, "model_save", text=tuned, version=saved["version"])
+        assert saved["ok"] and saved["reloaded"] and path.read_text() == tuned
+        assert {c["c"] for c in world(client, "model")["oct"]["goto"]["couplings"]} == {9.0}
+        # The robot goes on with the new model (its run did not restart).
+        frame = client.frame_after(lambda f: f["scene"]["op"] == "goto a c" and f["t"] > 2000)
+        assert frame["scene"]["plan_version"] == 1
 
 
 @pytest.mark.parametrize(

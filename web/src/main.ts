@@ -124,7 +124,7 @@ function main(): void {
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
   // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
-  const dynamics = new DynamicsPanel(session);
+  const dynamics = new DynamicsPanel(session, connection);
   const plan = new PlanPanel(session, connection);
   const facts = new FactsPanel(session, connection);
 

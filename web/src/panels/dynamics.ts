@@ -9,12 +9,16 @@ import "./world.css";
 import type { Session, SessionEvent } from "../session";
 import type { Tick } from "../protocol";
 import { h, setText } from "../ui";
-import { type DDScene, type DDStatic, ddOf, SERIES } from "./world";
+import type { Connection } from "../connection";
+import { ModelEditor } from "./modeleditor";
+import { commandsOf, type DDScene, type DDStatic, ddOf, SERIES } from "./world";
 
 interface Chart {
   host: HTMLElement;
   plot: uPlot | null;
   key: string;
+  /// Plot height in px (the legend goes below it, so the host grows with it).
+  height: number;
 }
 
 const TERM_LABELS: Record<string, string> = {
@@ -36,17 +40,23 @@ export class DynamicsPanel {
   private readonly termsTitle: HTMLElement;
   private dd: DDStatic | null = null;
   private lastDraw = 0;
+  private readonly model: ModelEditor;
+  private generation = -1;
 
-  constructor(private readonly session: Session) {
+  constructor(
+    private readonly session: Session,
+    connection: Connection,
+  ) {
+    this.model = new ModelEditor(connection);
     this.behavior = h("select", { "aria-label": "Behavior whose Δα terms are shown", title: "Behavior whose Δα terms are shown" });
     this.behavior.addEventListener("change", () => this.draw(true));
     this.windowSelect = h("select", { "aria-label": "Seconds shown" }, ...[10, 20, 30, 60].map((s) => h("option", { value: s }, `${s} s`)));
     this.windowSelect.value = "20";
     this.windowSelect.addEventListener("change", () => this.draw(true));
-    const chart = (cls: string): Chart => ({ host: h("div.dd-chart", { class: `dd-chart ${cls}` }), plot: null, key: "" });
-    this.alpha = chart("dd-alpha");
-    this.terms = chart("dd-terms");
-    this.switches = chart("dd-switches");
+    const chart = (cls: string, height: number): Chart => ({ host: h("div.dd-chart", { class: `dd-chart ${cls}` }), plot: null, key: "", height });
+    this.alpha = chart("dd-alpha", 160);
+    this.terms = chart("dd-terms", 130);
+    this.switches = chart("dd-switches", 110);
     this.drive = h("div.dd-drive");
     this.fusion = h("div.dd-fusion");
     this.termsTitle = h("span", {}, "Δα");
@@ -61,13 +71,18 @@ export class DynamicsPanel {
         h("div.dd-section", {}, h("div.dd-title", {}, this.termsTitle), this.terms.host, this.drive),
         h("div.dd-section", {}, h("div.dd-title", {}, "switch variables s_OP(t)"), this.switches.host),
         h("div.dd-section", {}, h("div.dd-title", {}, "actuator fusion: each behavior's share α·λ·(m* − m) (1/s)"), this.fusion),
+        this.model.element,
       ),
     );
     new ResizeObserver(() => this.resize()).observe(this.element);
   }
 
   render(changes: Set<SessionEvent>): void {
-    if (changes.has("hello")) {
+    const gen = this.session.hello?.generation ?? -1;
+    if (changes.has("hello") && gen !== this.generation) {
+      this.generation = gen;
+      // A reload or reset: the model editor keeps unsaved text only within one generation.
+      this.model.setCommands(commandsOf(this.session.scene));
       this.dd = ddOf(this.session.scene);
       const names = this.dd?.behaviors ?? [];
       const keep = this.behavior.value;
@@ -81,7 +96,7 @@ export class DynamicsPanel {
   private resize(): void {
     for (const c of [this.alpha, this.terms, this.switches]) {
       const r = c.host.getBoundingClientRect();
-      if (c.plot && r.width > 0 && r.height > 0) c.plot.setSize({ width: r.width, height: r.height });
+      if (c.plot && r.width > 0) c.plot.setSize({ width: r.width, height: c.height });
     }
   }
 
@@ -184,7 +199,7 @@ export class DynamicsPanel {
       const grid = style.getPropertyValue("--grid").trim() || "rgba(128,128,128,0.2)";
       const opts: uPlot.Options = {
         width: Math.max(100, rect.width),
-        height: Math.max(60, rect.height),
+        height: c.height,
         legend: { show: true, live: false },
         cursor: { drag: { x: false, y: false } },
         scales: { x: { time: false }, y: range ? { range: [range.min, range.max] } : {} },
