@@ -55,9 +55,7 @@ class ErrandsExample:
 
     def build_world(self, seed: int) -> World:
         """The errands world of §1.5, without a controller until :meth:`make_controller`."""
-        from examples.errands.world import ErrandsWorld
-
-        from examples.errands.world import MODEL_PATH
+        from examples.errands.world import MODEL_PATH, ErrandsWorld
 
         model = self.root / "model" / "errands_dd.json"  # the served folder's model, if it has one
         return ErrandsWorld(
