@@ -28,6 +28,15 @@ const TERM_LABELS: Record<string, string> = {
 };
 const DRIVE_LABELS: Record<string, string> = { sensors: "sensors", self: "self-excitation", others: "inhibition / excitation by others", bias: "bias" };
 
+/// Index of the largest activation (0 without data).
+function dominant(alpha: number[] | undefined): number {
+  let best = 0;
+  (alpha ?? []).forEach((a, i) => {
+    if (a > (alpha?.[best] ?? 0)) best = i;
+  });
+  return best;
+}
+
 export class DynamicsPanel {
   readonly element: HTMLElement;
   private readonly behavior: HTMLSelectElement;
@@ -54,7 +63,7 @@ export class DynamicsPanel {
     this.windowSelect.value = "20";
     this.windowSelect.addEventListener("change", () => this.draw(true));
     const chart = (cls: string, height: number): Chart => ({ host: h("div.dd-chart", { class: `dd-chart ${cls}` }), plot: null, key: "", height });
-    this.alpha = chart("dd-alpha", 160);
+    this.alpha = chart("dd-alpha", 150);
     this.terms = chart("dd-terms", 130);
     this.switches = chart("dd-switches", 110);
     this.drive = h("div.dd-drive");
@@ -86,8 +95,8 @@ export class DynamicsPanel {
       this.dd = ddOf(this.session.scene);
       const names = this.dd?.behaviors ?? [];
       const keep = this.behavior.value;
-      this.behavior.replaceChildren(...names.map((b) => h("option", { value: b }, b)));
-      if (names.includes(keep)) this.behavior.value = keep;
+      this.behavior.replaceChildren(h("option", { value: "" }, "the dominant behavior"), ...names.map((b) => h("option", { value: b }, b)));
+      this.behavior.value = names.includes(keep) ? keep : "";
       this.alpha.key = this.terms.key = this.switches.key = "";
     }
     this.draw(changes.has("hello") || changes.has("cursor") || changes.has("history"));
@@ -123,7 +132,7 @@ export class DynamicsPanel {
       { min: 0, max: 1 },
     );
     // Δα terms of the selected behavior.
-    const b = Math.max(0, dd.behaviors.indexOf(this.behavior.value));
+    const b = this.behavior.value ? Math.max(0, dd.behaviors.indexOf(this.behavior.value)) : dominant((this.session.view?.scene as DDScene | null | undefined)?.alpha);
     const termNames = ["relax", "plan", "noise"];
     setText(this.termsTitle, `Δα of ${dd.behaviors[b] ?? ""} per tick, by term`);
     this.chart(
