@@ -85,7 +85,13 @@ def describe(world: ErrandsWorld) -> list[dict[str, Any]]:
                 {"name": "value", "type": "bool", "default": True},
             ],
         },
-        {"name": "plan", "label": "Plan versions", "group": "query", "doc": "Every plan with its reason.", "args": []},
+        {
+            "name": "plan",
+            "label": "Plan versions",
+            "group": "query",
+            "doc": "Every plan with its reason, and the interventions by hand.",
+            "args": [],
+        },
         {
             "name": "plan_stats",
             "label": "Planning graph",
@@ -240,7 +246,8 @@ def plan_versions(world: ErrandsWorld) -> dict[str, Any]:
             {k: v[k] for k in ("version", "t", "reason", "kind", "detail", "layers", "dropped", "solved", "failed")}
             | {"done": sorted(board.done) if current else list(v["done"]), "current": current}
         )
-    return {"versions": versions, "replans": board.replans, "reason": board.reason}
+    interventions = [{"t": round(t * 1000), "what": what} for t, what in world.interventions]
+    return {"versions": versions, "replans": board.replans, "reason": board.reason, "interventions": interventions}
 
 
 def plan_stats(world: ErrandsWorld, version: int) -> dict[str, Any]:

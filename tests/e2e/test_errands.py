@@ -121,6 +121,7 @@ def test_a_perturbation_button_leads_to_a_replan_the_plan_panel_shows(page: Any,
         assert "precondition_lost" in replan.inner_text()
         # The new version is in force; the old one shows its failed operator.
         page.locator(".plan-head", has_text="version 2").wait_for()
+        page.locator(".plan-intervention", has_text="by hand: teleported the mug to b").wait_for()
         screenshot(page, "errands-plan")
         page.locator(".plan-version[data-version='1'] button.link").first.click()
         failed = page.locator(".plan-op.failed[data-op='load mug c']")

@@ -122,7 +122,13 @@ def test_forcing_an_operator_a_replan_and_a_fact_by_hand(errands_session: Sessio
         client.frame_after(lambda f: f["scene"]["op"] == "goto a c" and f["scene"]["forced_op"] is None)
 
         assert world(client, "replan")["version"] == 2
-        assert world(client, "plan")["versions"][1]["reason"] == "by_hand"
+        plan = world(client, "plan")
+        assert plan["versions"][1]["reason"] == "by_hand"
+        assert [i["what"] for i in plan["interventions"]] == [
+            "forced operator goto a b",
+            "released the operator",
+            "replanned by hand",
+        ]
 
         world(client, "set_fact", fact="has-robot book", value=True)
         frame = client.frame_after(lambda f: "has-robot book" in f["scene"]["facts"] or f["scene"]["fact_events"] > 0)

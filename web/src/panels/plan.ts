@@ -40,6 +40,8 @@ export class PlanPanel {
   private readonly stats: HTMLElement;
   private readonly intervene: HTMLElement;
   private versions: PlanVersion[] = [];
+  private interventions: Array<{ t: number; what: string }> = [];
+  private seenInterventions = -1;
   private fetched = -1;
   private fetching = false;
   /// The version picked by the user (null: the one in force at the moment in view).
@@ -67,7 +69,7 @@ export class PlanPanel {
         {},
         this.graph,
         this.stats,
-        h("div.dd-title", {}, "versions (every replan, with its reason)"),
+        h("div.dd-title", {}, "versions (every replan, with its reason) and interventions by hand"),
         this.versionsList,
         h("div.dd-title", {}, "intervene"),
         this.intervene,
@@ -85,7 +87,11 @@ export class PlanPanel {
     }
     if (this.element.closest("[hidden]")) return;
     const live = this.session.live?.scene as DDScene | null | undefined;
-    if (live?.plan_version !== undefined && live.plan_version !== this.fetched) void this.fetch();
+    const interventions = (live as { interventions?: number } | null | undefined)?.interventions ?? 0;
+    if ((live?.plan_version !== undefined && live.plan_version !== this.fetched) || interventions !== this.seenInterventions) {
+      this.seenInterventions = interventions;
+      void this.fetch();
+    }
     this.draw();
   }
 
@@ -94,8 +100,9 @@ export class PlanPanel {
     this.fetching = true;
     try {
       const want = (this.session.live?.scene as DDScene | null | undefined)?.plan_version ?? 0;
-      const result = await worldCommand<{ versions: PlanVersion[] }>(this.connection, "plan");
+      const result = await worldCommand<{ versions: PlanVersion[]; interventions?: Array<{ t: number; what: string }> }>(this.connection, "plan");
       this.versions = result.versions;
+      this.interventions = result.interventions ?? [];
       this.fetched = Math.max(want, this.versions.length);
       this.drawnKey = "";
       this.draw();
@@ -143,7 +150,7 @@ export class PlanPanel {
     const shown = this.shownVersion();
     const viewedVersion = scene?.plan_version ?? 0;
     const done = new Set(shown && shown.version === viewedVersion ? (scene?.done ?? []) : (shown?.done ?? []));
-    const key = JSON.stringify([shown?.version, [...done], scene?.op, this.versions.length, viewedVersion, this.picked]);
+    const key = JSON.stringify([shown?.version, [...done], scene?.op, this.versions.length, viewedVersion, this.picked, this.interventions.length]);
     if (key === this.drawnKey) return;
     this.drawnKey = key;
     if (!shown) {
@@ -168,8 +175,13 @@ export class PlanPanel {
         h("div.plan-layers", {}, ...columns),
       );
     }
-    this.versionsList.replaceChildren(
-      ...this.versions.map((v) =>
+    const items: Array<[number, HTMLElement]> = this.interventions.map((i) => [
+      i.t,
+      h("li.plan-intervention", { "data-t": i.t }, h("button.link", { title: "Go to this moment", onclick: () => this.session.setCursor(i.t) }, seconds(i.t)), ` by hand: ${i.what}`),
+    ]);
+    for (const v of this.versions) {
+      items.push([
+        v.t,
         h(
           "li.plan-version",
           { class: `plan-version${v === shown ? " shown" : ""}`, "data-version": v.version },
@@ -178,7 +190,10 @@ export class PlanPanel {
           h("button.link", { title: "Go to this moment", onclick: () => this.session.setCursor(v.t) }, seconds(v.t)),
           ` ${v.kind} (${v.reason}): ${v.detail}`,
         ),
-      ),
-    );
+      ]);
+    }
+    // Chronological; a version and an intervention at the same moment: the intervention first.
+    items.sort((a, b) => a[0] - b[0] || (a[1].classList.contains("plan-intervention") ? -1 : 1));
+    this.versionsList.replaceChildren(...items.map(([, el]) => el));
   }
 }
