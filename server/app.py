@@ -33,7 +33,24 @@ from server import frames
 from server.clients import Client, Hub
 from server.files import BehaviorFiles, FileError
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
-from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION, Command, Op, ProtocolError, parse_command
+from server.messages import (
+    BEHAVIOR_PARAMS_INDEX,
+    DEPTH_INDEX,
+    ID_INDEX,
+    OPTION_NODE,
+    OPTION_PARAMS_INDEX,
+    Command,
+    CompileEvent,
+    FileEvent,
+    History,
+    ProtocolError,
+    Reload,
+    Reply,
+    encode,
+    guess_id,
+    parse_command,
+)
+from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
 from server.security import SecurityMiddleware, SecurityPolicy
 from server.session import CommandError, Session
 
@@ -91,27 +108,34 @@ class Studio:
 
     # -- commands -------------------------------------------------------------------------------
 
-    async def run_command(self, command: Command, client: Client | None) -> tuple[bool, Any, str | None]:
-        """Carry out a websocket or REST command: ``(ok, result, error)``."""
+    async def run_command(self, command: Command, client: Client | None) -> Reply:
+        """Carry out a (validated) websocket or REST command; its reply.
+
+        ``reload`` and ``history`` are the server process's (compiling, the ring buffer); every
+        other op goes to the simulation (``Session.request``).
+        """
         session = self.session
-        args = command.args
         try:
-            if command.op is Op.RELOAD:
-                key = args.get("program")
+            if isinstance(command, Reload):
+                key = command.program
                 if key is not None and key not in session.programs:
                     raise CommandError(f"unknown program {key!r}")
                 results = await self.recompile([key] if key else list(session.programs))
                 ok = all(r["ok"] for r in results.values())
-                return ok, {"programs": results}, None if ok else "a behavior has errors; the running one is kept"
-            if command.op is Op.HISTORY:
-                return self.start_history(command, client)
+                error = None if ok else "a behavior has errors; the running one is kept"
+                return Reply(id=command.id, ok=ok, result={"programs": results}, error=error)
+            if isinstance(command, History):
+                return Reply(id=command.id, ok=True, result=self.start_history(command, client))
             owner = client.id if client is not None else None
-            return True, await session.request(command.op, args, owner), None
+            return Reply(id=command.id, ok=True, result=await session.request(command, owner))
         except CommandError as error:
-            return False, None, str(error)
+            return Reply(id=command.id, ok=False, error=str(error))
 
-    def start_history(self, command: Command, client: Client | None) -> tuple[bool, Any, str | None]:
-        t0, t1, every = _history_args(command.args)
+    def start_history(self, command: History, client: Client | None) -> dict[str, int]:
+        """Queue the ``history`` chunks for ``client``; the reply's result (frames and chunks)."""
+        t0, t1, every = command.t0, command.t1, command.every
+        if t1 < t0:
+            raise CommandError("history needs t0 <= t1")
         if client is None:
             raise CommandError("history streams over the websocket; use GET /api/log over REST")
         encoded = frames.history(self.session.ring, t0, t1, every)
@@ -132,7 +156,7 @@ class Studio:
         if count:
             client.history.append(messages())
             client.wake.set()
-        return True, {"frames": count, "chunks": chunks}, None
+        return {"frames": count, "chunks": chunks}
 
     # -- compiling and hot reload -------------------------------------------------------------------------
 
@@ -146,17 +170,7 @@ class Studio:
             diagnostics = [d.as_dict() for d in compilation.diagnostics]
             results[key] = {"ok": problem is None, "diagnostics": diagnostics, "error": problem}
             if self.hub is not None:
-                self.hub.broadcast(
-                    orjson.dumps(
-                        {
-                            "type": "event",
-                            "event": "compile",
-                            "program": key,
-                            "ok": problem is None,
-                            "diagnostics": diagnostics,
-                        }
-                    )
-                )
+                self.hub.broadcast(CompileEvent(program=key, ok=problem is None, diagnostics=diagnostics))
         return results
 
     def programs_of(self, path: str) -> list[str]:
@@ -181,17 +195,8 @@ class Studio:
         diagnostics = [dict(d, program=k) for k, r in results.items() for d in r["diagnostics"]]
         if self.hub is not None:
             for path in paths:
-                self.hub.broadcast(
-                    orjson.dumps(
-                        {
-                            "type": "event",
-                            "event": "file",
-                            "path": path,
-                            "version": None if path == deleted else version,
-                            "deleted": path == deleted,
-                        }
-                    )
-                )
+                gone = path == deleted
+                self.hub.broadcast(FileEvent(path=path, version=None if gone else version, deleted=gone))
         body: dict[str, Any] = {
             "path": paths[-1],
             "version": version,
@@ -205,16 +210,6 @@ class Studio:
             body["detail"] = "saved, but " + "; ".join(errors)
             return JSONResponse(body, status_code=422)
         return JSONResponse(body, status_code=status)
-
-
-def _history_args(args: dict[str, Any]) -> tuple[int, int, int]:
-    t0, t1, every = args.get("t0", 0), args.get("t1", 2**62), args.get("every", 1)
-    for name, value in (("t0", t0), ("t1", t1), ("every", every)):
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise CommandError(f"{name} must be an integer")
-    if every < 1 or t1 < t0:
-        raise CommandError("history needs t0 <= t1 and every >= 1")
-    return t0, t1, every
 
 
 def _count_history(session: Session, t0: int, t1: int, every: int) -> int:
@@ -275,23 +270,27 @@ async def structure(studio: StudioDep) -> Response:
 
 
 @router.post("/api/command", tags=["session"])
-async def command(studio: StudioDep, body: dict[str, Any]) -> JSONResponse:
-    """A websocket command over REST (``{"op": "pause"}``); answers the reply."""
+async def command(studio: StudioDep, request: Request) -> Response:
+    """A websocket command over REST (``{"op": "pause"}``); answers the reply.
+
+    The body is read and validated by the same parser as the websocket's messages
+    (``server.messages.parse_command``): one rule for both edges.
+    """
+    body = await request.body()
     try:
         parsed = parse_command(body)
     except ProtocolError as error:
-        return JSONResponse(
-            {"type": "reply", "id": body.get("id"), "ok": False, "error": str(error), "detail": str(error)},
-            status_code=400,
-        )
-    ok, result, error = await studio.run_command(parsed, None)
-    payload: dict[str, Any] = {"type": "reply", "id": parsed.id, "ok": ok}
-    if result is not None:
-        payload["result"] = result
-    if error is not None:
-        payload["error"] = error
-        payload["detail"] = error
-    return JSONResponse(payload, status_code=200 if ok else (422 if parsed.op is Op.RELOAD else 400))
+        return _reply_response(Reply(id=guess_id(body), ok=False, error=str(error)), 400)
+    answer = await studio.run_command(parsed, None)
+    return _reply_response(answer, 200 if answer.ok else (422 if isinstance(parsed, Reload) else 400))
+
+
+def _reply_response(answer: Reply, status: int) -> Response:
+    # A failed reply also carries the error as ``detail``, as every other REST error does.
+    data = encode(answer)
+    if answer.error is not None:
+        data = data[:-1] + b',"detail":' + orjson.dumps(answer.error) + b"}"
+    return Response(data, status_code=status, media_type="application/json")
 
 
 @router.get("/api/log", tags=["session"])
@@ -487,29 +486,30 @@ def _log_lines(encoded: Iterator[bytes], gen: frames.Generation) -> Iterator[byt
     """Decoded frames (full first, then deltas) -> one JSON line per tick with names."""
     state: dict[int, dict[str, dict[str, Any]]] = {}
     names = _names(gen)
+    robots_info = gen.structure["robots"]
     for data in encoded:
         frame = orjson.loads(data)
-        agents = []
-        for agent in frame["agents"]:
-            index = agent["id"]
+        robots = []
+        for robot in frame["robots"]:
+            index = robot["id"]
             values = state.setdefault(index, {"inputs": {}, "outputs": {}})
             for kind in ("inputs", "outputs"):
-                values[kind].update(agent.get(kind, {}))
+                values[kind].update(robot.get(kind, {}))
             table = names.get(index)
             if table is None:
-                agents.append({"id": index, "name": gen.structure["agents"][index]["name"], "path": []})
+                robots.append({"id": index, "name": robots_info[index]["name"], "path": []})
                 continue
-            agents.append(
+            robots.append(
                 {
                     "id": index,
-                    "name": gen.structure["agents"][index]["name"],
-                    "path": [table.node(node) for node in agent["path"]],
+                    "name": robots_info[index]["name"],
+                    "path": [table.node(node) for node in robot["path"]],
                     "outputs": {table.outputs.get(int(k), k): v for k, v in values["outputs"].items()},
                     "inputs": {table.inputs.get(int(k), k): v for k, v in values["inputs"].items()},
-                    **{k: agent[k] for k in ("fault", "forced", "overrides") if k in agent},
+                    **{k: robot[k] for k in ("fault", "forced", "overrides") if k in robot},
                 }
             )
-        yield orjson.dumps({"seq": frame["seq"], "t": frame["t"], "agents": agents}) + b"\n"
+        yield orjson.dumps({"seq": frame["seq"], "t": frame["t"], "robots": robots}) + b"\n"
 
 
 class _Names:
@@ -522,33 +522,36 @@ class _Names:
         self.outputs = {s["id"]: s["name"] for s in program["outputs"]}
 
     def node(self, node: list[Any]) -> dict[str, Any]:
-        if node[0] == 0:
-            _, depth, option_id, state_id, option_time, state_time, decided_in, leaf, params = node
-            option = self.options[option_id]
+        """A path node (``server.messages.OptionNode`` or ``BehaviorNode``) with names."""
+        depth = node[DEPTH_INDEX]
+        if node[0] == OPTION_NODE:
+            option = self.options[node[ID_INDEX]]
             states = option["states"]
+            state, option_time, state_time, decided_in, leaf = node[ID_INDEX + 1 : OPTION_PARAMS_INDEX]
+            params = node[OPTION_PARAMS_INDEX]
             return {
                 "depth": depth,
                 "option": option["name"],
-                "state": states[state_id]["name"],
+                "state": states[state]["name"],
                 "option_time": option_time,
                 "state_time": state_time,
                 "decided_in": states[decided_in]["name"] if decided_in >= 0 else None,
                 "leaf": leaf,
                 "params": dict(zip((p["name"] for p in option["params"]), params, strict=False)),
             }
-        _, depth, behavior_id, time, params = node
-        return {"depth": depth, "behavior": self.behaviors[behavior_id], "time": time, "params": params}
+        time, params = node[ID_INDEX + 1], node[BEHAVIOR_PARAMS_INDEX]
+        return {"depth": depth, "behavior": self.behaviors[node[ID_INDEX]], "time": time, "params": params}
 
 
 def _names(gen: frames.Generation) -> dict[int, _Names]:
     tables: dict[str, _Names] = {}
     result: dict[int, _Names] = {}
     programs = gen.structure["programs"]
-    for agent in gen.structure["agents"]:
-        key = agent["program"]
+    for robot in gen.structure["robots"]:
+        key = robot["program"]
         if key is None:
             continue
         if key not in tables:
             tables[key] = _Names(programs[key])
-        result[agent["id"]] = tables[key]
+        result[robot["id"]] = tables[key]
     return result

@@ -31,7 +31,7 @@ def test_status_structure_and_the_no_ui_page(api: TestClient) -> None:
     assert status["example"] == "demo" and status["version"] == 1 and status["programs"]["demo"]["ok"]
     assert status["ring"]["capacity"] == 120 * 40
     structure = api.get("/api/structure").json()
-    assert [a["name"] for a in structure["agents"]] == ["robot1", "robot2"]
+    assert [a["name"] for a in structure["robots"]] == ["robot1", "robot2"]
     assert structure["programs"]["demo"]["options"][0]["states"]
     page = api.get("/")
     assert page.status_code == 200 and "web/dist" in page.text
@@ -137,13 +137,13 @@ def test_command_endpoint_and_the_activation_log(api: TestClient) -> None:
     assert stepped["ok"] and stepped["result"]["t"] >= 29 * 25
     bad = api.post("/api/command", json={"op": "warp"})
     assert bad.status_code == 400 and "unknown op" in bad.json()["detail"]
-    assert api.post("/api/command", json={"op": "release", "agent": 7}).status_code == 400
+    assert api.post("/api/command", json={"op": "release", "robot": 7}).status_code == 400
     assert api.post("/api/command", json={"op": "history"}).status_code == 400, "history needs the websocket"
     log = api.get("/api/log", params={"t0": 100, "t1": 400})
     assert log.headers["content-type"].startswith("application/x-ndjson")
     lines = [orjson.loads(line) for line in log.text.splitlines()]
     assert [line["t"] for line in lines] == list(range(100, 401, 25))
-    first = lines[0]["agents"][0]
+    first = lines[0]["robots"][0]
     assert first["name"] == "robot1" and first["path"][0]["option"] == "play"
     assert "ball.distance" in first["inputs"] and "activity" in first["outputs"]
     assert api.get("/api/log", params={"t0": 5, "t1": 1}).status_code == 400
@@ -155,7 +155,7 @@ def test_websocket_hello_frames_and_errors(api: TestClient) -> None:
         hello = orjson.loads(ws.receive_text())
         assert hello["type"] == "hello" and hello["version"] == 1 and hello["scene"]["kind"] == "demo"
         frame = orjson.loads(ws.receive_text())
-        assert frame["type"] == "frame" and frame["full"] is True and len(frame["agents"]) == 2
+        assert frame["type"] == "frame" and frame["full"] is True and len(frame["robots"]) == 2
         ws.send_text("nope")
         while (message := orjson.loads(ws.receive_text()))["type"] != "reply":
             pass
