@@ -73,15 +73,21 @@ then reload this page.</p>
 
 
 class FileBody(BaseModel):
+    """The body of writing or creating a file."""
+
     text: str = Field(description="the whole file content")
     version: str | None = Field(default=None, description="the version edited (instead of If-Match)")
 
 
 class RenameBody(BaseModel):
+    """The body of renaming a file."""
+
     path: str = Field(description="the new path, relative to the example folder")
 
 
 class CompileBody(BaseModel):
+    """The body of compiling unsaved text."""
+
     path: str = Field(description="the file the text belongs to, relative to the example folder")
     text: str = Field(description="its unsaved content")
 
@@ -187,6 +193,7 @@ class Studio:
     async def after_write(
         self, paths: list[str], version: str | None, status: int, deleted: str | None = None
     ) -> Response:
+        """Recompile the behavior sets ``paths`` belong to, tell the clients, answer the write."""
         keys: list[str] = []
         for path in paths:
             keys.extend(k for k in self.programs_of(path) if k not in keys)
@@ -244,6 +251,7 @@ router = APIRouter()
 
 @router.websocket("/ws")
 async def websocket(ws: WebSocket) -> None:
+    """The live session (docs/protocol.md): one :class:`~server.clients.Client` per connection."""
     studio: Studio = ws.app.state.studio
     assert studio.hub is not None, "the app's lifespan did not run"
     await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)

@@ -187,6 +187,7 @@ class AgentSampler:
         return lambda value: table.get(int(value), -1)
 
     def inputs(self) -> tuple[Value | None, ...]:
+        """The display values of the plain input symbols (None: the host getter failed)."""
         # One engine sampler reads all plain inputs (overrides included), converted in C.
         try:
             return tuple(map(operator.call, self._input_converters, self._sample_inputs()))
@@ -201,6 +202,7 @@ class AgentSampler:
             return tuple(values)
 
     def outputs(self) -> tuple[Value | None, ...]:
+        """The display values of the output and internal symbols."""
         try:
             return tuple(map(operator.call, self._output_converters, self._sample_outputs()))
         except Exception:
@@ -368,6 +370,7 @@ class Ring:
         self._bytes = 0
 
     def append(self, entry: Entry) -> None:
+        """Append the newest entry; entries older than LIVE_ENTRIES drop their live part."""
         entries = self._entries
         if len(entries) == entries.maxlen:
             self._bytes -= entries[0].nbytes
@@ -384,6 +387,7 @@ class Ring:
 
     @property
     def latest(self) -> Entry | None:
+        """The newest entry (None before the first sample)."""
         try:
             return self._entries[-1]
         except IndexError:

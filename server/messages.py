@@ -56,6 +56,10 @@ __all__ = [
 # must be finite; a field the message type does not have is an error (a typo must not be ignored).
 _STRICT = ConfigDict(strict=True, allow_inf_nan=False, extra="forbid")
 
+# Server messages are never validated in production; tests validate real ones against these
+# dataclasses, and a key the server sends that a dataclass does not declare must fail them.
+_SCHEMA = ConfigDict(extra="forbid")
+
 #: The largest integer a command accepts (64-bit, as the engine's integers and JSON readers).
 MAX_INT = 2**63 - 1
 Int64 = Annotated[int, Field(ge=-MAX_INT - 1, le=MAX_INT)]
@@ -414,6 +418,7 @@ _UNION_MEMBERS = frozenset({"bool", "int", "constrained-int", "float", "constrai
 # -- server -> client ------------------------------------------------------------------------------
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Reply:
     """The answer to a command (and the error answer to a bad message: ``id`` then may be null)."""
@@ -425,6 +430,7 @@ class Reply:
     error: str | None = None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class FileEvent:
     """A behavior file was written, created, renamed or deleted (by any client)."""
@@ -436,6 +442,7 @@ class FileEvent:
     deleted: bool
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class CompileEvent:
     """A behavior set was compiled after a file change (``ok``: a ``hello`` with reason reload follows)."""
@@ -447,6 +454,7 @@ class CompileEvent:
     diagnostics: list[dict[str, Any]]
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class CrashEvent:
     """The simulation process stopped (``seq``/``t`` of its last tick); ``reset`` restarts it."""
@@ -458,6 +466,7 @@ class CrashEvent:
     t: int | None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class SessionInfo:
     """The session as a ``hello`` describes it."""
@@ -472,6 +481,7 @@ class SessionInfo:
     token_required: bool
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RobotInfo:
     """A robot of the world; ``program``: the behavior set its engine runs (``None``: no XABSL engine)."""
@@ -483,6 +493,7 @@ class RobotInfo:
     program: str | None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Structure:
     """The ids of a generation: one program JSON per behavior set (``engine.emit.json``), the robots."""
@@ -491,6 +502,7 @@ class Structure:
     robots: list[RobotInfo]
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Hello:
     """Sent on connect, after every reload and reset, and in answer to ``resync``: the ids from now on."""
@@ -520,6 +532,7 @@ KIND_INDEX, DEPTH_INDEX, ID_INDEX = 0, 1, 2
 OPTION_PARAMS_INDEX, BEHAVIOR_PARAMS_INDEX = 8, 4
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Fault:
     """Why a robot's engine stopped (until ``reset_agent``)."""
@@ -529,6 +542,7 @@ class Fault:
     state: str | None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RobotFrame:
     """One robot in a frame; values only for subscribed robots, extras only while they apply."""
@@ -543,6 +557,7 @@ class RobotFrame:
     overrides: dict[str, WireValue] | None = None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Frame:
     """One tick: full, or the changes since the previous frame this client received."""
@@ -560,6 +575,7 @@ class Frame:
     status: dict[str, Any] | None = None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class HistoryChunk:
     """Frames of the ring buffer answering a ``history`` command (its own delta stream)."""
@@ -571,6 +587,7 @@ class HistoryChunk:
     frames: list[Frame]
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Condition:
     """One ``if`` on the path to the leaf an option's decision took, re-evaluated now."""
@@ -582,6 +599,7 @@ class Condition:
     span: dict[str, Any] | None
 
 
+@with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Explanation:
     """The result of ``explain``."""
@@ -597,6 +615,86 @@ class Explanation:
     leaf_span: dict[str, Any] | None
     conditions: list[Condition]
 
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PausedResult:
+    """The result of ``pause`` and ``resume``."""
+
+    paused: bool
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class StepResult:
+    """The result of ``step``: the last tick run."""
+
+    seq: int
+    t: int
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SpeedResult:
+    """The result of ``speed``."""
+
+    speed: float
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ResetResult:
+    """The result of ``reset``: the seed the new world was built with."""
+
+    seed: int
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ProgramCompile:
+    """One behavior set's compile in a ``reload`` result (``error``: why the running one was kept)."""
+
+    ok: bool
+    diagnostics: list[dict[str, Any]]
+    error: str | None
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReloadResult:
+    """The result of ``reload``, per behavior set."""
+
+    programs: dict[str, ProgramCompile]
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class HistoryResult:
+    """The result of ``history``: how many frames and chunks follow."""
+
+    frames: int
+    chunks: int
+
+
+#: The ``result`` of a successful reply, per op (None: no result; ``status``: the session status).
+RESULTS: dict[str, Any] = {
+    "pause": PausedResult,
+    "resume": PausedResult,
+    "step": StepResult,
+    "speed": SpeedResult,
+    "reset": ResetResult,
+    "select_agent": None,
+    "force_option": None,
+    "force_behavior": None,
+    "release": None,
+    "override_input": None,
+    "release_input": None,
+    "reset_agent": None,
+    "reload": ReloadResult,
+    "explain": Explanation,
+    "history": HistoryResult,
+    "status": dict[str, Any],
+}
 
 ServerEvent = FileEvent | CompileEvent | CrashEvent
 ServerMessage = Hello | Frame | Reply | HistoryChunk | FileEvent | CompileEvent | CrashEvent

@@ -83,6 +83,7 @@ class ProgramState:
     error: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
+        """The behavior set as ``GET /api/status`` shows it."""
         comp = self.compilation
         return {
             "folder": self.source.folder.name,
@@ -172,6 +173,7 @@ class Session:
 
     @property
     def running(self) -> bool:
+        """Whether the simulation process runs (started, not crashed, not stopped)."""
         return self._process is not None and self._channel is not None and self.crash is None
 
     async def start(self) -> None:

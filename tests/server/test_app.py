@@ -227,3 +227,41 @@ def test_policy_for_hosts() -> None:
     assert not policy.origin_ok({"host": "localhost:8000", "origin": "null"})
     assert policy.origin_ok({"host": "localhost", "origin": "http://localhost:80"})
     assert policy.host_ok({"host": "[::1]:8000"}) and not policy.host_ok({"host": "127.0.0.1.nip.io:8000"})
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": ' + b"9" * 400 + b"}",
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": 1e999}',
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": NaN}',
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": Infinity}',
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": -Infinity}',
+        b'{"op": "force_behavior", "robot": 0, "behavior": "walk", "params": {"speed": ' + b"9" * 400 + b"}}",
+        b'{"op": "force_behavior", "robot": 0, "behavior": "walk", "params": {"speed": 1e999}}',
+        b'{"op": "force_option", "robot": 0, "option": "approach_ball", "params": {"stop_at": NaN}}',
+    ],
+)
+def test_non_finite_and_out_of_range_numbers_over_rest_are_a_clear_400(api: TestClient, body: bytes) -> None:
+    """Issue 18 item 3: was ``internal error: OverflowError`` (a 400 saying nothing) or accepted NaN."""
+    answer = api.post("/api/command", content=body, headers={"Content-Type": "application/json"})
+    assert answer.status_code == 400, answer.text
+    reply = answer.json()
+    assert reply["type"] == "reply" and reply["ok"] is False
+    assert "internal error" not in reply["error"] and reply["detail"] == reply["error"]
+    assert "finite" in reply["error"] or "less than or equal" in reply["error"] or "valid number" in reply["error"]
+    status = api.get("/api/status").json()
+    assert status["simulation"]["running"], "the simulation is unharmed"
+
+
+def test_rest_and_websocket_commands_answer_the_same_errors(api: TestClient) -> None:
+    body = {"op": "force_option", "robot": 0, "option": "approach_ball", "params": {"stop_at": "far"}, "id": 9}
+    rest = api.post("/api/command", json=body).json()
+    with api.websocket_connect("ws://127.0.0.1/ws") as ws:
+        ws.send_text(orjson.dumps({"type": "command", **body}).decode())
+        while (message := orjson.loads(ws.receive_text()))["type"] != "reply":
+            pass
+    assert rest["ok"] is False and message["ok"] is False and message["id"] == rest["id"] == 9
+    assert message["error"] == rest["error"]
+    unknown = api.post("/api/command", json={"op": "release", "agent": 0}).json()
+    assert "agent: unknown argument" in unknown["error"] and "robot: Field required" in unknown["error"]

@@ -7,6 +7,7 @@ first ones run the soccer example (2 vs 2, both XABSL teams) to prove the produc
 from __future__ import annotations
 
 import itertools
+import logging
 import time
 from pathlib import Path
 from typing import Any
@@ -527,3 +528,42 @@ def test_a_client_that_never_reads_does_not_slow_the_simulation_or_grow_memory(
         other = client_for(live_demo)
         other.frame_after()
         other.frame_after()
+
+
+def test_rapid_connect_and_disconnect_logs_no_send_after_close(
+    live_demo: LiveServer, client_for: Any, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Issue 18 item 7: a peer gone before its hello was sent logged ``RuntimeError: Unexpected ASGI
+    message 'websocket.send', after sending 'websocket.close'`` (the sender task sent on a closed socket)."""
+    import base64
+    import os
+    import socket
+    import struct
+
+    caplog.set_level(logging.DEBUG, logger="xabsl.server")
+    request = (
+        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1:%d\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "Sec-WebSocket-Key: %s\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
+    for i in range(150):
+        with socket.create_connection(("127.0.0.1", live_demo.port)) as s:
+            key = base64.b64encode(os.urandom(16)).decode()
+            s.sendall((request % (live_demo.port, key)).encode())
+            if i % 2:
+                s.recv(256)
+                # A frame a client must not send (unmasked): uvicorn answers with a close of its
+                # own, and every send of ours after it used to raise.
+                s.sendall(b"\x81\x05hello")
+                time.sleep(0.02)
+            # An abortive close (RST): the server finds out while it sends the hello and frames.
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    time.sleep(1.0)
+    client = client_for(live_demo)
+    client.frame_after()
+    assert client.command("status")["ok"]
+    problems = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    assert not [p for p in problems if "Unexpected ASGI message" in p or "RuntimeError" in p], problems[:3]
+    deadline = time.monotonic() + 10
+    while len(live_demo.studio.hub.clients) > 1 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert len(live_demo.studio.hub.clients) == 1, "every aborted connection was cleaned up"

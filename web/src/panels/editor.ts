@@ -106,7 +106,7 @@ export class EditorPanel {
         if (index) return index;
       }
     }
-    return session.indexOf(session.selectedAgent) ?? session.programs.values().next().value ?? null;
+    return session.indexOf(session.selectedRobot) ?? session.programs.values().next().value ?? null;
   }
 
   private makeState(doc: string, path: string): EditorState {
@@ -451,7 +451,7 @@ export class EditorPanel {
   }
 
   compileEvent(event: CompileEvent): void {
-    if (!event.ok) this.lastDiagnostics = event.diagnostics as ServerDiagnostic[];
+    if (!event.ok) this.lastDiagnostics = event.diagnostics as unknown as ServerDiagnostic[];
   }
 
   render(changes: Set<SessionEvent>): void {

@@ -45,7 +45,7 @@ export class OptionView {
       this.title,
       this.picker,
       h("button", { title: "Show the source of this option (E)", onclick: () => this.current() && this.actions.edit(this.current() as Option) }, "Edit source"),
-      h("button", { title: "Run this option on the selected agent", onclick: () => this.current() && this.actions.test(this.current() as Option) }, "Test…"),
+      h("button", { title: "Run this option on the selected robot", onclick: () => this.current() && this.actions.test(this.current() as Option) }, "Test…"),
       h("button", { title: "Ask the engine again why (W)", onclick: () => this.explain(true) }, "Why?"),
       h("button", { title: "Fit", onclick: () => this.view.fit() }, "Fit"),
     );
@@ -61,26 +61,26 @@ export class OptionView {
     };
   }
 
-  /// The option shown: the one opened, else the root option of the selected agent.
+  /// The option shown: the one opened, else the root option of the selected robot.
   current(): Option | null {
     const session = this.session;
-    const index = session.indexOf(session.selectedAgent);
+    const index = session.indexOf(session.selectedRobot);
     if (!index) return null;
     if (session.openOption !== null) return index.optionById.get(session.openOption) ?? null;
-    const root = session.agentInView()?.path.find((n) => n.kind === "option") as OptionNode | undefined;
+    const root = session.robotInView()?.path.find((n) => n.kind === "option") as OptionNode | undefined;
     return root ? (index.optionById.get(root.option) ?? null) : (index.optionByName.get(index.description.agents[0]?.root ?? "") ?? null);
   }
 
   private node(option: Option): OptionNode | null {
-    const agent = this.session.agentInView();
-    return (agent?.path.find((n) => n.kind === "option" && n.option === option.id) as OptionNode | undefined) ?? null;
+    const robot = this.session.robotInView();
+    return (robot?.path.find((n) => n.kind === "option" && n.option === option.id) as OptionNode | undefined) ?? null;
   }
 
   render(changes: Set<SessionEvent>): void {
     const session = this.session;
-    const index = session.indexOf(session.selectedAgent);
+    const index = session.indexOf(session.selectedRobot);
     const option = this.current();
-    const program = session.programOf(session.selectedAgent);
+    const program = session.programOf(session.selectedRobot);
     if (changes.has("hello") || changes.has("select") || this.picker.options.length === 0) this.fillPicker(index);
     const wanted = session.openOption === null ? "" : String(session.openOption);
     if (this.picker.value !== wanted) this.picker.value = wanted;
@@ -128,7 +128,7 @@ export class OptionView {
   private highlight(option: Option): void {
     const node = this.node(option);
     this.view.setClasses("active", node ? [`state_${node.state}`] : []);
-    const last = this.session.transitions.get(this.session.selectedAgent)?.get(option.id);
+    const last = this.session.transitions.get(this.session.selectedRobot)?.get(option.id);
     const fresh = last && this.session.isLive;
     this.view.setClasses("fired", fresh ? [`leaf_${last.from}_${last.leaf}`] : node && node.decidedIn !== node.state ? [`leaf_${node.decidedIn}_${node.leaf}`] : []);
     this.view.setClasses("previous", fresh ? [`state_${last.from}`] : []);
@@ -137,13 +137,13 @@ export class OptionView {
   private renderInfo(option: Option, index: DescriptionIndex | null): void {
     const node = this.node(option);
     const lines: string[] = [];
-    if (!node) lines.push(`Not active on ${this.session.agentInfo(this.session.selectedAgent)?.name ?? "this agent"} ${this.session.isLive ? "now" : "at this moment"}.`);
+    if (!node) lines.push(`Not active on ${this.session.robotInfo(this.session.selectedRobot)?.name ?? "this robot"} ${this.session.isLive ? "now" : "at this moment"}.`);
     else {
       const state = option.states[node.state];
       lines.push(`state ${state?.name ?? node.state} for ${formatMs(node.stateTime)} · option active ${formatMs(node.optionTime)}`);
       option.params.forEach((p, i) => lines.push(`@${p.short_name} = ${formatValue(node.params[i], p.type, p.enum, index)} ${rangeText(null, p.unit)}`.trim()));
     }
-    const last = this.session.transitions.get(this.session.selectedAgent)?.get(option.id);
+    const last = this.session.transitions.get(this.session.selectedRobot)?.get(option.id);
     if (last && this.session.isLive) {
       const t = this.session.view?.t ?? last.t;
       lines.push(`last transition ${option.states[last.from]?.name} → ${option.states[last.to]?.name}, ${formatMs(Math.max(0, t - last.t))} ago`);
@@ -198,14 +198,14 @@ export class OptionView {
     if (!option || !session.isLive || this.explaining || this.element.closest("[hidden]")) return;
     const node = this.node(option);
     if (!node || node.leaf < 0) return;
-    const key = `${session.selectedAgent}|${option.id}|${node.decidedIn}|${node.leaf}`;
+    const key = `${session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}`;
     const now = performance.now();
     if (!force && key === this.explainKey && now - this.explainAt < 1000) return;
     this.explainKey = key;
     this.explainAt = now;
     this.explaining = true;
     this.connection
-      .command<Explanation>("explain", { agent: session.selectedAgent, option: option.id })
+      .command("explain", { robot: session.selectedRobot, option: option.id })
       .then((ex) => {
         this.explanation = ex;
       })

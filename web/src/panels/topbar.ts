@@ -1,4 +1,4 @@
-/// The top bar: agent picker, simulation controls (pause/resume, step, speed, reset), the game
+/// The top bar: robot picker, simulation controls (pause/resume, step, speed, reset), the game
 /// clock and score, the link-health indicator, the theme switch and the keyboard help.
 import type { Connection, LinkState } from "../connection";
 import type { Session, SessionEvent } from "../session";
@@ -6,7 +6,7 @@ import { formatMs, h, setText, toast } from "../ui";
 
 export class TopBar {
   readonly element: HTMLElement;
-  readonly agentPicker: HTMLSelectElement;
+  readonly robotPicker: HTMLSelectElement;
   private readonly pauseButton: HTMLButtonElement;
   private readonly speed: HTMLSelectElement;
   private readonly clock: HTMLElement;
@@ -21,8 +21,8 @@ export class TopBar {
     private readonly connection: Connection,
     actions: { toggleTheme(): void; help(): void },
   ) {
-    this.agentPicker = h("select#agent-picker", { "aria-label": "Agent", title: "Selected agent (1..9, 0)" });
-    this.agentPicker.addEventListener("change", () => session.selectAgent(Number(this.agentPicker.value)));
+    this.robotPicker = h("select#robot-picker", { "aria-label": "Robot", title: "Selected robot (1..9, 0)" });
+    this.robotPicker.addEventListener("change", () => session.selectRobot(Number(this.robotPicker.value)));
     this.pauseButton = h("button#pause", { title: "Pause / resume the simulation (Space)", onclick: () => this.togglePause() }, "❚❚ Pause");
     this.speed = h("select#speed", { "aria-label": "Speed", title: "Simulation speed" }, ...[0.25, 0.5, 1, 2, 4].map((s) => h("option", { value: s }, `${s}×`)));
     this.speed.value = "1";
@@ -41,7 +41,7 @@ export class TopBar {
       "header.topbar",
       {},
       h("span.brand", {}, "xabsl", h("b", {}, "studio")),
-      h("label.inline", {}, "Agent ", this.agentPicker),
+      h("label.inline", {}, "Robot ", this.robotPicker),
       h(
         "div.group",
         { role: "group", "aria-label": "Simulation" },
@@ -61,7 +61,7 @@ export class TopBar {
   togglePause(): void {
     const op = this.paused ? "resume" : "pause";
     this.connection
-      .command<{ paused: boolean }>(op)
+      .command(op)
       .then((r) => this.setPaused(r?.paused ?? op === "pause"))
       .catch((e: Error) => toast(`${op}: ${e.message}`, "error"));
   }
@@ -106,11 +106,11 @@ export class TopBar {
           this.speed.value = String(info.speed);
         }
       }
-      this.agentPicker.replaceChildren(
-        ...session.agents.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${a.program ? "" : " (no engine)"}`)),
+      this.robotPicker.replaceChildren(
+        ...session.robots.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${a.program ? "" : " (no engine)"}`)),
       );
     }
-    if (this.agentPicker.value !== String(session.selectedAgent)) this.agentPicker.value = String(session.selectedAgent);
+    if (this.robotPicker.value !== String(session.selectedRobot)) this.robotPicker.value = String(session.selectedRobot);
     const tick = session.live;
     const status = tick?.status;
     const parts: string[] = [];
