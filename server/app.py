@@ -23,9 +23,14 @@ from typing import Annotated, Any
 
 import orjson
 from fastapi import APIRouter, Depends, FastAPI, Header, HTTPException, Query, Request, Response, WebSocket
+from fastapi import Path as FastApiPath
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.responses import HTMLResponse, JSONResponse, StreamingResponse
+from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, JsonValue
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
 
 from engine.emit.dot import GraphvizMissing
 from engine.ir.model import Program
@@ -46,8 +51,10 @@ from server.messages import (
     ProtocolError,
     Reload,
     Reply,
+    RestReply,
     encode,
     guess_id,
+    openapi_schemas,
     parse_command,
 )
 from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
@@ -72,6 +79,13 @@ then reload this page.</p>
 """
 
 
+#: What a behavior file path looks like (documented, not enforced here: ``server.files`` checks
+#: paths and answers 400/403/404 with the reason, which a pattern mismatch could not give).
+FILE_PATH_PATTERN = r"^([^/\\\x00.][^/\\\x00]*/)*[^/\\\x00.][^/\\\x00]*\.xabsl$"
+_FILE_PATH: dict[str, JsonValue] = {"pattern": FILE_PATH_PATTERN}
+FilePath = Annotated[str, FastApiPath(description="relative to the example folder", json_schema_extra=_FILE_PATH)]
+
+
 class FileBody(BaseModel):
     """The body of writing or creating a file."""
 
@@ -82,14 +96,67 @@ class FileBody(BaseModel):
 class RenameBody(BaseModel):
     """The body of renaming a file."""
 
-    path: str = Field(description="the new path, relative to the example folder")
+    path: str = Field(description="the new path, relative to the example folder", json_schema_extra=_FILE_PATH)
 
 
 class CompileBody(BaseModel):
     """The body of compiling unsaved text."""
 
-    path: str = Field(description="the file the text belongs to, relative to the example folder")
+    path: str = Field(
+        description="the file the text belongs to, relative to the example folder", pattern=FILE_PATH_PATTERN
+    )
     text: str = Field(description="its unsaved content")
+
+
+class ErrorBody(BaseModel):
+    """A refused request: what was wrong."""
+
+    detail: str = Field(description="the reason, for a human")
+
+
+class NdjsonResponse(StreamingResponse):
+    """JSON lines (``/api/log``)."""
+
+    media_type = "application/x-ndjson"
+
+
+class SvgResponse(Response):
+    """An SVG document (``/api/graph``)."""
+
+    media_type = "image/svg+xml"
+
+
+_WHY = {
+    400: "a malformed request (its text says what is wrong)",
+    401: "the server requires a token and none or a wrong one was given",
+    403: "a foreign Origin, or a path outside the behavior folders",
+    404: "no such file, folder, behavior set or option",
+    409: "the file changed since the version given, or the target exists; a command that does not fit the session now",
+    413: "a request body over 1 MiB",
+    415: "a file that is not UTF-8 text",
+    422: "saved or compiled, but a behavior set has errors (the body lists them); or a malformed parameter",
+    428: "overwriting without the version edited",
+    503: "Graphviz (dot) is not installed",
+}
+
+
+_ERROR_JSON = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
+# 422 is also FastAPI's answer to a malformed parameter or body.
+_UNPROCESSABLE_JSON = {
+    "application/json": {
+        "schema": {
+            "anyOf": [{"$ref": "#/components/schemas/ErrorBody"}, {"$ref": "#/components/schemas/HTTPValidationError"}]
+        }
+    }
+}
+
+
+def _errors(*codes: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` for error statuses a route answers (besides 401/403 on every /api route)."""
+    return {
+        code: {"description": _WHY[code], "content": _UNPROCESSABLE_JSON if code == 422 else _ERROR_JSON}
+        for code in sorted({401, 403, *codes})
+    }
 
 
 def _etag(value: str | None) -> str | None:
@@ -260,7 +327,7 @@ async def websocket(ws: WebSocket) -> None:
 # -- session --------------------------------------------------------------------------------------
 
 
-@router.get("/api/status", tags=["session"])
+@router.get("/api/status", tags=["session"], responses=_errors())
 async def status(studio: StudioDep) -> dict[str, Any]:
     """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
     result = await studio.session.status()
@@ -270,19 +337,45 @@ async def status(studio: StudioDep) -> dict[str, Any]:
     return result
 
 
-@router.get("/api/structure", tags=["session"])
+@router.get("/api/structure", tags=["session"], responses=_errors())
 async def structure(studio: StudioDep) -> Response:
     """The ``structure`` of the current hello (programs JSON and agents)."""
     gen = studio.session.generation
     return Response(gen.structure_bytes if gen is not None else b"{}", media_type="application/json")
 
 
-@router.post("/api/command", tags=["session"])
+_REPLY = {"$ref": "#/components/schemas/RestReply"}
+_COMMAND_DOC: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/json": {"schema": {"$ref": "#/components/schemas/Command"}}},
+    },
+    "responses": {
+        "200": {"description": "the command's reply", "content": {"application/json": {"schema": _REPLY}}},
+        "400": {
+            "description": "a malformed command (the reply's error says what is wrong)",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+        "409": {
+            "description": "a command that does not fit the session now: no such robot, option or symbol, "
+            "step while running, the simulation stopped",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+        "422": {
+            "description": "reload: a behavior set has errors (the running one is kept)",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+    },
+}
+
+
+@router.post("/api/command", tags=["session"], responses=_errors(401, 403, 413), openapi_extra=_COMMAND_DOC)
 async def command(studio: StudioDep, request: Request) -> Response:
     """A websocket command over REST (``{"op": "pause"}``); answers the reply.
 
     The body is read and validated by the same parser as the websocket's messages
-    (``server.messages.parse_command``): one rule for both edges.
+    (``server.messages.parse_command``): one rule for both edges. 400: the command is malformed;
+    409: it is well formed but does not fit the session (an unknown robot or option...).
     """
     body = await request.body()
     try:
@@ -290,34 +383,44 @@ async def command(studio: StudioDep, request: Request) -> Response:
     except ProtocolError as error:
         return _reply_response(Reply(id=guess_id(body), ok=False, error=str(error)), 400)
     answer = await studio.run_command(parsed, None)
-    return _reply_response(answer, 200 if answer.ok else (422 if isinstance(parsed, Reload) else 400))
+    if answer.ok:
+        return _reply_response(answer, 200)
+    # A reload that compiled (a result) with errors is 422; anything else refused is a conflict.
+    return _reply_response(answer, 422 if isinstance(parsed, Reload) and answer.result is not None else 409)
 
 
 def _reply_response(answer: Reply, status: int) -> Response:
     # A failed reply also carries the error as ``detail``, as every other REST error does.
-    data = encode(answer)
-    if answer.error is not None:
-        data = data[:-1] + b',"detail":' + orjson.dumps(answer.error) + b"}"
-    return Response(data, status_code=status, media_type="application/json")
+    rest = RestReply(id=answer.id, ok=answer.ok, result=answer.result, error=answer.error, detail=answer.error)
+    return Response(encode(rest), status_code=status, media_type="application/json")
 
 
-@router.get("/api/log", tags=["session"])
+@router.get(
+    "/api/log",
+    tags=["session"],
+    response_class=NdjsonResponse,
+    responses={
+        **_errors(422),
+        200: {
+            "description": "one JSON object per line and tick",
+            "content": {"application/x-ndjson": {"schema": {"type": "string"}}},
+        },
+    },
+)
 async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(2**62)) -> StreamingResponse:
-    """The ring buffer between behavior times t0 and t1 as JSON lines, with names."""
-    if t1 < t0:
-        raise HTTPException(400, "t1 must not be before t0")
+    """The ring buffer between behavior times t0 and t1 as JSON lines, with names (none when t1 < t0)."""
     session = studio.session
     latest = session.ring.latest
-    if latest is None:
-        return StreamingResponse(iter(()), media_type="application/x-ndjson")
+    if latest is None or t1 < t0:
+        return NdjsonResponse(iter(()))
     encoded = frames.history(session.ring, t0, t1)
-    return StreamingResponse(_log_lines(encoded, latest.gen), media_type="application/x-ndjson")
+    return NdjsonResponse(_log_lines(encoded, latest.gen))
 
 
 # -- files ------------------------------------------------------------------------------------------
 
 
-@router.get("/api/files", tags=["files"])
+@router.get("/api/files", tags=["files"], responses=_errors())
 async def list_files(studio: StudioDep) -> dict[str, Any]:
     """Every behavior file: path, version, size, the behaviors it belongs to."""
     listed = await asyncio.to_thread(studio.files.list)
@@ -326,16 +429,16 @@ async def list_files(studio: StudioDep) -> dict[str, Any]:
     return {"files": listed}
 
 
-@router.get("/api/files/{path:path}", tags=["files"])
-async def read_file(studio: StudioDep, path: str) -> JSONResponse:
+@router.get("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 415))
+async def read_file(studio: StudioDep, path: FilePath) -> JSONResponse:
     """A file's text and version (also as ETag)."""
     text, version = await asyncio.to_thread(studio.files.read, path)
     return JSONResponse({"path": path, "version": version, "text": text}, headers={"ETag": f'"{version}"'})
 
 
-@router.put("/api/files/{path:path}", tags=["files"])
+@router.put("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 413, 422, 428))
 async def write_file(
-    studio: StudioDep, path: str, body: FileBody, if_match: str | None = Header(default=None)
+    studio: StudioDep, path: FilePath, body: FileBody, if_match: str | None = Header(default=None)
 ) -> Response:
     """Replace a file (If-Match: its version); compile; hot-swap when clean, else 422."""
     expected = _etag(if_match) or body.version
@@ -344,17 +447,17 @@ async def write_file(
         return await studio.after_write([path], version, 200)
 
 
-@router.post("/api/files/{path:path}", tags=["files"])
-async def create_file(studio: StudioDep, path: str, body: FileBody) -> Response:
+@router.post("/api/files/{path:path}", tags=["files"], status_code=201, responses=_errors(400, 404, 409, 413, 422))
+async def create_file(studio: StudioDep, path: FilePath, body: FileBody) -> Response:
     """Create a file (409 if it exists); compile the behaviors it belongs to."""
     async with studio.write_lock:
         version = await asyncio.to_thread(studio.files.create, path, body.text)
         return await studio.after_write([path], version, 201)
 
 
-@router.patch("/api/files/{path:path}", tags=["files"])
+@router.patch("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 413, 422))
 async def rename_file(
-    studio: StudioDep, path: str, body: RenameBody, if_match: str | None = Header(default=None)
+    studio: StudioDep, path: FilePath, body: RenameBody, if_match: str | None = Header(default=None)
 ) -> Response:
     """Rename a file to ``body.path`` (409 if that exists)."""
     async with studio.write_lock:
@@ -362,15 +465,15 @@ async def rename_file(
         return await studio.after_write([path, body.path], version, 200, deleted=path)
 
 
-@router.delete("/api/files/{path:path}", tags=["files"])
-async def delete_file(studio: StudioDep, path: str, if_match: str | None = Header(default=None)) -> Response:
+@router.delete("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 422))
+async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = Header(default=None)) -> Response:
     """Delete a file; compile the behaviors it belonged to."""
     async with studio.write_lock:
         await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
         return await studio.after_write([path], None, 200, deleted=path)
 
 
-@router.post("/api/compile", tags=["files"])
+@router.post("/api/compile", tags=["files"], responses=_errors(400, 404, 413, 422))
 async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
     """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
     real = studio.files.resolve(body.path, must_exist=False)
@@ -404,7 +507,14 @@ async def _svg(studio: Studio, request: Request, dot: str) -> Response:
     return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
 
 
-@router.get("/api/graph/{program}", tags=["graphs"])
+_SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
+    **_errors(404, 422, 503),
+    200: {"description": "the graph", "content": {"image/svg+xml": {"schema": {"type": "string"}}}},
+    304: {"description": "the SVG of the If-None-Match ETag is still current"},
+}
+
+
+@router.get("/api/graph/{program}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
 async def graph(studio: StudioDep, request: Request, program: str, agent: str | None = None) -> Response:
     """The option graph below an XABSL agent's root option (SVG)."""
     try:
@@ -414,7 +524,7 @@ async def graph(studio: StudioDep, request: Request, program: str, agent: str | 
     return await _svg(studio, request, dot)
 
 
-@router.get("/api/graph/{program}/{option}", tags=["graphs"])
+@router.get("/api/graph/{program}/{option}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
 async def option_graph(studio: StudioDep, request: Request, program: str, option: str) -> Response:
     """The state machine of one option (SVG)."""
     try:
@@ -430,7 +540,23 @@ async def _file_error(request: Request, error: Exception) -> JSONResponse:
 
 
 async def _command_error(request: Request, error: Exception) -> JSONResponse:
-    return JSONResponse({"detail": str(error)}, status_code=400)
+    return JSONResponse({"detail": str(error)}, status_code=409)
+
+
+async def _method_not_allowed(request: Request, error: Exception) -> Response:
+    """405 with the methods *every* route of the path allows (one route per method in FastAPI)."""
+    assert isinstance(error, StarletteHTTPException)
+    if error.status_code != 405:
+        return await http_exception_handler(request, error)
+    allowed: set[str] = set()
+    for route in router.routes:  # the API's own routes (the app wraps the included router)
+        if isinstance(route, APIRoute) and route.matches({**request.scope, "method": "GET"})[0] is not Match.NONE:
+            allowed.update(route.methods or ())
+    if "GET" in allowed:
+        allowed.add("HEAD")
+    return JSONResponse(
+        {"detail": "Method Not Allowed"}, status_code=405, headers={"Allow": ", ".join(sorted(allowed))}
+    )
 
 
 async def _no_ui(request: Request) -> HTMLResponse:
@@ -482,12 +608,29 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.add_middleware(SecurityMiddleware, policy=policy)
     app.add_exception_handler(FileError, _file_error)
     app.add_exception_handler(CommandError, _command_error)
+    app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     app.include_router(router)
+    _document_messages(app)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")
     else:
         app.add_api_route("/", _no_ui, methods=["GET"], include_in_schema=False)
     return app
+
+
+def _document_messages(app: FastAPI) -> None:
+    """Add the command and reply schemas of ``server.messages`` to the app's OpenAPI components."""
+    base = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        schema = base()
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        if "Command" not in components:
+            components.update(openapi_schemas())
+            components["ErrorBody"] = ErrorBody.model_json_schema()
+        return schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
 
 
 def _log_lines(encoded: Iterator[bytes], gen: frames.Generation) -> Iterator[bytes]:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import orjson
-from pydantic import ConfigDict, Discriminator, Field, TypeAdapter, ValidationError, with_config
+from pydantic import BeforeValidator, ConfigDict, Discriminator, Field, TypeAdapter, ValidationError, with_config
 from pydantic_core import ErrorDetails
 
 from engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
@@ -60,6 +60,15 @@ _STRICT = ConfigDict(strict=True, allow_inf_nan=False, extra="forbid")
 # dataclasses, and a key the server sends that a dataclass does not declare must fail them.
 _SCHEMA = ConfigDict(extra="forbid")
 
+
+def _integral(value: object) -> object:
+    """``3.0`` -> ``3``: JSON (and JSON Schema's ``integer``) does not tell 3.0 from 3; 3.5 stays a float."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+# Integer arguments take an integral JSON number: ``3`` or ``3.0``, not ``3.5``, ``"3"`` or ``true``
+# (the bounds come before the validator so that they stay in the JSON Schema).
+_INTEGRAL = BeforeValidator(_integral)
 #: The largest integer a command accepts (64-bit, as the engine's integers and JSON readers).
 MAX_INT = 2**63 - 1
 Int64 = Annotated[int, Field(ge=-MAX_INT - 1, le=MAX_INT)]
@@ -71,11 +80,11 @@ CommandValue = bool | Int64 | float | str
 #: A command's client-chosen id, echoed in its reply.
 CommandId = Int64 | float | str
 #: A robot id: its index in ``hello.structure.robots``.
-RobotId = Annotated[int, Field(ge=0, le=2**31)]
+RobotId = Annotated[int, Field(ge=0, le=2**31), _INTEGRAL]
 #: An option, basic behavior or symbol by id (the program JSON's) or by name.
-Ref = Annotated[int, Field(ge=0, le=2**31)] | str
+Ref = Annotated[int, Field(ge=0, le=2**31), _INTEGRAL] | str
 #: Behavior time in ms.
-Ms = Annotated[int, Field(ge=0, le=2**62)]
+Ms = Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
 
 HelloReason = Literal["connect", "reload", "reset", "resync"]
 
@@ -139,7 +148,7 @@ class Step:
     type: Literal["command"] = "command"
     id: CommandId | None = None
     op: Literal["step"]
-    ticks: Annotated[int, Field(ge=1, le=MAX_STEP_TICKS)] = 1
+    ticks: Annotated[int, Field(ge=1, le=MAX_STEP_TICKS), _INTEGRAL] = 1
 
 
 @with_config(_STRICT)
@@ -161,7 +170,7 @@ class Reset:
     type: Literal["command"] = "command"
     id: CommandId | None = None
     op: Literal["reset"]
-    seed: Annotated[int, Field(ge=0, le=2**32 - 1)] | None = None
+    seed: Annotated[int, Field(ge=0, le=2**32 - 1), _INTEGRAL] | None = None
 
 
 @with_config(_STRICT)
@@ -282,7 +291,7 @@ class History:
     op: Literal["history"]
     t0: Ms = 0
     t1: Ms = 2**62
-    every: Annotated[int, Field(ge=1, le=2**31)] = 1
+    every: Annotated[int, Field(ge=1, le=2**31), _INTEGRAL] = 1
 
 
 @with_config(_STRICT)
@@ -322,6 +331,18 @@ _client_adapter: TypeAdapter[Subscribe | Resync | Command] = TypeAdapter(ClientM
 _command_adapter: TypeAdapter[Command] = TypeAdapter(Command)
 #: The ops, in the order of docs/protocol.md (the discriminator's tags).
 OPS: tuple[str, ...] = tuple(_command_adapter.core_schema["choices"])
+
+
+def openapi_schemas(ref_template: str = "#/components/schemas/{model}") -> dict[str, Any]:
+    """JSON Schemas of ``Command`` and ``Reply`` and every type they use, for an OpenAPI document."""
+    reply: TypeAdapter[RestReply] = TypeAdapter(RestReply)
+    schemas, defs = TypeAdapter.json_schemas(
+        [("Command", "validation", _command_adapter), ("RestReply", "serialization", reply)],
+        ref_template=ref_template,
+    )
+    result: dict[str, Any] = dict(defs.get("$defs", {}))
+    result["Command"] = schemas[("Command", "validation")]
+    return result
 
 
 def parse_message(data: str | bytes) -> Subscribe | Resync | Command:
@@ -428,6 +449,14 @@ class Reply:
     ok: bool
     result: Any = None
     error: str | None = None
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RestReply(Reply):
+    """A reply over REST (``POST /api/command``): ``detail`` repeats ``error``, as in every REST error."""
+
+    detail: str | None = None
 
 
 @with_config(_SCHEMA)

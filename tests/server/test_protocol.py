@@ -12,6 +12,7 @@ from server.messages import (
     ProtocolError,
     Reply,
     Resync,
+    Step,
     Subscribe,
     encode,
     parse_command,
@@ -31,6 +32,8 @@ def test_good_messages() -> None:
     )
     assert command == ForceOption(id=4, op="force_option", robot=1, option="x", params={"p": 2.5})
     assert parse_command(b'{"op": "pause"}') == Pause(op="pause")
+    # JSON does not tell 2.0 from 2 (nor does JSON Schema's "integer"): an integral number is an integer.
+    assert parse_command(b'{"op": "step", "ticks": 2.0}') == Step(op="step", ticks=2)
     assert parse_command(b'{"op": "override_input", "robot": 0, "symbol": 3, "value": 9007199254740993}') == (
         OverrideInput(op="override_input", robot=0, symbol=3, value=9007199254740993)
     )
@@ -48,6 +51,8 @@ def test_good_messages() -> None:
         ('{"type": "command", "op": "pause", "agent": 1}', "agent: unknown argument"),
         ('{"type": "command", "op": "step", "ticks": 0}', "ticks"),
         ('{"type": "command", "op": "step", "ticks": 1.5}', "ticks"),
+        ('{"type": "command", "op": "step", "ticks": "2"}', "ticks"),
+        ('{"type": "command", "op": "step", "ticks": true}', "ticks"),
         ('{"type": "command", "op": "speed", "speed": "2"}', "speed"),
         ('{"type": "command", "op": "release", "robot": true}', "robot"),
         ('{"type": "command", "op": "release", "robot": -1}', "robot"),
