@@ -53,6 +53,7 @@ from server.messages import (
     Reply,
     RestReply,
     encode,
+    encode_history_chunk,
     guess_id,
     openapi_schemas,
     parse_command,
@@ -221,10 +222,10 @@ class Studio:
             for frame in encoded:
                 chunk.append(frame)
                 if len(chunk) == HISTORY_CHUNK:
-                    yield _history_message(command.id, index, False, chunk)
+                    yield encode_history_chunk(command.id, index, False, chunk)
                     index += 1
                     chunk = []
-            yield _history_message(command.id, index, True, chunk)
+            yield encode_history_chunk(command.id, index, True, chunk)
 
         if count:
             client.history.append(messages())
@@ -293,15 +294,6 @@ def _count_history(session: Session, t0: int, t1: int, every: int) -> int:
     gen = entries[-1].gen
     n = sum(1 for e in entries if e.gen is gen and t0 <= e.t <= t1)
     return 0 if n == 0 else 1 + (n - 1) // every
-
-
-def _history_message(command_id: Any, index: int, last: bool, chunk: list[bytes]) -> bytes:
-    return b'{"type":"history","id":%s,"chunk":%d,"last":%s,"frames":[%s]}' % (
-        orjson.dumps(command_id),
-        index,
-        b"true" if last else b"false",
-        b",".join(chunk),
-    )
 
 
 def _studio(request: Request) -> Studio:

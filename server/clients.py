@@ -29,7 +29,6 @@ from collections import deque
 from collections.abc import Awaitable, Callable, Iterator
 from typing import Any
 
-import orjson
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from server.frames import Entry, FrameEncoder, Generation
@@ -44,10 +43,11 @@ from server.messages import (
     SessionInfo,
     Subscribe,
     encode,
+    encode_hello,
     guess_id,
     parse_message,
 )
-from server.protocol import DEFAULT_RATE, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL, VERSION, CloseCode
+from server.protocol import DEFAULT_RATE, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL, CloseCode
 from server.session import Session
 
 log = logging.getLogger("xabsl.server")
@@ -304,18 +304,7 @@ class Hub:
             t=latest.t if latest else 0,
             token_required=self.token_required,
         )
-        return b"".join(
-            [
-                b'{"type":"hello","version":%d,"reason":%s,"generation":%d,"session":'
-                % (VERSION, orjson.dumps(reason), gen.number),
-                orjson.dumps(info),
-                b',"structure":',
-                gen.structure_bytes,
-                b',"scene":',
-                gen.scene_bytes,
-                b"}",
-            ]
-        )
+        return encode_hello(reason, gen.number, info, gen.structure_bytes, gen.scene_bytes)
 
     token_required = False
 

@@ -35,7 +35,7 @@ from pydantic import BeforeValidator, ConfigDict, Discriminator, Field, TypeAdap
 from pydantic_core import ErrorDetails
 
 from engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
-from server.protocol import DEFAULT_RATE, MAX_RATE, MAX_SPEED, MAX_STEP_TICKS, MIN_RATE, MIN_SPEED
+from server.protocol import DEFAULT_RATE, MAX_RATE, MAX_SPEED, MAX_STEP_TICKS, MIN_RATE, MIN_SPEED, VERSION
 
 if TYPE_CHECKING:
     from engine.ir.model import Program
@@ -732,6 +732,26 @@ ServerMessage = Hello | Frame | Reply | HistoryChunk | FileEvent | CompileEvent 
 def encode(message: Reply | ServerEvent) -> bytes:
     """A server message as JSON bytes (orjson encodes the dataclasses natively)."""
     return orjson.dumps(message, option=orjson.OPT_NON_STR_KEYS)
+
+
+def encode_hello(reason: HelloReason, generation: int, session: SessionInfo, structure: bytes, scene: bytes) -> bytes:
+    """A :class:`Hello` spliced from the generation's pre-encoded ``structure`` and ``scene``."""
+    head = b'{"type":"hello","version":%d,"reason":%s,"generation":%d,"session":' % (
+        VERSION,
+        orjson.dumps(reason),
+        generation,
+    )
+    return b"".join([head, orjson.dumps(session), b',"structure":', structure, b',"scene":', scene, b"}"])
+
+
+def encode_history_chunk(command_id: CommandId | None, index: int, last: bool, frames: list[bytes]) -> bytes:
+    """A :class:`HistoryChunk` around frames encoded already (``server.frames.history``)."""
+    return b'{"type":"history","id":%s,"chunk":%d,"last":%s,"frames":[%s]}' % (
+        orjson.dumps(command_id),
+        index,
+        b"true" if last else b"false",
+        b",".join(frames),
+    )
 
 
 # -- server <-> simulation process -----------------------------------------------------------------
