@@ -34,6 +34,7 @@ import orjson
 from pydantic import BeforeValidator, ConfigDict, Discriminator, Field, TypeAdapter, ValidationError, with_config
 from pydantic_core import ErrorDetails
 
+from engine.errors import ServerError
 from engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from server.protocol import DEFAULT_RATE, MAX_RATE, MAX_SPEED, MAX_STEP_TICKS, MIN_RATE, MIN_SPEED, VERSION
 
@@ -89,7 +90,7 @@ Ms = Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
 HelloReason = Literal["connect", "reload", "reset", "resync"]
 
 
-class ProtocolError(ValueError):
+class ProtocolError(ServerError, ValueError):
     """A client message that cannot be carried out; its text goes into the error reply."""
 
 

@@ -35,18 +35,16 @@ import socket
 import sys
 import time
 import traceback
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import orjson
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, World
-from engine.ir.model import Parameter, Program, leaf_path
-from engine.runtime import DebugError, Engine, EngineError
-from engine.types import Kind, Value
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, Example, World
+from engine.ir.model import Program, leaf_path
+from engine.runtime import DebugError, Debugger, Engine, EngineError
 from server.channel import Channel, ChannelClosed
-from server.examples import Example
 from server.frames import AgentSampler, ProgramCodec
 from server.messages import (
     Apply,
@@ -71,6 +69,7 @@ from server.messages import (
     Status,
     Step,
     ToWorker,
+    WireValue,
     WorkerCommand,
     WorkerReply,
     WorkerRequest,
@@ -81,7 +80,7 @@ from server.protocol import MAX_SPEED, MIN_SPEED
 WorkerChannel = Channel[FromWorker, ToWorker]
 
 
-class CommandError(ValueError):
+class CommandError(DebugError, ValueError):
     """A command that cannot be carried out (bad agent, unknown option, wrong value...)."""
 
 
@@ -235,8 +234,8 @@ class Simulation:
         self.seq += 1
         paths: list[bytes] = []
         extras: list[bytes] = []
-        inputs: list[tuple[Value | None, ...]] = []
-        outputs: list[tuple[Value | None, ...]] = []
+        inputs: list[tuple[WireValue, ...]] = []
+        outputs: list[tuple[WireValue, ...]] = []
         dumps = orjson.dumps
         for sampler in self.samplers:
             if sampler is None:
@@ -344,28 +343,26 @@ class Simulation:
 
     def _op_select_agent(self, command: SelectAgent, owner: str | None) -> Any:
         _, engine, _ = self._robot(command.robot)
-        engine.select_agent(command.agent)
+        engine.root_actions.select_agent(command.agent)
         return None
 
     def _op_force_option(self, command: ForceOption, owner: str | None) -> Any:
         index, engine, codec = self._robot(command.robot)
         option = self._named(command.option, codec.option_ids, "option")
-        params = self._params(command.params, codec.program.options[option].params, codec)
-        engine.debug.force_option(option, params)
+        engine.root_actions.force_option(option, command.params, by_index=True)
         self._own(index, "root", owner)
         return None
 
     def _op_force_behavior(self, command: ForceBehavior, owner: str | None) -> Any:
         index, engine, codec = self._robot(command.robot)
         behavior = self._named(command.behavior, codec.behavior_ids, "basic behavior")
-        params = self._params(command.params, codec.program.behaviors[behavior].params, codec)
-        engine.debug.force_behavior(behavior, params)
+        engine.root_actions.force_behavior(behavior, command.params, by_index=True)
         self._own(index, "root", owner)
         return None
 
     def _op_release(self, command: Release, owner: str | None) -> Any:
         index, engine, _ = self._robot(command.robot)
-        engine.debug.release()
+        engine.root_actions.release()
         self._owners.pop((index, "root"), None)
         return None
 
@@ -373,33 +370,32 @@ class Simulation:
         index, engine, codec = self._robot(command.robot)
         ids = {s.name: s.index for s in codec.program.inputs.values()}
         name = self._named(command.symbol, ids, "input symbol")
-        symbol = codec.program.inputs[name]
-        engine.debug.override_input(name, self._value(command.value, symbol.kind, symbol.enum, codec, name))
+        engine.root_actions.override_input(name, command.value, by_index=True)
         self._own(index, "input:" + name, owner)
         return None
 
     def _op_release_input(self, command: ReleaseInput, owner: str | None) -> Any:
         index, engine, codec = self._robot(command.robot)
         if command.symbol is None:
-            engine.debug.release_inputs()
+            engine.root_actions.release_inputs()
             for key in [k for k in self._owners if k[0] == index and k[1].startswith("input:")]:
                 del self._owners[key]
             return None
         ids = {s.name: s.index for s in codec.program.inputs.values()}
         name = self._named(command.symbol, ids, "input symbol")
-        engine.debug.release_input(name)
+        engine.root_actions.release_input(name)
         self._owners.pop((index, "input:" + name), None)
         return None
 
     def _op_reset_agent(self, command: ResetAgent, owner: str | None) -> Any:
         _, engine, _ = self._robot(command.robot)
-        engine.debug.reset()
+        engine.reset()
         return None
 
     def _op_explain(self, command: Explain, owner: str | None) -> Any:
         _, engine, codec = self._robot(command.robot)
         option = self._named(command.option, codec.option_ids, "option")
-        explanation = engine.debug.explain(option)
+        explanation = Debugger(engine).explain(option)
         states = codec.state_ids[option]
         ir_option = codec.program.options[option]
         decided = ir_option.state(explanation.decided_in)
@@ -468,33 +464,6 @@ class Simulation:
                 return name
         raise CommandError(f"unknown {what} id {value}")
 
-    def _params(
-        self, given: Mapping[str, Value | str], declared: Sequence[Parameter], codec: ProgramCodec
-    ) -> dict[str, Value | str]:
-        by_name = {p.name: p for p in declared}
-        by_short = {p.name.rsplit(".", 1)[-1]: p for p in declared}
-        result: dict[str, Value | str] = {}
-        for key, value in given.items():
-            param = by_name.get(key) or by_short.get(key)
-            if param is None:
-                raise CommandError(f"no parameter {key!r}")
-            result[param.name] = self._value(value, param.kind, param.enum, codec, param.name)
-        return result
-
-    @staticmethod
-    def _value(value: Value | str, kind: Kind, enum: str | None, codec: ProgramCodec, name: str) -> Value | str:
-        if kind is Kind.ENUM and isinstance(value, int) and not isinstance(value, bool):
-            element = codec.element(enum, value)
-            if element is None:
-                raise CommandError(f"{name}: no element {value} in enum {enum}")
-            return element
-        if kind is Kind.DECIMAL and isinstance(value, int | float) and not isinstance(value, bool):
-            try:
-                return float(value)
-            except OverflowError:  # the edge bounds integers to 64 bits; a caller in-process may not
-                raise CommandError(f"{name}: {value} is beyond the range of a decimal") from None
-        return value
-
     def _own(self, agent: int, what: str, owner: str | None) -> None:
         if owner is None:
             self._owners.pop((agent, what), None)
@@ -513,9 +482,9 @@ class Simulation:
                 continue
             try:
                 if what == "root":
-                    engine.debug.release()
+                    engine.root_actions.release()
                 else:
-                    engine.debug.release_input(what.removeprefix("input:"))
+                    engine.root_actions.release_input(what.removeprefix("input:"))
                 released += 1
             except (DebugError, EngineError):
                 continue

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis.errors import Unsatisfiable
 from schemathesis import GenerationMode
 
-from server.examples import DemoExample
+from server.bench_world import BenchExample
 from server.session import Session
 from tests.server.conftest import REPO, LiveServer
 
@@ -40,7 +40,7 @@ checks.positive_data_acceptance.expected-statuses = ["2xx", "3xx", "401", "403",
 def live_api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
     folder = tmp_path_factory.mktemp("schema") / "demo"
     shutil.copytree(REPO / "examples" / "demo", folder)
-    session = Session(DemoExample(folder), seed=3, speed=2.0)
+    session = Session(BenchExample(folder), seed=3, speed=2.0)
     with LiveServer(session) as server:
         yield server
     session.stop()
