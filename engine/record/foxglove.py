@@ -1,0 +1,337 @@
+"""The world as a Foxglove 2D scene: ``foxglove.SceneUpdate`` messages built from a world's scenes.
+
+Foxglove's 3D panel (switched to its 2D top-down view) draws ``foxglove.SceneUpdate`` messages. A
+world whose scenes follow the planar convention below gets two such channels in a recording: the
+static field once (:func:`static_update`) and the moving bodies every tick (:class:`SceneBuilder`).
+
+The convention (what ``examples/soccer`` scenes already are; lengths in the static scene's
+``units.length``, ``mm`` by default, headings in degrees):
+
+* static: ``lines`` ``[[x0, y0, x1, y1], ...]``, ``circles`` ``[[x, y, r], ...]``, optional
+  ``walls`` (lines too), ``goals[].net`` (polylines), ``agents[].team``, ``teams[].color``,
+  ``robot_radius``, ``ball_radius``;
+* dynamic: ``robots`` ``[[x, y, heading], ...]`` in agent order and optional ``ball`` ``[x, y]``.
+
+A world without ``robots`` in its dynamic scene gets no Foxglove channels (:func:`supports`).
+Everything is written in metres in the frame ``field`` (x towards the right goal, z up). The
+schema (:data:`SCENE_UPDATE_SCHEMA`) is written from Foxglove's documented field list and
+covers the primitives used here.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from engine.host import Scene
+
+FRAME = "field"
+
+_VEC3 = {
+    "type": "object",
+    "required": ["x", "y", "z"],
+    "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}},
+}
+_QUAT = {
+    "type": "object",
+    "required": ["x", "y", "z", "w"],
+    "properties": {k: {"type": "number"} for k in "xyzw"},
+}
+_POSE = {
+    "type": "object",
+    "required": ["position", "orientation"],
+    "properties": {"position": _VEC3, "orientation": _QUAT},
+}
+_COLOR = {
+    "type": "object",
+    "required": ["r", "g", "b", "a"],
+    "properties": {k: {"type": "number", "minimum": 0, "maximum": 1} for k in "rgba"},
+}
+_TIME = {
+    "type": "object",
+    "required": ["sec", "nsec"],
+    "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999},
+    },
+}
+
+
+def _primitive(**fields: Any) -> dict[str, Any]:
+    return {"type": "object", "required": list(fields), "properties": fields}
+
+
+_ENTITY = {
+    "title": "foxglove.SceneEntity",
+    "type": "object",
+    "required": ["timestamp", "frame_id", "id", "lifetime", "frame_locked"],
+    "properties": {
+        "timestamp": _TIME,
+        "frame_id": {"type": "string"},
+        "id": {"type": "string"},
+        "lifetime": _TIME,
+        "frame_locked": {"type": "boolean"},
+        "metadata": {"type": "array", "items": _primitive(key={"type": "string"}, value={"type": "string"})},
+        "arrows": {
+            "type": "array",
+            "items": _primitive(
+                pose=_POSE,
+                shaft_length={"type": "number"},
+                shaft_diameter={"type": "number"},
+                head_length={"type": "number"},
+                head_diameter={"type": "number"},
+                color=_COLOR,
+            ),
+        },
+        "cubes": {"type": "array", "items": _primitive(pose=_POSE, size=_VEC3, color=_COLOR)},
+        "spheres": {"type": "array", "items": _primitive(pose=_POSE, size=_VEC3, color=_COLOR)},
+        "cylinders": {
+            "type": "array",
+            "items": _primitive(
+                pose=_POSE, size=_VEC3, bottom_scale={"type": "number"}, top_scale={"type": "number"}, color=_COLOR
+            ),
+        },
+        "lines": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": ["type", "pose", "thickness", "scale_invariant", "points", "color"],
+                "properties": {
+                    "type": {"enum": [0, 1, 2], "description": "LINE_STRIP, LINE_LOOP, LINE_LIST"},
+                    "pose": _POSE,
+                    "thickness": {"type": "number"},
+                    "scale_invariant": {"type": "boolean"},
+                    "points": {"type": "array", "items": _VEC3},
+                    "color": _COLOR,
+                    "colors": {"type": "array", "items": _COLOR},
+                    "indices": {"type": "array", "items": {"type": "integer", "minimum": 0}},
+                },
+            },
+        },
+        "triangles": {"type": "array"},
+        "texts": {
+            "type": "array",
+            "items": _primitive(
+                pose=_POSE,
+                billboard={"type": "boolean"},
+                font_size={"type": "number"},
+                scale_invariant={"type": "boolean"},
+                color=_COLOR,
+                text={"type": "string"},
+            ),
+        },
+        "models": {"type": "array"},
+    },
+}
+
+#: The JSON Schema of ``foxglove.SceneUpdate`` (the name Foxglove recognises).
+SCENE_UPDATE_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "foxglove.SceneUpdate",
+    "description": "An update to the entities displayed in a 3D scene",
+    "type": "object",
+    "required": ["deletions", "entities"],
+    "properties": {
+        "deletions": {
+            "type": "array",
+            "items": _primitive(timestamp=_TIME, type={"enum": [0, 1]}, id={"type": "string"}),
+        },
+        "entities": {"type": "array", "items": _ENTITY},
+    },
+}
+
+_IDENTITY = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+_ORIGIN = {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": _IDENTITY}
+_ZERO = {"sec": 0, "nsec": 0}
+_WHITE = {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}
+_GREY = {"r": 0.6, "g": 0.6, "b": 0.6, "a": 1.0}
+_BALL = {"r": 1.0, "g": 0.55, "b": 0.0, "a": 1.0}
+_GREEN = {"r": 0.13, "g": 0.45, "b": 0.2, "a": 1.0}
+
+
+def supports(static: Scene, dynamic: Scene) -> bool:
+    """Whether the world's scenes follow the planar convention of this module."""
+    robots = dynamic.get("robots")
+    return isinstance(robots, list) and all(isinstance(r, list) and len(r) >= 3 for r in robots)
+
+
+def _scale(static: Scene) -> float:
+    unit = (static.get("units") or {}).get("length", "mm")
+    return {"mm": 0.001, "cm": 0.01, "m": 1.0}.get(unit, 0.001)
+
+
+def _color(hex_color: str) -> dict[str, float]:
+    text = hex_color.lstrip("#")
+    try:
+        r, g, b = (int(text[i : i + 2], 16) / 255.0 for i in (0, 2, 4))
+    except ValueError:
+        return dict(_GREY)
+    return {"r": round(r, 3), "g": round(g, 3), "b": round(b, 3), "a": 1.0}
+
+
+def _stamp(ns: int) -> dict[str, int]:
+    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+
+
+def _line(points: list[tuple[float, float]], kind: int, color: dict[str, float], width: float) -> dict[str, Any]:
+    return {
+        "type": kind,
+        "pose": _ORIGIN,
+        "thickness": width,
+        "scale_invariant": False,
+        "points": [{"x": x, "y": y, "z": 0.0} for x, y in points],
+        "color": color,
+    }
+
+
+def static_update(static: Scene, time_ns: int) -> dict[str, Any]:
+    """The static scene as one persistent entity ``field`` (lines, circles, walls, goal nets)."""
+    k = _scale(static)
+    width = float(static.get("field", {}).get("line_width", 50)) * k
+    segments: list[tuple[float, float]] = []
+    for x0, y0, x1, y1 in static.get("lines", []):
+        segments += [(x0 * k, y0 * k), (x1 * k, y1 * k)]
+    lines = [_line(segments, 2, _WHITE, width)] if segments else []
+    for x, y, r in static.get("circles", []):
+        loop = [
+            (k * (x + r * math.cos(a * math.tau / 48)), k * (y + r * math.sin(a * math.tau / 48))) for a in range(48)
+        ]
+        lines.append(_line(loop, 1, _WHITE, width))
+    walls: list[tuple[float, float]] = []
+    for x0, y0, x1, y1 in static.get("walls", []):
+        walls += [(x0 * k, y0 * k), (x1 * k, y1 * k)]
+    if walls:
+        lines.append(_line(walls, 2, _GREY, width))
+    for goal in static.get("goals", []):
+        net = goal.get("net")
+        if net:
+            lines.append(_line([(x * k, y * k) for x, y in net], 0, _GREY, width * 2))
+    cubes = []
+    field = static.get("field")
+    if field and "length" in field and "width" in field:
+        border = float(field.get("border", 0))
+        size = {"x": (field["length"] + 2 * border) * k, "y": (field["width"] + 2 * border) * k, "z": 0.001}
+        cubes.append(
+            {
+                "pose": {"position": {"x": 0.0, "y": 0.0, "z": -0.002}, "orientation": _IDENTITY},
+                "size": size,
+                "color": _GREEN,
+            }
+        )
+    entity = {
+        "timestamp": _stamp(time_ns),
+        "frame_id": FRAME,
+        "id": "field",
+        "lifetime": _ZERO,
+        "frame_locked": False,
+        "metadata": [{"key": "kind", "value": str(static.get("kind", ""))}],
+        "arrows": [],
+        "cubes": cubes,
+        "spheres": [],
+        "cylinders": [],
+        "lines": lines,
+        "triangles": [],
+        "texts": [],
+        "models": [],
+    }
+    return {"deletions": [], "entities": [entity]}
+
+
+class SceneBuilder:
+    """Turns each tick's dynamic scene into a ``foxglove.SceneUpdate`` (one entity ``bodies``).
+
+    Robots are cylinders in their team's colour with an arrow for the heading and their name as a
+    label; the ball is a sphere. Sizes and colours are computed once from the static scene.
+    """
+
+    __slots__ = ("_agents", "_ball_size", "_colors", "_k", "_robot_size")
+
+    def __init__(self, static: Scene) -> None:
+        self._k = _scale(static)
+        k = self._k
+        team_colors = {t.get("name"): _color(str(t.get("color", ""))) for t in static.get("teams", [])}
+        agents = static.get("agents", [])
+        self._agents = [str(a.get("name", "")) for a in agents]
+        self._colors = [team_colors.get(a.get("team"), _GREY) for a in agents]
+        r = float(static.get("robot_radius", 130)) * k
+        b = float(static.get("ball_radius", 50)) * k
+        self._robot_size = {"x": 2 * r, "y": 2 * r, "z": 0.1}
+        self._ball_size = {"x": 2 * b, "y": 2 * b, "z": 2 * b}
+
+    def update(self, dynamic: Scene, time_ns: int) -> dict[str, Any]:
+        """The SceneUpdate of one tick."""
+        k = self._k
+        size = self._robot_size
+        arrow_length = size["x"] * 1.2
+        cylinders = []
+        arrows = []
+        texts = []
+        names, colors = self._agents, self._colors
+        for i, robot in enumerate(dynamic.get("robots", [])):
+            x, y, heading = robot[0] * k, robot[1] * k, math.radians(robot[2])
+            color = colors[i] if i < len(colors) else _GREY
+            position = {"x": x, "y": y, "z": 0.05}
+            half = heading / 2.0
+            cylinders.append(
+                {
+                    "pose": {"position": position, "orientation": _IDENTITY},
+                    "size": size,
+                    "bottom_scale": 1.0,
+                    "top_scale": 1.0,
+                    "color": color,
+                }
+            )
+            arrows.append(
+                {
+                    "pose": {
+                        "position": position,
+                        "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(half), "w": math.cos(half)},
+                    },
+                    "shaft_length": arrow_length * 0.7,
+                    "shaft_diameter": 0.03,
+                    "head_length": arrow_length * 0.3,
+                    "head_diameter": 0.08,
+                    "color": _WHITE,
+                }
+            )
+            if i < len(names):
+                texts.append(
+                    {
+                        "pose": {"position": {"x": x, "y": y, "z": 0.3}, "orientation": _IDENTITY},
+                        "billboard": True,
+                        "font_size": 12.0,
+                        "scale_invariant": True,
+                        "color": _WHITE,
+                        "text": names[i],
+                    }
+                )
+        spheres = []
+        ball = dynamic.get("ball")
+        if ball is not None:
+            spheres.append(
+                {
+                    "pose": {
+                        "position": {"x": ball[0] * k, "y": ball[1] * k, "z": self._ball_size["z"] / 2},
+                        "orientation": _IDENTITY,
+                    },
+                    "size": self._ball_size,
+                    "color": _BALL,
+                }
+            )
+        entity = {
+            "timestamp": _stamp(time_ns),
+            "frame_id": FRAME,
+            "id": "bodies",
+            "lifetime": _ZERO,
+            "frame_locked": False,
+            "metadata": [],
+            "arrows": arrows,
+            "cubes": [],
+            "spheres": spheres,
+            "cylinders": cylinders,
+            "lines": [],
+            "triangles": [],
+            "texts": texts,
+            "models": [],
+        }
+        return {"deletions": [], "entities": [entity]}
