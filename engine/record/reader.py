@@ -279,10 +279,10 @@ class Recording:
     def _decode(self, start: int, stop: int) -> Iterator[TickView]:
         """Views of ticks ``start`` .. ``stop - 1``; ``start`` must be a key frame tick."""
         states = {name: _AgentState() for name in self.agents}
-        agent_topics: dict[str, tuple[str, str]] = {}
+        agent_topics: dict[str, tuple[str, bool]] = {}
         for name in self.agents:
-            for what in (S.ACTIVATION, S.SYMBOLS, S.FAULT):
-                agent_topics[S.agent_topic(name, what)] = (name, what)
+            agent_topics[S.agent_topic(name)] = (name, True)
+            agent_topics[S.fault_topic(name)] = (name, False)
         events_by_seq: dict[int, list[dict[str, Any]]] = {}
         for event in self.events:
             events_by_seq.setdefault(event["seq"], []).append(event)
@@ -310,44 +310,40 @@ class Recording:
             if topic == S.WORLD_STATUS:
                 status = current.status = data["status"]
                 continue
-            name, what = agent_topics[topic]
+            name, is_tick = agent_topics[topic]
             state = states[name]
-            if what == S.ACTIVATION:
-                state.gen = data["gen"]
-                if "roots" in data:
-                    state.roots = tuple(Root(kind, root) for kind, root in data["roots"])
-                if "assignments" in data:
-                    state.assignments = tuple(data["assignments"])
-                current.agents[name] = AgentTick(
-                    name,
-                    self.program(name, state.gen),
-                    state.gen,
-                    data["tick"],
-                    data["path"],
-                    state.roots,
-                    state.assignments,
-                    state.inputs,
-                    state.outputs,
-                    state.fault,
-                )
-            elif what == S.SYMBOLS:
-                if data["key"]:
-                    state.inputs, state.outputs = {}, {}
-                else:  # a new dict per tick: views already yielded keep their values
-                    state.inputs, state.outputs = dict(state.inputs), dict(state.outputs)
-                _flatten(data["inputs"], state.inputs)
-                _flatten(data["outputs"], state.outputs)
-                for unread in data.get("unread", ()):
-                    target = state.inputs if unread in state.inputs or unread not in state.outputs else state.outputs
-                    target[unread] = None
-                agent = current.agents.get(name)
-                if agent is not None:
-                    agent.inputs, agent.outputs = state.inputs, state.outputs
-            else:
+            if not is_tick:
                 state.fault = data["fault"]
                 agent = current.agents.get(name)
                 if agent is not None:
                     agent.fault = state.fault
+                continue
+            state.gen = data["gen"]
+            if "roots" in data:
+                state.roots = tuple(Root(kind, root) for kind, root in data["roots"])
+            if "assignments" in data:
+                state.assignments = tuple(data["assignments"])
+            if data["key"]:
+                state.inputs, state.outputs = {}, {}
+            else:  # a new dict per tick: views already yielded keep their values
+                state.inputs, state.outputs = dict(state.inputs), dict(state.outputs)
+            _flatten(data["inputs"], state.inputs)
+            _flatten(data["outputs"], state.outputs)
+            for unread in data.get("unread", ()):
+                target = state.outputs if unread in state.outputs else state.inputs
+                target[unread] = None
+            current.agents[name] = AgentTick(
+                name,
+                self.program(name, state.gen),
+                state.gen,
+                data["tick"],
+                data["path"],
+                state.roots,
+                state.assignments,
+                state.inputs,
+                state.outputs,
+                state.fault,
+            )
         if current is not None:
             yield current
 

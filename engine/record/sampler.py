@@ -51,7 +51,8 @@ class ProgramTables:
     """How to read the raw samples of one program run by one host (names, enums, parameters).
 
     ``inputs``/``outputs`` are the symbol names in sample order; ``input_enums``/``output_enums``
-    the enum of each (None for decimals and booleans); ``enums`` maps enum name -> host value ->
+    the enum of each (None for decimals and booleans), ``input_decimals``/``output_decimals``
+    whether each is a decimal; ``enums`` maps enum name -> host value ->
     element; ``behavior_params`` gives each basic behavior's parameters as ``(name, enum)`` in path
     order (the host's declaration order); ``assignment_sites`` numbers every output assignment as
     ``(option id, state id, action position, output symbol, kind, enum)``.
@@ -61,6 +62,8 @@ class ProgramTables:
     outputs: tuple[str, ...]
     input_enums: tuple[str | None, ...]
     output_enums: tuple[str | None, ...]
+    input_decimals: tuple[bool, ...]
+    output_decimals: tuple[bool, ...]
     enums: dict[str, dict[int, str]]
     behavior_params: dict[str, tuple[tuple[str, str | None], ...]]
     assignment_sites: tuple[tuple[int, int, int, str, str, str | None], ...]
@@ -100,6 +103,8 @@ class ProgramTables:
             outputs=tuple(s.name for s in outputs),
             input_enums=tuple(s.enum if s.kind is Kind.ENUM else None for s in inputs),
             output_enums=tuple(s.enum if s.kind is Kind.ENUM else None for s in outputs),
+            input_decimals=tuple(s.kind is Kind.DECIMAL for s in inputs),
+            output_decimals=tuple(s.kind is Kind.DECIMAL for s in outputs),
             enums=enums,
             behavior_params=behavior_params,
             assignment_sites=tuple(site_rows),

@@ -45,14 +45,15 @@ FOXGLOVE_FIELD = "/foxglove/field"
 FOXGLOVE_SCENE = "/foxglove/scene"
 
 
-def agent_topic(agent: str, what: str) -> str:
-    """The topic of one agent's channel: ``what`` is ``activation``, ``symbols`` or ``fault``."""
-    return f"/xabsl/agents/{agent}/{what}"
+def agent_topic(agent: str) -> str:
+    """The topic of an agent's ticks (activation path and symbol values, ``xabsl.AgentTick``)."""
+    return f"/xabsl/agents/{agent}"
 
 
-ACTIVATION = "activation"
-SYMBOLS = "symbols"
-FAULT = "fault"
+def fault_topic(agent: str) -> str:
+    """The topic of an agent's fault changes (``xabsl.Fault``)."""
+    return f"/xabsl/agents/{agent}/fault"
+
 
 #: Event kinds (``/xabsl/events`` ``kind``); ``data`` per kind is documented in docs/recordings.md.
 EVENT_KINDS = (
@@ -139,6 +140,7 @@ RECORDING_SCHEMA: dict[str, Any] = {
         "behavior_hz": {"type": "integer", "minimum": 1},
         "physics_hz": {"type": "integer", "minimum": 1},
         "key_every": {"type": "integer", "minimum": 1},
+        "decimals": {"type": ["integer", "null"], "description": "fractional digits kept of decimal symbols"},
         "deterministic": {"type": "boolean", "description": "the run is a pure function of seed and programs"},
         "agents": {
             "type": "array",
@@ -256,12 +258,16 @@ STATUS_SCHEMA: dict[str, Any] = {
     "properties": {"seq": _SEQ, "t": _T, "status": _OBJECT},
 }
 
-ACTIVATION_SCHEMA: dict[str, Any] = {
+AGENT_TICK_SCHEMA: dict[str, Any] = {
     "$schema": _DRAFT,
-    "title": "xabsl.Activation",
-    "description": "One agent's activation path after one tick (pre-order; ids index the program JSON)",
+    "title": "xabsl.AgentTick",
+    "description": (
+        "One agent after one tick: its activation path (pre-order; ids index the program JSON) and its"
+        " input and output symbol values (all of them on key frames, else the changed ones)"
+    ),
     "type": "object",
-    "required": ["seq", "t", "gen", "tick", "path"],
+    "required": ["seq", "t", "gen", "tick", "path", "key", "inputs", "outputs"],
+    "$defs": {"values": _SCALAR_TREE},
     "properties": {
         "seq": _SEQ,
         "t": _T,
@@ -269,29 +275,16 @@ ACTIVATION_SCHEMA: dict[str, Any] = {
         "tick": {"type": "integer", "minimum": 0, "description": "the engine's own tick counter"},
         "path": {"type": "array", "items": {"oneOf": [_OPTION_NODE, _BEHAVIOR_NODE]}},
         "roots": {
-            "description": "the root actions as [kind, name]; present when they changed (and on key frames)",
+            "description": "the root actions as [kind, name]; present on key frames and when they changed",
             "type": "array",
             "items": {"type": "array", "prefixItems": [{"enum": ["option", "behavior", "output"]}, {"type": "string"}]},
         },
         "assignments": {
-            "description": "per assignment site the value it last wrote (null: never); present when changed",
+            "description": "per assignment site the value it last wrote (null: never); on key frames and changes",
             "type": "array",
             "items": _VALUE,
         },
-    },
-}
-
-SYMBOLS_SCHEMA: dict[str, Any] = {
-    "$schema": _DRAFT,
-    "title": "xabsl.Symbols",
-    "description": "One agent's input and output symbol values: all of them on key frames, else the changed ones",
-    "type": "object",
-    "required": ["seq", "t", "key", "inputs", "outputs"],
-    "$defs": {"values": _SCALAR_TREE},
-    "properties": {
-        "seq": _SEQ,
-        "t": _T,
-        "key": {"type": "boolean", "description": "true: every value is present (a key frame)"},
+        "key": {"type": "boolean", "description": "true: every symbol value is present (a key frame)"},
         "inputs": {"$ref": "#/$defs/values"},
         "outputs": {"$ref": "#/$defs/values"},
         "unread": {
@@ -340,8 +333,7 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         STATIC_SCHEMA,
         SCENE_SCHEMA,
         STATUS_SCHEMA,
-        ACTIVATION_SCHEMA,
-        SYMBOLS_SCHEMA,
+        AGENT_TICK_SCHEMA,
         FAULT_SCHEMA,
     )
 }

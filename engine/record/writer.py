@@ -20,7 +20,7 @@ crashed run never leaves a truncated file under the final name. Message layouts:
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -30,7 +30,7 @@ import orjson
 from mcap.writer import CompressionType, Writer
 
 from engine.emit.json import program_to_json
-from engine.host import World
+from engine.host import Agent, World
 from engine.ir.model import Program
 from engine.record import foxglove
 from engine.record import schema as S
@@ -43,6 +43,9 @@ __all__ = ["Recorder", "RecorderStats", "engines_of"]
 #: Uncompressed bytes per MCAP chunk: small enough that a seek decompresses little (a chunk is
 #: about 2 s of a 10-agent match), large enough for zstd to find the repetition between ticks.
 CHUNK_SIZE = 512 * 1024
+#: Decimal symbol values are kept to this many fractional digits by default: the studio's display
+#: precision (mm, degrees and ms to a thousandth), and a third of the bytes of exact values.
+DECIMALS = 3
 
 
 @dataclass(slots=True)
@@ -68,9 +71,7 @@ class _Agent:
     """Per-agent writer state: channels, sampler, what the last messages said."""
 
     __slots__ = (
-        "activation",
-        "enum_positions",
-        "fault",
+        "channel",
         "fault_channel",
         "gen",
         "key",
@@ -83,23 +84,26 @@ class _Agent:
         "nest_inputs",
         "nest_outputs",
         "sampler",
-        "symbols",
     )
 
-    def __init__(self, name: str, key: str, sampler: AgentSampler, gen: int, channels: tuple[int, int, int]) -> None:
+    def __init__(
+        self, name: str, key: str, sampler: AgentSampler, gen: int, channels: tuple[int, int], decimals: int | None
+    ) -> None:
         self.name = name
         self.key = key
         self.gen = gen
-        self.activation, self.symbols, self.fault_channel = channels
-        self.bind(sampler, gen)
+        self.channel, self.fault_channel = channels
+        self.bind(sampler, gen, decimals)
         self.last_fault: Fault | None = None
 
-    def bind(self, sampler: AgentSampler, gen: int) -> None:
+    def bind(self, sampler: AgentSampler, gen: int, decimals: int | None) -> None:
         self.sampler = sampler
         self.gen = gen
         tables = sampler.tables
-        self.nest_inputs = _Nesting(tables.inputs, tables.input_enums, tables.enums)
-        self.nest_outputs = _Nesting(tables.outputs, tables.output_enums, tables.enums)
+        self.nest_inputs = _Nesting(tables.inputs, tables.input_enums, tables.input_decimals, tables.enums, decimals)
+        self.nest_outputs = _Nesting(
+            tables.outputs, tables.output_enums, tables.output_decimals, tables.enums, decimals
+        )
         self.last_inputs: tuple[Value | None, ...] = ()
         self.last_outputs: tuple[Value | None, ...] = ()
         self.last_assignments: tuple[Value | None, ...] | None = None
@@ -112,13 +116,18 @@ class _Nesting:
     Foxglove's message paths address nested fields with dots (``.inputs.ball.x``) and cannot
     quote a key that contains one, hence the nesting. A name that is also a namespace of other
     names (``a`` beside ``a.b``) is stored under the key ``"="`` of that namespace. Enum values
-    are written as element names.
+    are written as element names, decimals rounded to ``decimals`` fractional digits (None: exact).
     """
 
-    __slots__ = ("_enum", "_keys", "_paths")
+    __slots__ = ("_decimal", "_enum", "_keys", "_paths", "_scale")
 
     def __init__(
-        self, names: tuple[str, ...], enums: tuple[str | None, ...], tables: dict[str, dict[int, str]]
+        self,
+        names: tuple[str, ...],
+        enums: tuple[str | None, ...],
+        is_decimal: tuple[bool, ...],
+        tables: dict[str, dict[int, str]],
+        decimals: int | None,
     ) -> None:
         namespaces = {name.rsplit(".", k)[0] for name in names for k in range(1, name.count(".") + 1)}
         paths: list[tuple[str, ...]] = []
@@ -128,11 +137,13 @@ class _Nesting:
         self._paths = tuple(paths)
         self._keys = names
         self._enum = tuple(tables.get(e) if e is not None else None for e in enums)
+        self._decimal = is_decimal if decimals is not None else (False,) * len(names)
+        self._scale = 10.0 ** (decimals or 0)
 
     def encode(self, values: tuple[Value | None, ...], previous: tuple[Value | None, ...]) -> dict[str, Any]:
         """The nested object of ``values``: every value if ``previous`` is empty, else the changed ones."""
         out: dict[str, Any] = {}
-        paths, enum = self._paths, self._enum
+        paths, enum, decimal, scale = self._paths, self._enum, self._decimal, self._scale
         if len(previous) != len(values):
             changed: Any = range(len(values))
         elif values == previous:
@@ -146,8 +157,22 @@ class _Nesting:
             table = enum[i]
             if table is not None and value is not None:
                 value = table.get(int(value), int(value))
+            elif decimal[i] and value is not None:
+                # ``round(v * s) / s``: exact decimal rounding with round(v, n) costs 3-4x more;
+                # a try beats contextlib.suppress in this loop. NaN and infinities stay (JSON null).
+                try:  # noqa: SIM105
+                    value = round(value * scale) / scale
+                except (ValueError, OverflowError):
+                    pass
             path = paths[i]
-            if len(path) == 1:
+            depth = len(path)
+            if depth == 2:  # the common case (``ball.x``), without the loop below
+                node = out.get(path[0])
+                if node is None:
+                    node = out[path[0]] = {}
+                node[path[1]] = value
+                continue
+            if depth == 1:
                 out[path[0]] = value
                 continue
             node = out
@@ -173,6 +198,8 @@ class Recorder:
         key_every: a symbols key frame every this many ticks.
         foxglove_scene: also write the Foxglove 2D scene channels (for planar worlds).
         deterministic: whether the run is a pure function of seed and programs (for fork).
+        decimals: decimal symbol values are rounded to this many fractional digits (the studio's
+            display precision; None: exact). Activation paths and assignment values are always exact.
 
     Raises:
         ValueError: an engine runs a program that is not in ``programs``.
@@ -192,6 +219,7 @@ class Recorder:
         foxglove_scene: bool = True,
         deterministic: bool = True,
         chunk_size: int = CHUNK_SIZE,
+        decimals: int | None = DECIMALS,
     ) -> None:
         if key_every < 1:
             raise ValueError(f"key_every must be at least 1, got {key_every}")
@@ -200,6 +228,7 @@ class Recorder:
         self.programs = dict(programs)
         self.behavior_hz = behavior_hz
         self.key_every = key_every
+        self.decimals = decimals
         self.seq = 0
         self.generation = 0
         self.messages = 0
@@ -231,11 +260,10 @@ class Recorder:
             keys.append(key)
             sampler = AgentSampler(engine, self._tables_for(key, engine))
             channels = (
-                self._channel(S.agent_topic(agent.name, S.ACTIVATION), "xabsl.Activation"),
-                self._channel(S.agent_topic(agent.name, S.SYMBOLS), "xabsl.Symbols"),
-                self._channel(S.agent_topic(agent.name, S.FAULT), "xabsl.Fault"),
+                self._channel(S.agent_topic(agent.name), "xabsl.AgentTick"),
+                self._channel(S.fault_topic(agent.name), "xabsl.Fault"),
             )
-            self._agents.append(_Agent(agent.name, key, sampler, self.generation, channels))
+            self._agents.append(_Agent(agent.name, key, sampler, self.generation, channels, decimals))
 
         static = world.static_scene()
         self._write(
@@ -250,6 +278,7 @@ class Recorder:
                 "behavior_hz": behavior_hz,
                 "physics_hz": physics_hz,
                 "key_every": key_every,
+                "decimals": decimals,
                 "deterministic": deterministic,
                 "agents": [
                     {"id": i, "name": a.name, "team": a.team, "number": a.number, "program": keys[i]}
@@ -261,6 +290,35 @@ class Recorder:
         for key in self._tables:
             self._write_program(key, self.programs[key], "start", ())
         self._write_static(static)
+
+    @classmethod
+    def for_world(
+        cls,
+        path: str | os.PathLike[str],
+        world: World,
+        program_key: Callable[[Agent], str | None],
+        **options: Any,
+    ) -> Recorder:
+        """A recorder for ``world`` whose agent ``a`` runs the program named ``program_key(a)``.
+
+        The programs are those the agents' engines run (:func:`engines_of`); ``options`` are the
+        constructor's keyword arguments (``example``, ``behavior_hz``, ``physics_hz``, ...).
+
+        Raises:
+            ValueError: two different programs under one key.
+        """
+        engines: list[Engine | None] = []
+        programs: dict[str, Program] = {}
+        for agent, engine in zip(world.agents, engines_of(world), strict=True):
+            key = program_key(agent) if engine is not None else None
+            if engine is None or key is None:
+                engines.append(None)  # no engine, or one the caller does not want recorded
+                continue
+            engines.append(engine)
+            known = programs.setdefault(key, engine.program)
+            if known is not engine.program:
+                raise ValueError(f"two different programs are both named {key!r}")
+        return cls(path, world, programs, engines=engines, **options)
 
     # -- setup helpers ------------------------------------------------------------------------------
 
@@ -330,27 +388,20 @@ class Recorder:
             if agent is None:
                 continue
             sample = agent.sampler.sample()
-            activation: dict[str, Any] = {"seq": seq, "t": now_ms, "gen": gen, "tick": sample.tick, "path": sample.path}
+            message: dict[str, Any] = {"seq": seq, "t": now_ms, "gen": gen, "tick": sample.tick, "path": sample.path}
             if key or sample.roots != agent.last_roots:
                 agent.last_roots = sample.roots
-                activation["roots"] = [[r.kind, r.name] for r in sample.roots]
+                message["roots"] = [[r.kind, r.name] for r in sample.roots]
             if key or sample.assignments != agent.last_assignments:
                 agent.last_assignments = sample.assignments
-                activation["assignments"] = sample.assignments
-            add(agent.activation, dumps(activation))
-            previous_in = () if key else agent.last_inputs
-            previous_out = () if key else agent.last_outputs
-            symbols: dict[str, Any] = {
-                "seq": seq,
-                "t": now_ms,
-                "key": key,
-                "inputs": agent.nest_inputs.encode(sample.inputs, previous_in),
-                "outputs": agent.nest_outputs.encode(sample.outputs, previous_out),
-            }
+                message["assignments"] = sample.assignments
+            message["key"] = key
+            message["inputs"] = agent.nest_inputs.encode(sample.inputs, () if key else agent.last_inputs)
+            message["outputs"] = agent.nest_outputs.encode(sample.outputs, () if key else agent.last_outputs)
             if sample.unread:
-                symbols["unread"] = list(sample.unread)
+                message["unread"] = list(sample.unread)
             agent.last_inputs, agent.last_outputs = sample.inputs, sample.outputs
-            add(agent.symbols, dumps(symbols))
+            add(agent.channel, dumps(message))
             # On change, and repeated on key frames while faulted, so a seek from a key frame sees it.
             if sample.fault != agent.last_fault or (key and sample.fault is not None):
                 agent.last_fault = sample.fault
@@ -398,7 +449,7 @@ class Recorder:
         self._tables.pop(key, None)
         for agent, engine in zip(self._agents, engines, strict=True):
             if agent is not None and engine is not None and engine.program is program:
-                agent.bind(AgentSampler(engine, self._tables_for(key, engine)), self.generation)
+                agent.bind(AgentSampler(engine, self._tables_for(key, engine)), self.generation, self.decimals)
         tables = self._tables.get(key)
         self._write_program(key, program, "reload", changed_files)
         self.event(
@@ -428,7 +479,7 @@ class Recorder:
         self.generation += 1
         for agent, engine in zip(self._agents, engines, strict=True):
             if agent is not None and engine is not None:
-                agent.bind(AgentSampler(engine, self._tables_for(agent.key, engine)), self.generation)
+                agent.bind(AgentSampler(engine, self._tables_for(agent.key, engine)), self.generation, self.decimals)
                 agent.last_fault = None
         self.event("reset", now_ms, None, reason=reason, gen=self.generation, seed=int(world.seed))
         self._write_static(world.static_scene())
