@@ -292,8 +292,8 @@ class Recording:
         loads = orjson.loads
         for _schema, channel, message in self._reader.iter_messages(
             topics=topics,
-            start_time=self.time_ns(start),
-            end_time=self.time_ns(stop - 1) + 1,
+            starting_at=self.time_ns(start),
+            ending_before=self.time_ns(stop - 1) + 1,
             log_time_order=False,
         ):
             data = loads(message.data)
