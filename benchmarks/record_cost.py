@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
-from engine.record import AgentSampler, Recorder, Recording, engines_of
+from engine.record import AgentSampler, Recorder, RecorderStats, Recording, engines_of
 from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 TEN_MINUTES_TICKS = 600 * DEFAULT_BEHAVIOR_HZ
@@ -43,8 +43,8 @@ def plain(seconds: float, seed: int, programs: tuple[object, object]) -> tuple[f
 
 
 def recorded(
-    seconds: float, seed: int, programs: tuple[object, object], path: Path
-) -> tuple[float, float, object, Recorder]:
+    seconds: float, seed: int, programs: tuple[object, object], path: Path, background: bool
+) -> tuple[float, float, object, RecorderStats]:
     world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
     cpu = time.process_time()
     wall = time.perf_counter()
@@ -55,10 +55,11 @@ def recorded(
         example="soccer",
         behavior_hz=DEFAULT_BEHAVIOR_HZ,
         physics_hz=DEFAULT_PHYSICS_HZ,
+        background=background,
     )
     run_headless(world, duration_s=seconds, on_tick=recorder.on_tick)
-    recorder.close()
-    return time.perf_counter() - wall, time.process_time() - cpu, world.dynamic_scene(), recorder
+    stats = recorder.close()
+    return time.perf_counter() - wall, time.process_time() - cpu, world.dynamic_scene(), stats
 
 
 def sampling_only(seconds: float, seed: int, programs: tuple[object, object]) -> tuple[float, int]:
@@ -111,43 +112,47 @@ def main() -> None:
     folder = Path(args.keep or tempfile.mkdtemp(prefix="record_cost_"))
     folder.mkdir(parents=True, exist_ok=True)
     plain(5.0, args.seed, programs)  # warm up: imports, code generation caches
-    walls, cpus, rec_walls, rec_cpus = [], [], [], []
-    recorder = None
+    runs: dict[str, list[tuple[float, float]]] = {
+        "without recording": [],
+        "recorded inline": [],
+        "recorded, writer process": [],
+    }
+    stats = None
     path = folder / f"match_{args.seconds:.0f}s.mcap"
     for _ in range(args.repeat):
         wall, cpu, scene_plain = plain(args.seconds, args.seed, programs)
-        walls.append(wall)
-        cpus.append(cpu)
-        wall, cpu, scene_recorded, recorder = recorded(args.seconds, args.seed, programs, path)
-        rec_walls.append(wall)
-        rec_cpus.append(cpu)
-        if scene_plain != scene_recorded:
-            raise SystemExit("recording changed the match: the final scenes differ")
-    assert recorder is not None
-    ticks = recorder.seq
+        runs["without recording"].append((wall, cpu))
+        for label, background in (("recorded inline", False), ("recorded, writer process", True)):
+            wall, cpu, scene_recorded, stats = recorded(args.seconds, args.seed, programs, path, background)
+            runs[label].append((wall, cpu))
+            if scene_plain != scene_recorded:
+                raise SystemExit("recording changed the match: the final scenes differ")
+    assert stats is not None
+    ticks = stats.ticks
     size = path.stat().st_size
     sample_seconds, sample_ticks = sampling_only(args.seconds, args.seed, programs)
 
-    wall, rec_wall = statistics.median(walls), statistics.median(rec_walls)
-    cpu, rec_cpu = statistics.median(cpus), statistics.median(rec_cpus)
     print(
-        f"soccer 5 vs 5, {args.seconds:.0f} simulated s ({ticks} ticks), seed {args.seed}, {args.repeat} pairs of runs"
+        f"soccer 5 vs 5, {args.seconds:.0f} simulated s ({ticks} ticks), seed {args.seed}, "
+        f"median of {args.repeat} runs each (cpu: this process only)"
     )
-    print(f"  without recording: {wall:7.2f} s wall  {cpu:7.2f} s cpu  ({1e3 * wall / ticks:.3f} ms per tick)")
-    print(
-        f"  with recording:    {rec_wall:7.2f} s wall  {rec_cpu:7.2f} s cpu  ({1e3 * rec_wall / ticks:.3f} ms per tick)"
-    )
-    print(
-        f"  overhead: {100 * (rec_wall / wall - 1):.0f} % wall, {100 * (rec_cpu / cpu - 1):.0f} % cpu "
-        f"(goal < 10 %); {1e3 * (rec_wall - wall) / ticks:.3f} ms per tick"
-    )
+    base_wall = statistics.median(w for w, _ in runs["without recording"])
+    base_cpu = statistics.median(c for _, c in runs["without recording"])
+    for label, values in runs.items():
+        wall = statistics.median(w for w, _ in values)
+        cpu = statistics.median(c for _, c in values)
+        line = f"  {label:<25} {wall:7.2f} s wall {cpu:7.2f} s cpu  {1e3 * wall / ticks:.3f} ms/tick"
+        if label != "without recording":
+            line += f"  overhead {100 * (wall / base_wall - 1):4.0f} % wall, {100 * (cpu / base_cpu - 1):4.0f} % cpu"
+        print(line)
+    print("  (goal: overhead < 10 %)")
     print(
         f"  sampling the 10 engines alone (AgentSampler.sample): {1e3 * sample_seconds / sample_ticks:.3f} ms per tick "
         "(goal <= 0.2 ms)"
     )
     per_tick = size / ticks
     print(
-        f"  file: {size / MB:.2f} MB, {recorder.messages} messages, {per_tick:.0f} B per tick; "
+        f"  file: {size / MB:.2f} MB, {stats.messages} messages, {per_tick:.0f} B per tick; "
         f"10 minutes extrapolated: {per_tick * TEN_MINUTES_TICKS / MB:.1f} MB (goal <= 50 MB)"
     )
     seeks = seek_times(path, 30, args.seed)
@@ -155,10 +160,10 @@ def main() -> None:
 
     if args.full:
         full = folder / "match_600s.mcap"
-        wall, cpu, _, recorder = recorded(600.0, args.seed, programs, full)
+        wall, cpu, _, stats = recorded(600.0, args.seed, programs, full, True)
         size = full.stat().st_size
         seeks = seek_times(full, 50, args.seed)
-        print(f"full 10 minutes recorded ({recorder.seq} ticks): {wall:.1f} s wall, {size / MB:.1f} MB (goal <= 50 MB)")
+        print(f"full 10 minutes recorded ({stats.ticks} ticks): {wall:.1f} s wall, {size / MB:.1f} MB (goal <= 50 MB)")
         print(f"  seek a random tick + rebuild 10 trees: {_spread(seeks)} (goal < 100 ms)")
     if not args.keep:
         for file in folder.glob("*.mcap"):

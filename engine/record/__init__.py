@@ -3,15 +3,17 @@
 * :mod:`engine.record.schema`   topic names, JSON Schemas, timestamps (the format's one source)
 * :mod:`engine.record.sampler`  the cheap per-tick read of one engine (shared with the studio)
 * :mod:`engine.record.foxglove` the world as ``foxglove.SceneUpdate`` messages (2D field view)
-* :mod:`engine.record.writer`   :class:`Recorder`: a running world -> an MCAP file
+* :mod:`engine.record.encoder`  :class:`RecordingEncoder`: samples -> MCAP messages (no engine needed)
+* :mod:`engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder
 * :mod:`engine.record.reader`   :class:`Recording`: iterate ticks, seek, rebuild activation trees
 
 Independent of the server: the studio records through the same :class:`Recorder`.
 """
 
+from engine.record.encoder import RecordingEncoder
 from engine.record.reader import AgentTick, Recording, RecordingError, TickView
 from engine.record.sampler import AgentSample, AgentSampler, ProgramTables
-from engine.record.writer import Recorder, RecorderStats, engines_of
+from engine.record.writer import Recorder, RecorderStats, RecordingFailed, engines_of
 
 __all__ = [
     "AgentSample",
@@ -21,7 +23,9 @@ __all__ = [
     "Recorder",
     "RecorderStats",
     "Recording",
+    "RecordingEncoder",
     "RecordingError",
+    "RecordingFailed",
     "TickView",
     "engines_of",
 ]

@@ -1,51 +1,49 @@
-"""Writing a recording: :class:`Recorder` turns a running world's ticks into an MCAP file.
+"""Recording a running world: :class:`Recorder` samples the engines each tick and feeds the encoder.
 
 Feed it after every behavior tick (``run_headless(..., on_tick=recorder.on_tick)`` or, in a loop
 of your own, ``loop.tick(); recorder.tick(now_ms)``). Per tick it samples every XABSL agent
-(:class:`~engine.record.sampler.AgentSampler`), writes one activation message per agent, one
-symbols message per agent (all values on key frames every ``key_every`` ticks, the changed
-values in between), a fault message when an agent's fault changes, the world's dynamic scene
-and, for planar worlds, a Foxglove scene. Once, at the start: the header (agents, rates, seed,
-value tables), each program's behavior description and the static scene.
+(:class:`~engine.record.sampler.AgentSampler`) and the world's dynamic scene (its status on key
+frames), and hands them to a :class:`~engine.record.encoder.RecordingEncoder`, which writes the
+MCAP file: in the same thread, or with ``background=True`` in a writer process of its own, so
+that encoding, indexing and compressing leave the simulation's thread (operations are sent in
+batches over a pipe). Once, at the start: the header (agents, rates, seed, value tables), each
+program's behavior description and the static scene.
 
 For the studio (later): :meth:`Recorder.event` writes debugging and session events,
 :meth:`Recorder.reload` starts a new program generation (new description, changed files, fresh
-samplers, a key frame next), :meth:`Recorder.rebind` follows a world that was rebuilt (reset).
-
-The file is written to ``FILE.part`` and renamed to ``FILE`` by :meth:`Recorder.close`, so a
-crashed run never leaves a truncated file under the final name. Message layouts: see
-:mod:`engine.record.schema` and docs/recordings.md.
+samplers, a key frame next), :meth:`Recorder.rebind` follows a world that was rebuilt (a reset).
+Message layouts: :mod:`engine.record.schema` and docs/recordings.md.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from multiprocessing.connection import Connection
 from pathlib import Path
 from types import TracebackType
-from typing import Any, BinaryIO
-
-import orjson
-from mcap.writer import CompressionType, Writer
+from typing import Any
 
 from engine.emit.json import program_to_json
 from engine.host import Agent, World
 from engine.ir.model import Program
-from engine.record import foxglove
 from engine.record import schema as S
+from engine.record.encoder import CHUNK_SIZE, DECIMALS, NO_CHANGE, RecordingEncoder, TickSample
 from engine.record.sampler import AgentSampler, ProgramTables
-from engine.runtime import Engine, Fault
-from engine.types import Ms, Value
+from engine.runtime import Engine, Fault, Root
+from engine.types import Ms
 
-__all__ = ["Recorder", "RecorderStats", "engines_of"]
+__all__ = ["Recorder", "RecorderStats", "RecordingFailed", "engines_of"]
 
-#: Uncompressed bytes per MCAP chunk: small enough that a seek decompresses little (a chunk is
-#: about 2 s of a 10-agent match), large enough for zstd to find the repetition between ticks.
-CHUNK_SIZE = 512 * 1024
-#: Decimal symbol values are kept to this many fractional digits by default: the studio's display
-#: precision (mm, degrees and ms to a thousandth), and a third of the bytes of exact values.
-DECIMALS = 3
+#: Operations per pipe message in background mode: one send per batch keeps the per-tick cost
+#: of the pipe to one list append.
+BATCH = 64
+
+
+class RecordingFailed(Exception):
+    """The writer (in the background process) failed; the message says why."""
 
 
 @dataclass(slots=True)
@@ -67,122 +65,94 @@ def engines_of(world: World) -> list[Engine | None]:
     return engines
 
 
-class _Agent:
-    """Per-agent writer state: channels, sampler, what the last messages said."""
+class _Background:
+    """The encoder in a writer process: operations are batched and sent over a pipe."""
 
-    __slots__ = (
-        "channel",
-        "fault_channel",
-        "gen",
-        "key",
-        "last_assignments",
-        "last_fault",
-        "last_inputs",
-        "last_outputs",
-        "last_roots",
-        "name",
-        "nest_inputs",
-        "nest_outputs",
-        "sampler",
-    )
+    def __init__(self, **encoder: Any) -> None:
+        context = multiprocessing.get_context("spawn")  # no fork of a process that may run threads
+        self._conn, child = context.Pipe()
+        self._process = context.Process(target=_serve, args=(child, encoder), name="xabsl-recorder", daemon=True)
+        self._process.start()
+        child.close()
+        self._batch: list[tuple[Any, ...]] = []
 
-    def __init__(
-        self, name: str, key: str, sampler: AgentSampler, gen: int, channels: tuple[int, int], decimals: int | None
-    ) -> None:
-        self.name = name
+    def handle(self, op: tuple[Any, ...]) -> None:
+        batch = self._batch
+        batch.append(op)
+        if len(batch) >= BATCH:
+            self._send()
+
+    def _send(self) -> None:
+        batch, self._batch = self._batch, []
+        try:
+            self._conn.send(batch)
+        except (BrokenPipeError, EOFError, OSError) as error:
+            raise RecordingFailed(f"the recording process stopped: {self._reply()}") from error
+
+    def _reply(self) -> str:
+        try:
+            if self._conn.poll(5.0):
+                reply = self._conn.recv()
+                return str(reply[1]) if reply[0] == "error" else "no error reported"
+        except (EOFError, OSError):
+            pass
+        return "it exited without a word"
+
+    def close(self) -> tuple[str, int, int, int]:
+        self._batch.append(("close",))
+        self._send()
+        try:
+            reply = self._conn.recv()
+        except EOFError:
+            reply = ("error", "the recording process exited before closing the file")
+        self._process.join(10.0)
+        self._conn.close()
+        if reply[0] == "error":
+            raise RecordingFailed(str(reply[1]))
+        return reply[1]  # type: ignore[no-any-return]
+
+    def abort(self) -> None:
+        try:
+            self._batch.append(("abort",))
+            self._send()
+        except RecordingFailed:
+            pass
+        self._process.join(10.0)
+        if self._process.is_alive():
+            self._process.terminate()
+        self._conn.close()
+
+
+def _serve(conn: Connection, options: dict[str, Any]) -> None:
+    """The writer process: run operations until ``close`` (reply with the stats) or ``abort``."""
+    encoder = RecordingEncoder(**options)
+    try:
+        while True:
+            for op in conn.recv():
+                if op[0] == "close":
+                    conn.send(("ok", encoder.close()))
+                    return
+                if op[0] == "abort":
+                    encoder.abort()
+                    return
+                encoder.handle(op)
+    except Exception as error:  # report it to the simulation side, which raises RecordingFailed
+        encoder.abort()
+        conn.send(("error", f"{type(error).__name__}: {error}"))
+    finally:
+        conn.close()
+
+
+class _Capture:
+    """Per-agent capture state: the sampler and what was last sent (roots and fault by identity)."""
+
+    __slots__ = ("fault", "key", "roots", "sampler")
+
+    def __init__(self, key: str, sampler: AgentSampler) -> None:
         self.key = key
-        self.gen = gen
-        self.channel, self.fault_channel = channels
-        self.bind(sampler, gen, decimals)
-        self.last_fault: Fault | None = None
-
-    def bind(self, sampler: AgentSampler, gen: int, decimals: int | None) -> None:
         self.sampler = sampler
-        self.gen = gen
-        tables = sampler.tables
-        self.nest_inputs = _Nesting(tables.inputs, tables.input_enums, tables.input_decimals, tables.enums, decimals)
-        self.nest_outputs = _Nesting(
-            tables.outputs, tables.output_enums, tables.output_decimals, tables.enums, decimals
-        )
-        self.last_inputs: tuple[Value | None, ...] = ()
-        self.last_outputs: tuple[Value | None, ...] = ()
-        self.last_assignments: tuple[Value | None, ...] | None = None
-        self.last_roots: tuple[Any, ...] | None = None
-
-
-class _Nesting:
-    """Symbol values -> the nested JSON object of a symbols message (``ball.x`` -> ``{"ball": {"x": ..}}``).
-
-    Foxglove's message paths address nested fields with dots (``.inputs.ball.x``) and cannot
-    quote a key that contains one, hence the nesting. A name that is also a namespace of other
-    names (``a`` beside ``a.b``) is stored under the key ``"="`` of that namespace. Enum values
-    are written as element names, decimals rounded to ``decimals`` fractional digits (None: exact).
-    """
-
-    __slots__ = ("_decimal", "_enum", "_keys", "_paths", "_scale")
-
-    def __init__(
-        self,
-        names: tuple[str, ...],
-        enums: tuple[str | None, ...],
-        is_decimal: tuple[bool, ...],
-        tables: dict[str, dict[int, str]],
-        decimals: int | None,
-    ) -> None:
-        namespaces = {name.rsplit(".", k)[0] for name in names for k in range(1, name.count(".") + 1)}
-        paths: list[tuple[str, ...]] = []
-        for name in names:
-            parts = tuple(name.split("."))
-            paths.append((*parts, "=") if name in namespaces else parts)
-        self._paths = tuple(paths)
-        self._keys = names
-        self._enum = tuple(tables.get(e) if e is not None else None for e in enums)
-        self._decimal = is_decimal if decimals is not None else (False,) * len(names)
-        self._scale = 10.0 ** (decimals or 0)
-
-    def encode(self, values: tuple[Value | None, ...], previous: tuple[Value | None, ...]) -> dict[str, Any]:
-        """The nested object of ``values``: every value if ``previous`` is empty, else the changed ones."""
-        out: dict[str, Any] = {}
-        paths, enum, decimal, scale = self._paths, self._enum, self._decimal, self._scale
-        if len(previous) != len(values):
-            changed: Any = range(len(values))
-        elif values == previous:
-            return out
-        else:
-            changed = [
-                i for i, (a, b) in enumerate(zip(values, previous, strict=True)) if a != b or type(a) is not type(b)
-            ]
-        for i in changed:
-            value = values[i]
-            table = enum[i]
-            if table is not None and value is not None:
-                value = table.get(int(value), int(value))
-            elif decimal[i] and value is not None:
-                # ``round(v * s) / s``: exact decimal rounding with round(v, n) costs 3-4x more;
-                # a try beats contextlib.suppress in this loop. NaN and infinities stay (JSON null).
-                try:  # noqa: SIM105
-                    value = round(value * scale) / scale
-                except (ValueError, OverflowError):
-                    pass
-            path = paths[i]
-            depth = len(path)
-            if depth == 2:  # the common case (``ball.x``), without the loop below
-                node = out.get(path[0])
-                if node is None:
-                    node = out[path[0]] = {}
-                node[path[1]] = value
-                continue
-            if depth == 1:
-                out[path[0]] = value
-                continue
-            node = out
-            for part in path[:-1]:
-                child = node.get(part)
-                if child is None:
-                    child = node[part] = {}
-                node = child
-            node[path[-1]] = value
-        return out
+        self.roots: tuple[Root, ...] | None = None
+        self.fault: Fault | int | None = NO_CHANGE
 
 
 class Recorder:
@@ -200,6 +170,8 @@ class Recorder:
         deterministic: whether the run is a pure function of seed and programs (for fork).
         decimals: decimal symbol values are rounded to this many fractional digits (the studio's
             display precision; None: exact). Activation paths and assignment values are always exact.
+        chunk_size: uncompressed bytes per MCAP chunk.
+        background: encode and write in a writer process (the simulation thread only samples).
 
     Raises:
         ValueError: an engine runs a program that is not in ``programs``.
@@ -218,8 +190,9 @@ class Recorder:
         key_every: int = S.KEY_EVERY,
         foxglove_scene: bool = True,
         deterministic: bool = True,
-        chunk_size: int = CHUNK_SIZE,
         decimals: int | None = DECIMALS,
+        chunk_size: int = CHUNK_SIZE,
+        background: bool = False,
     ) -> None:
         if key_every < 1:
             raise ValueError(f"key_every must be at least 1, got {key_every}")
@@ -228,45 +201,35 @@ class Recorder:
         self.programs = dict(programs)
         self.behavior_hz = behavior_hz
         self.key_every = key_every
-        self.decimals = decimals
         self.seq = 0
         self.generation = 0
-        self.messages = 0
         self._closed = False
-        self._force_key = True
-        self._part = self.path.with_name(self.path.name + ".part")
-        self._stream: BinaryIO = open(self._part, "wb")  # noqa: SIM115 -- closed in close()
-        self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
-        self._writer.start(profile=S.PROFILE, library="xabsl-studio")
-        self._schemas = {
-            name: self._writer.register_schema(name, "jsonschema", orjson.dumps(s)) for name, s in S.SCHEMAS.items()
-        }
-        self._schemas[foxglove.SCENE_UPDATE_SCHEMA["title"]] = self._writer.register_schema(
-            foxglove.SCENE_UPDATE_SCHEMA["title"], "jsonschema", orjson.dumps(foxglove.SCENE_UPDATE_SCHEMA)
-        )
-        self._foxglove = foxglove_scene
-        self._channels: dict[str, int] = {}
         self._tables: dict[str, ProgramTables] = {}
-
         engines = list(engines) if engines is not None else engines_of(world)
-        self._agents: list[_Agent | None] = []
+        captures: list[_Capture | None] = []
         keys: list[str | None] = []
-        for agent, engine in zip(world.agents, engines, strict=True):
+        for engine in engines:
             if engine is None:
-                self._agents.append(None)
+                captures.append(None)
                 keys.append(None)
                 continue
             key = self._key_of(engine.program)
             keys.append(key)
-            sampler = AgentSampler(engine, self._tables_for(key, engine))
-            channels = (
-                self._channel(S.agent_topic(agent.name), "xabsl.AgentTick"),
-                self._channel(S.fault_topic(agent.name), "xabsl.Fault"),
-            )
-            self._agents.append(_Agent(agent.name, key, sampler, self.generation, channels, decimals))
-
+            captures.append(_Capture(key, AgentSampler(engine, self._tables_for(key, engine))))
+        self._captures = captures
+        options: dict[str, Any] = {
+            "path": str(self.path),
+            "behavior_hz": behavior_hz,
+            "key_every": key_every,
+            "decimals": decimals,
+            "chunk_size": chunk_size,
+            "foxglove_scene": foxglove_scene,
+        }
+        self._sink: RecordingEncoder | _Background = (
+            _Background(**options) if background else RecordingEncoder(**options)
+        )
         static = world.static_scene()
-        self._write(
+        self._message(
             S.RECORDING,
             "xabsl.Recording",
             {
@@ -289,7 +252,8 @@ class Recorder:
         )
         for key in self._tables:
             self._write_program(key, self.programs[key], "start", ())
-        self._write_static(static)
+        self._bind_all()
+        self._sink.handle(("static", self.seq, static, world.dynamic_scene()))
 
     @classmethod
     def for_world(
@@ -334,22 +298,18 @@ class Recorder:
             tables = self._tables[key] = ProgramTables.of(engine)
         return tables
 
-    def _channel(self, topic: str, schema_name: str) -> int:
-        channel = self._channels.get(topic)
-        if channel is None:
-            channel = self._channels[topic] = self._writer.register_channel(topic, "json", self._schemas[schema_name])
-        return channel
+    def _bind_all(self) -> None:
+        for index, (agent, capture) in enumerate(zip(self.world.agents, self._captures, strict=True)):
+            if capture is not None:
+                self._sink.handle(("agent", index, agent.name, capture.sampler.tables, self.generation))
+                capture.roots = None
+                capture.fault = NO_CHANGE
 
-    def _write(self, topic: str, schema_name: str, message: dict[str, Any]) -> None:
-        self._add(self._channel(topic, schema_name), orjson.dumps(message))
-
-    def _add(self, channel: int, data: bytes) -> None:
-        time_ns = S.tick_time_ns(self.seq, self.behavior_hz)
-        self._writer.add_message(channel, time_ns, data, time_ns, self.seq)
-        self.messages += 1
+    def _message(self, topic: str, schema_name: str, message: dict[str, Any]) -> None:
+        self._sink.handle(("msg", topic, schema_name, self.seq, message))
 
     def _write_program(self, key: str, program: Program, reason: str, changed_files: Sequence[str]) -> None:
-        self._write(
+        self._message(
             S.PROGRAM,
             "xabsl.Program",
             {
@@ -362,14 +322,6 @@ class Recorder:
             },
         )
 
-    def _write_static(self, static: dict[str, Any]) -> None:
-        self._write(S.WORLD_STATIC, "xabsl.StaticScene", {"seq": self.seq, "scene": static})
-        self._scene_builder: foxglove.SceneBuilder | None = None
-        if self._foxglove and foxglove.supports(static, self.world.dynamic_scene()):
-            time_ns = S.tick_time_ns(self.seq, self.behavior_hz)
-            self._write(S.FOXGLOVE_FIELD, "foxglove.SceneUpdate", foxglove.static_update(static, time_ns))
-            self._scene_builder = foxglove.SceneBuilder(static)
-
     # -- per tick -----------------------------------------------------------------------------------
 
     def on_tick(self, now_ms: Ms) -> None:
@@ -378,44 +330,26 @@ class Recorder:
 
     def tick(self, now_ms: Ms) -> None:
         """Record the tick that just ran at engine time ``now_ms``."""
-        seq = self.seq
-        key = self._force_key or seq % self.key_every == 0
-        self._force_key = False
-        dumps = orjson.dumps
-        add = self._add
-        gen = self.generation
-        for agent in self._agents:
-            if agent is None:
+        samples: list[TickSample | None] = []
+        append = samples.append
+        for capture in self._captures:
+            if capture is None:
+                append(None)
                 continue
-            sample = agent.sampler.sample()
-            message: dict[str, Any] = {"seq": seq, "t": now_ms, "gen": gen, "tick": sample.tick, "path": sample.path}
-            if key or sample.roots != agent.last_roots:
-                agent.last_roots = sample.roots
-                message["roots"] = [[r.kind, r.name] for r in sample.roots]
-            if key or sample.assignments != agent.last_assignments:
-                agent.last_assignments = sample.assignments
-                message["assignments"] = sample.assignments
-            message["key"] = key
-            message["inputs"] = agent.nest_inputs.encode(sample.inputs, () if key else agent.last_inputs)
-            message["outputs"] = agent.nest_outputs.encode(sample.outputs, () if key else agent.last_outputs)
-            if sample.unread:
-                message["unread"] = list(sample.unread)
-            agent.last_inputs, agent.last_outputs = sample.inputs, sample.outputs
-            add(agent.channel, dumps(message))
-            # On change, and repeated on key frames while faulted, so a seek from a key frame sees it.
-            if sample.fault != agent.last_fault or (key and sample.fault is not None):
-                agent.last_fault = sample.fault
-                add(agent.fault_channel, dumps({"seq": seq, "t": now_ms, "fault": _fault(sample.fault)}))
+            s = capture.sampler.sample()
+            roots: Any = NO_CHANGE
+            if s.roots is not capture.roots:  # the engine keeps its roots tuple until they change
+                capture.roots = s.roots
+                roots = [[r.kind, r.name] for r in s.roots]
+            fault: Any = NO_CHANGE
+            if s.fault is not capture.fault:
+                capture.fault = s.fault
+                fault = _fault(s.fault)
+            append((s.tick, s.path, s.assignments, s.inputs, s.outputs, roots, fault, s.unread))
+        seq = self.seq
         world = self.world
-        scene = world.dynamic_scene()
-        self._write(S.WORLD_SCENE, "xabsl.DynamicScene", {"seq": seq, "t": now_ms, "scene": scene})
-        builder = self._scene_builder
-        if builder is not None:
-            self._write(
-                S.FOXGLOVE_SCENE, "foxglove.SceneUpdate", builder.update(scene, S.tick_time_ns(seq, self.behavior_hz))
-            )
-        if key:
-            self._write(S.WORLD_STATUS, "xabsl.WorldStatus", {"seq": seq, "t": now_ms, "status": world.status()})
+        status = world.status() if seq % self.key_every == 0 else None
+        self._sink.handle(("tick", seq, now_ms, samples, world.dynamic_scene(), status))
         self.seq = seq + 1
 
     # -- events and generations (the studio) --------------------------------------------------------
@@ -428,7 +362,9 @@ class Recorder:
         """
         if kind not in S.EVENT_KINDS:
             raise ValueError(f"unknown event kind {kind!r} (known: {', '.join(S.EVENT_KINDS)})")
-        self._write(S.EVENTS, "xabsl.Event", {"seq": self.seq, "t": now_ms, "kind": kind, "agent": agent, "data": data})
+        self._message(
+            S.EVENTS, "xabsl.Event", {"seq": self.seq, "t": now_ms, "kind": kind, "agent": agent, "data": data}
+        )
 
     def reload(
         self,
@@ -447,9 +383,9 @@ class Recorder:
         self.generation += 1
         self.programs[key] = program
         self._tables.pop(key, None)
-        for agent, engine in zip(self._agents, engines, strict=True):
-            if agent is not None and engine is not None and engine.program is program:
-                agent.bind(AgentSampler(engine, self._tables_for(key, engine)), self.generation, self.decimals)
+        for capture, engine in zip(self._captures, engines, strict=True):
+            if capture is not None and engine is not None and engine.program is program:
+                capture.sampler = AgentSampler(engine, self._tables_for(key, engine))
         tables = self._tables.get(key)
         self._write_program(key, program, "reload", changed_files)
         self.event(
@@ -461,47 +397,48 @@ class Recorder:
             changed_files=list(changed_files),
             tables=tables.to_json() if tables is not None else None,
         )
-        self._force_key = True
+        self._bind_all()
 
     def rebind(self, world: World, engines: Sequence[Engine | None], now_ms: Ms, reason: str = "reset") -> None:
-        """Follow a world that was rebuilt (a reset): new engines, static scene again, a key frame next.
+        """Follow a world that was rebuilt (a reset): new engines, the static scene again, a key frame next.
 
-        The agents must be the same (names and order) as when recording started.
+        The agents must be the same (names, order, which run engines) as when recording started.
 
         Raises:
             ValueError: the new world has other agents.
         """
-        names = [a.name if a is not None else None for a in self._agents]
-        new_names = [a.name if e is not None else None for a, e in zip(world.agents, engines, strict=True)]
-        if names != new_names:
-            raise ValueError(f"the rebuilt world has other agents: {new_names} instead of {names}")
+        old = [a.name for a, c in zip(self.world.agents, self._captures, strict=True) if c is not None]
+        new = [a.name for a, e in zip(world.agents, engines, strict=True) if e is not None]
+        if old != new or len(world.agents) != len(self._captures):
+            raise ValueError(f"the rebuilt world has other agents: {new} instead of {old}")
         self.world = world
         self.generation += 1
-        for agent, engine in zip(self._agents, engines, strict=True):
-            if agent is not None and engine is not None:
-                agent.bind(AgentSampler(engine, self._tables_for(agent.key, engine)), self.generation, self.decimals)
-                agent.last_fault = None
+        for capture, engine in zip(self._captures, engines, strict=True):
+            if capture is not None and engine is not None:
+                capture.sampler = AgentSampler(engine, self._tables_for(capture.key, engine))
         self.event("reset", now_ms, None, reason=reason, gen=self.generation, seed=int(world.seed))
-        self._write_static(world.static_scene())
-        self._force_key = True
+        self._bind_all()
+        self._sink.handle(("static", self.seq, world.static_scene(), world.dynamic_scene()))
 
     # -- closing --------------------------------------------------------------------------------
 
     def close(self) -> RecorderStats:
-        """Finish the file (summary, indexes) and move it to its final name."""
-        if not self._closed:
-            self._closed = True
-            self._writer.finish()  # type: ignore[no-untyped-call]
-            self._stream.close()
-            os.replace(self._part, self.path)
-        return RecorderStats(str(self.path), self.seq, self.messages, self.path.stat().st_size)
+        """Finish the file (summary, indexes) and move it to its final name.
+
+        Raises:
+            RecordingFailed: the writer process failed.
+        """
+        if self._closed:
+            return RecorderStats(str(self.path), self.seq, -1, self.path.stat().st_size)
+        self._closed = True
+        path, ticks, messages, size = self._sink.close()
+        return RecorderStats(path, ticks, messages, size)
 
     def abort(self) -> None:
         """Stop without a file (an error in the run): the partial file is removed."""
         if not self._closed:
             self._closed = True
-            self._stream.close()
-            self._part.unlink(missing_ok=True)
+            self._sink.abort()
 
     def __enter__(self) -> Recorder:
         return self

@@ -344,3 +344,32 @@ def test_cli_records_a_headless_match(tmp_path: Path) -> None:
         assert recording.header["example"] == "soccer" and len(recording.agents) == 4
         assert len(recording) > 8 * 40  # the match runs pre-game phases beyond the playing time
         assert "/foxglove/scene" in recording.topics()
+
+
+def test_a_writer_process_writes_the_same_file(tmp_path: Path) -> None:
+    files = {}
+    for background in (False, True):
+        world = build_world(6, load_team(DEFAULT_HOME), load_team(DEFAULT_AWAY), players=2)
+        recorder = Recorder.for_world(
+            tmp_path / f"bg{background}.mcap",
+            world,
+            lambda a: ("behavior", "chase")[a.team_index],
+            example="soccer",
+            behavior_hz=40,
+            physics_hz=120,
+            background=background,
+        )
+        loop = BehaviorLoop(world)
+        for _ in range(150):
+            now = loop.now_ms
+            loop.tick()
+            recorder.tick(now)
+        stats = recorder.close()
+        assert stats.ticks == 150
+        files[background] = tmp_path / f"bg{background}.mcap"
+    with Recording(files[False]) as inline, Recording(files[True]) as background_file:
+        for a, b in zip(inline.ticks(), background_file.ticks(), strict=True):
+            assert a.scene == b.scene
+            for name in a.agents:
+                assert a.agents[name].tree() == b.agents[name].tree()
+                assert a.agents[name].inputs == b.agents[name].inputs
