@@ -57,10 +57,11 @@ class RecorderStats:
 
 
 def engines_of(world: World) -> list[Engine | None]:
-    """Per agent of ``world`` the XABSL engine its controller runs (``controller.engine``), or None."""
+    """Per agent of ``world`` the XABSL engine its controller is or runs (``controller.engine``), or None."""
     engines: list[Engine | None] = []
     for agent in world.agents:
-        engine = getattr(agent.controller, "engine", None)
+        controller = agent.controller
+        engine = controller if isinstance(controller, Engine) else getattr(controller, "engine", None)
         engines.append(engine if isinstance(engine, Engine) else None)
     return engines
 

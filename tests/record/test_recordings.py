@@ -373,3 +373,60 @@ def test_a_writer_process_writes_the_same_file(tmp_path: Path) -> None:
             for name in a.agents:
                 assert a.agents[name].tree() == b.agents[name].tree()
                 assert a.agents[name].inputs == b.agents[name].inputs
+
+
+def test_errands_round_trip(tmp_path: Path) -> None:
+    from examples.errands.world import AGENTS_PATH, physics_rate, run_world
+    from examples.errands.world import build_world as build_errands
+
+    world = build_errands(1)
+    engine = world.engine
+    behavior_hz, physics_hz = physics_rate(world.dt)
+    recorder = Recorder.for_world(
+        tmp_path / "e.mcap",
+        world,
+        lambda _: AGENTS_PATH.parent.name,
+        example="errands",
+        behavior_hz=behavior_hz,
+        physics_hz=physics_hz,
+    )
+    snapshots: list[Snapshot] = []
+
+    def on_tick(now: int) -> None:
+        recorder.tick(now)
+        snapshots.append(engine.snapshot())
+
+    run_world(world, 20.0, on_tick=on_tick)
+    recorder.close()
+    with Recording(tmp_path / "e.mcap") as recording:
+        assert len(recording) == len(snapshots) > 0
+        assert "/foxglove/scene" not in recording.topics()  # not a planar robots world: no Foxglove scene
+        for view in recording.ticks():
+            assert view.agents["robot"].tree() == engine.activation(snapshots[view.seq])
+
+
+def test_cli_records_errands(tmp_path: Path) -> None:
+    out = tmp_path / "errands.mcap"
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "engine.cli",
+            "run",
+            "examples/errands",
+            "--duration",
+            "10",
+            "--record",
+            str(out),
+            "--json",
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"},
+    )
+    assert result.returncode == 0, result.stderr
+    with Recording(out) as recording:
+        assert recording.header["example"] == "errands" and recording.agents == ["robot"]
+        assert len(recording) == 10 * recording.behavior_hz
