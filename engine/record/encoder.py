@@ -25,6 +25,8 @@ key frames while faulted, so a seek from a key frame sees it).
 from __future__ import annotations
 
 import os
+from itertools import compress
+from operator import ne
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -105,7 +107,7 @@ class _Nesting:
     are written as element names, decimals rounded to ``decimals`` fractional digits (None: exact).
     """
 
-    __slots__ = ("_decimal", "_enum", "_keys", "_paths", "_scale")
+    __slots__ = ("_decimal", "_enum", "_keys", "_paths", "_positions", "_scale")
 
     def __init__(
         self,
@@ -121,6 +123,7 @@ class _Nesting:
             parts = tuple(name.split("."))
             paths.append((*parts, "=") if name in namespaces else parts)
         self._paths = tuple(paths)
+        self._positions = range(len(names))
         self._keys = names
         self._enum = tuple(tables.get(e) if e is not None else None for e in enums)
         self._decimal = is_decimal if decimals is not None else (False,) * len(names)
@@ -135,9 +138,8 @@ class _Nesting:
         elif values == previous:
             return out
         else:
-            changed = [
-                i for i, (a, b) in enumerate(zip(values, previous, strict=True)) if a != b or type(a) is not type(b)
-            ]
+            # In C: positions where the value differs (``==`` equal values, 0 and 0.0, count as unchanged).
+            changed = compress(self._positions, map(ne, values, previous))
         for i in changed:
             value = values[i]
             table = enum[i]
