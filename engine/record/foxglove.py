@@ -241,10 +241,13 @@ class SceneBuilder:
     """Turns each tick's dynamic scene into a ``foxglove.SceneUpdate`` (one entity ``bodies``).
 
     Robots are cylinders in their team's colour with an arrow for the heading and their name as a
-    label; the ball is a sphere. Sizes and colours are computed once from the static scene.
+    label; the ball is a sphere. Sizes and colours are computed once from the static scene, and
+    the message's objects are built once and updated in place every tick (this runs on every
+    recorded tick): the update :meth:`update` returns is only valid until the next call, so
+    serialize it first.
     """
 
-    __slots__ = ("_agents", "_ball_size", "_colors", "_k", "_robot_size")
+    __slots__ = ("_agents", "_ball", "_ball_size", "_colors", "_entity", "_k", "_robot_size", "_robots", "_update")
 
     def __init__(self, static: Scene) -> None:
         self._k = _scale(static)
@@ -257,81 +260,99 @@ class SceneBuilder:
         b = float(static.get("ball_radius", 50)) * k
         self._robot_size = {"x": 2 * r, "y": 2 * r, "z": 0.1}
         self._ball_size = {"x": 2 * b, "y": 2 * b, "z": 2 * b}
-
-    def update(self, dynamic: Scene, time_ns: int) -> dict[str, Any]:
-        """The SceneUpdate of one tick."""
-        k = self._k
-        size = self._robot_size
-        arrow_length = size["x"] * 1.2
-        cylinders = []
-        arrows = []
-        texts = []
-        names, colors = self._agents, self._colors
-        for i, robot in enumerate(dynamic.get("robots", [])):
-            x, y, heading = robot[0] * k, robot[1] * k, math.radians(robot[2])
-            color = colors[i] if i < len(colors) else _GREY
-            position = {"x": x, "y": y, "z": 0.05}
-            half = heading / 2.0
-            cylinders.append(
-                {
-                    "pose": {"position": position, "orientation": _IDENTITY},
-                    "size": size,
-                    "bottom_scale": 1.0,
-                    "top_scale": 1.0,
-                    "color": color,
-                }
-            )
-            arrows.append(
-                {
-                    "pose": {
-                        "position": position,
-                        "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(half), "w": math.cos(half)},
-                    },
-                    "shaft_length": arrow_length * 0.7,
-                    "shaft_diameter": 0.03,
-                    "head_length": arrow_length * 0.3,
-                    "head_diameter": 0.08,
-                    "color": _WHITE,
-                }
-            )
-            if i < len(names):
-                texts.append(
-                    {
-                        "pose": {"position": {"x": x, "y": y, "z": 0.3}, "orientation": _IDENTITY},
-                        "billboard": True,
-                        "font_size": 12.0,
-                        "scale_invariant": True,
-                        "color": _WHITE,
-                        "text": names[i],
-                    }
-                )
-        spheres = []
-        ball = dynamic.get("ball")
-        if ball is not None:
-            spheres.append(
-                {
-                    "pose": {
-                        "position": {"x": ball[0] * k, "y": ball[1] * k, "z": self._ball_size["z"] / 2},
-                        "orientation": _IDENTITY,
-                    },
-                    "size": self._ball_size,
-                    "color": _BALL,
-                }
-            )
-        entity = {
-            "timestamp": _stamp(time_ns),
+        #: per robot: (position, label position, heading quaternion) dicts shared by its primitives
+        self._robots: list[tuple[dict[str, float], dict[str, float], dict[str, float]]] = []
+        self._ball = {"x": 0.0, "y": 0.0, "z": b}
+        self._entity: dict[str, Any] = {
+            "timestamp": {"sec": 0, "nsec": 0},
             "frame_id": FRAME,
             "id": "bodies",
             "lifetime": _ZERO,
             "frame_locked": False,
             "metadata": [],
-            "arrows": arrows,
+            "arrows": [],
             "cubes": [],
-            "spheres": spheres,
-            "cylinders": cylinders,
+            "spheres": [],
+            "cylinders": [],
             "lines": [],
             "triangles": [],
-            "texts": texts,
+            "texts": [],
             "models": [],
         }
-        return {"deletions": [], "entities": [entity]}
+        self._update = {"deletions": [], "entities": [self._entity]}
+
+    def _add_robot(self, i: int) -> None:
+        position = {"x": 0.0, "y": 0.0, "z": 0.05}
+        label = {"x": 0.0, "y": 0.0, "z": 0.3}
+        heading = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+        self._robots.append((position, label, heading))
+        color = self._colors[i] if i < len(self._colors) else _GREY
+        length = self._robot_size["x"] * 1.2
+        entity = self._entity
+        entity["cylinders"].append(
+            {
+                "pose": {"position": position, "orientation": _IDENTITY},
+                "size": self._robot_size,
+                "bottom_scale": 1.0,
+                "top_scale": 1.0,
+                "color": color,
+            }
+        )
+        entity["arrows"].append(
+            {
+                "pose": {"position": position, "orientation": heading},
+                "shaft_length": length * 0.7,
+                "shaft_diameter": 0.03,
+                "head_length": length * 0.3,
+                "head_diameter": 0.08,
+                "color": _WHITE,
+            }
+        )
+        entity["texts"].append(
+            {
+                "pose": {"position": label, "orientation": _IDENTITY},
+                "billboard": True,
+                "font_size": 12.0,
+                "scale_invariant": True,
+                "color": _WHITE,
+                "text": self._agents[i] if i < len(self._agents) else f"robot {i}",
+            }
+        )
+
+    def update(self, dynamic: Scene, time_ns: int) -> dict[str, Any]:
+        """The SceneUpdate of one tick (valid until the next call)."""
+        k = self._k
+        robots = dynamic.get("robots", [])
+        while len(self._robots) < len(robots):
+            self._add_robot(len(self._robots))
+        if len(self._robots) > len(robots):  # fewer robots than before: drop the extra primitives
+            del self._robots[len(robots) :]
+            for name in ("cylinders", "arrows", "texts"):
+                del self._entity[name][len(robots) :]
+        sin, cos = math.sin, math.cos
+        for (position, label, heading), robot in zip(self._robots, robots, strict=True):
+            x = robot[0] * k
+            y = robot[1] * k
+            half = robot[2] * (math.pi / 360.0)  # half the heading, degrees -> radians
+            position["x"] = label["x"] = x
+            position["y"] = label["y"] = y
+            heading["z"] = sin(half)
+            heading["w"] = cos(half)
+        ball = dynamic.get("ball")
+        entity = self._entity
+        if ball is not None:
+            self._ball["x"] = ball[0] * k
+            self._ball["y"] = ball[1] * k
+            if not entity["spheres"]:
+                entity["spheres"].append(
+                    {
+                        "pose": {"position": self._ball, "orientation": _IDENTITY},
+                        "size": self._ball_size,
+                        "color": _BALL,
+                    }
+                )
+        elif entity["spheres"]:
+            entity["spheres"].clear()
+        stamp = entity["timestamp"]
+        stamp["sec"], stamp["nsec"] = divmod(time_ns, 1_000_000_000)
+        return self._update

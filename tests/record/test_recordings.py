@@ -452,3 +452,25 @@ def test_cli_records_errands(tmp_path: Path) -> None:
     with Recording(out) as recording:
         assert recording.header["example"] == "errands" and recording.agents == ["robot"]
         assert len(recording) == 10 * recording.behavior_hz
+
+
+def test_the_foxglove_scene_shows_the_world_scene_in_metres(live: Live) -> None:
+    with open(live.path, "rb") as stream:
+        scenes: dict[int, Any] = {}
+        updates: dict[int, Any] = {}
+        for _schema, channel, message in make_reader(stream).iter_messages(topics=["/world/scene", "/foxglove/scene"]):
+            data = orjson.loads(message.data)
+            if channel.topic == "/world/scene":
+                scenes[data["seq"]] = data["scene"]
+            else:
+                updates[message.log_time] = data
+    with Recording(live.path) as recording:
+        for seq in (0, 333, TICKS - 1):
+            scene, update = scenes[seq], updates[recording.time_ns(seq)]
+            entity = update["entities"][0]
+            assert entity["frame_id"] == "field"
+            for robot, cylinder, text in zip(scene["robots"], entity["cylinders"], entity["texts"], strict=True):
+                assert cylinder["pose"]["position"]["x"] == pytest.approx(robot[0] / 1000)
+                assert cylinder["pose"]["position"]["y"] == pytest.approx(robot[1] / 1000)
+                assert text["text"] in live.names
+            assert entity["spheres"][0]["pose"]["position"]["x"] == pytest.approx(scene["ball"][0] / 1000)
