@@ -128,7 +128,7 @@ class AgentSampler:
     benchmarks/record_cost.py), most of it ``Engine.path()``.
     """
 
-    __slots__ = ("_read_inputs", "_read_outputs", "engine", "program", "tables")
+    __slots__ = ("_read_inputs", "_read_outputs", "_sites", "engine", "program", "tables")
 
     def __init__(self, engine: Engine, tables: ProgramTables | None = None) -> None:
         self.engine = engine
@@ -136,6 +136,8 @@ class AgentSampler:
         self.tables = tables if tables is not None else ProgramTables.of(engine)
         self._read_inputs: Callable[[], tuple[Value, ...]] = engine.input_sampler(self.tables.inputs)
         self._read_outputs: Callable[[], tuple[Value, ...]] = engine.output_sampler(self.tables.outputs)
+        #: the program has output assignments (only then their values are copied each tick)
+        self._sites = bool(self.tables.assignment_sites)
 
     def sample(self) -> AgentSample:
         """The engine's state after its last tick."""
@@ -155,9 +157,8 @@ class AgentSampler:
         except Exception:
             outputs, bad_out = self._one_by_one(self.tables.outputs, engine.output)
             unread += bad_out
-        return AgentSample(
-            engine.tick, engine.roots, path, engine.snapshot().assignments, inputs, outputs, engine.fault, unread
-        )
+        assignments = engine.snapshot().assignments if self._sites else ()
+        return AgentSample(engine.tick, engine.roots, path, assignments, inputs, outputs, engine.fault, unread)
 
     @staticmethod
     def _one_by_one(
