@@ -276,6 +276,46 @@ class Recording:
             if view.seq >= start:
                 yield view
 
+    def series(
+        self, agent: str, symbols: list[str], start: int = 0, stop: int | None = None, every: int = 1
+    ) -> dict[str, list[tuple[int, Value | str | None]]]:
+        """Per symbol its ``(seq, value)`` pairs over ticks ``start`` .. ``stop - 1`` (for plots).
+
+        Reads only ``agent``'s channel; ``every`` > 1 keeps every n-th tick. Values as recorded
+        (enums as element names); a symbol absent in a tick (not in this program generation)
+        has no pair there.
+
+        Raises:
+            RecordingError: ``agent`` is not a recorded XABSL agent.
+        """
+        if agent not in self.agents:
+            raise RecordingError(f"no agent {agent!r} in {self.path} (agents: {', '.join(self.agents)})")
+        stop = self.ticks_count if stop is None else min(stop, self.ticks_count)
+        out: dict[str, list[tuple[int, Value | str | None]]] = {name: [] for name in symbols}
+        if start >= stop:
+            return out
+        key = start - start % self.key_every
+        values: dict[str, Any] = {}
+        loads = orjson.loads
+        for _schema, _channel, message in self._reader.iter_messages(
+            topics=[S.agent_topic(agent)],
+            starting_at=self.time_ns(key),
+            ending_before=self.time_ns(stop - 1) + 1,
+            log_time_order=False,
+        ):
+            data = loads(message.data)
+            if data["key"]:
+                values = {}
+            _flatten(data["inputs"], values)
+            _flatten(data["outputs"], values)
+            seq = data["seq"]
+            if seq < start or (seq - start) % every:
+                continue
+            for name, pairs in out.items():
+                if name in values:
+                    pairs.append((seq, values[name]))
+        return out
+
     def _decode(self, start: int, stop: int) -> Iterator[TickView]:
         """Views of ticks ``start`` .. ``stop - 1``; ``start`` must be a key frame tick."""
         states = {name: _AgentState() for name in self.agents}

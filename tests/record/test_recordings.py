@@ -474,3 +474,17 @@ def test_the_foxglove_scene_shows_the_world_scene_in_metres(live: Live) -> None:
                 assert cylinder["pose"]["position"]["y"] == pytest.approx(robot[1] / 1000)
                 assert text["text"] in live.names
             assert entity["spheres"][0]["pose"]["position"]["x"] == pytest.approx(scene["ball"][0] / 1000)
+
+
+def test_series_reads_one_symbol_over_time(live: Live) -> None:
+    with Recording(live.path) as recording:
+        series = recording.series("blue2", ["ball.distance", "team.role", "game.state"], 100, 700, every=3)
+        views = {v.seq: v for v in recording.ticks(100, 700)}
+        assert [seq for seq, _ in series["ball.distance"]] == list(range(100, 700, 3))
+        for name, pairs in series.items():
+            for seq, value in pairs:
+                agent = views[seq].agents["blue2"]
+                assert value == {**agent.inputs, **agent.outputs}[name]
+        assert {value for _, value in series["game.state"]} >= {"game.state.ready", "game.state.playing"}
+        with pytest.raises(RecordingError, match="no agent"):
+            recording.series("green7", ["ball.distance"])
