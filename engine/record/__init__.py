@@ -6,6 +6,7 @@
 * :mod:`engine.record.encoder`  :class:`RecordingEncoder`: samples -> MCAP messages (no engine needed)
 * :mod:`engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder
 * :mod:`engine.record.reader`   :class:`Recording`: iterate ticks, seek, rebuild activation trees
+* :mod:`engine.record.fork`     re-simulate a recorded deterministic run to any tick, switch behavior
 
 Independent of the server: the studio records through the same :class:`Recorder`.
 """
