@@ -34,12 +34,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from engine.emit.json import program_to_json
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorSource, Example
 from engine.ir.model import Program
 from engine.lang import Compilation, compile_file
 from server import worker
 from server.channel import Channel, ChannelClosed
-from server.examples import BehaviorSource, Example
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.protocol import HelloReason, Op
 from server.worker import CommandError, WorkerConfig, check_seed, check_speed

@@ -23,6 +23,7 @@ import sys
 from typing import Any
 
 from engine.cli import UsageError
+from engine.errors import CommandLineError
 from engine.files import write_atomically
 from engine.ir.model import Program
 
@@ -51,7 +52,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.set_defaults(func=run)
 
 
-class _BehaviorError(Exception):
+class _BehaviorError(CommandLineError):
     """The behavior cannot be compiled, loaded or run (exit status 1)."""
 
 
@@ -89,7 +90,7 @@ def _load(args: argparse.Namespace) -> Program:
 
 
 def run(args: argparse.Namespace) -> int:
-    from engine.runtime.errors import EngineError
+    from engine.errors import EngineError
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
     if not os.path.isfile(args.inputs):

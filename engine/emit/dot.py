@@ -21,6 +21,7 @@ import shutil
 import subprocess
 
 from engine import ir
+from engine.errors import EmitError
 
 _GRAPH_STYLE = (
     'graph [rankdir=LR, fontname="Helvetica", fontsize=11, bgcolor="transparent", nodesep=0.25, ranksep=0.45];\n'
@@ -116,12 +117,12 @@ def state_machine(option: ir.Option) -> str:
             f'  {quote("s:" + state.name)} [id={quote(f"state_{state.index}")}, label="{_escape_label(label)}", '
             f'shape={shape}, style={style}, fillcolor="#ffffff"{extra}, tooltip={quote(state.doc or state.name)}];'
         )
-    initial = option.state(option.initial_state) if option.initial_state in option._by_name else None
+    initial = option.state(option.initial_state) if option.initial_state in {s.name for s in option.states} else None
     if initial is not None:
         lines.append(f'  "__initial" -> {quote("s:" + initial.name)} [id="initial_edge"];')
     for state in option.states:
         for leaf in ir.leaves(state.decision):
-            if leaf.target is None or leaf.target == state.name or leaf.target not in option._by_name:
+            if leaf.target is None or leaf.target == state.name or leaf.target not in {s.name for s in option.states}:
                 continue
             path = ir.leaf_path(state.decision, leaf.leaf)
             condition = " && ".join(node.text if taken else f"!({node.text})" for node, taken in path)
@@ -138,7 +139,7 @@ def _escape_label(text: str) -> str:
     return text.replace('"', '\\"')
 
 
-class GraphvizMissing(RuntimeError):
+class GraphvizMissing(EmitError, RuntimeError):
     """The Graphviz ``dot`` program is not installed."""
 
 
