@@ -4,13 +4,18 @@ Foxglove's 3D panel (switched to its 2D top-down view) draws ``foxglove.SceneUpd
 world whose scenes follow the planar convention below gets two such channels in a recording: the
 static field once (:func:`static_update`) and the moving bodies every tick (:class:`SceneBuilder`).
 
-The convention (what ``examples/soccer`` scenes already are; lengths in the static scene's
-``units.length``, ``mm`` by default, headings in degrees):
+The convention is the studio's scene vocabulary (``engine.host.Scene``; lengths in the static
+scene's ``units.length``, ``mm`` by default, headings in degrees), plus the soccer field's keys:
 
-* static: ``lines`` ``[[x0, y0, x1, y1], ...]``, ``circles`` ``[[x, y, r], ...]``, optional
-  ``walls`` (lines too), ``goals[].net`` (polylines), ``agents[].team``, ``teams[].color``,
-  ``robot_radius``, ``ball_radius``;
-* dynamic: ``robots`` ``[[x, y, heading], ...]`` in agent order and optional ``ball`` ``[x, y]``.
+* static: ``field`` (``{"x": [lo, hi], "y": [lo, hi]}``, or soccer's ``length``/``width``/
+  ``border``), ``walls`` ``[[x1, y1, x2, y2], ...]``, ``shapes``, ``agents[].team``,
+  ``teams[].color``, ``robot_radius``; soccer: ``lines``, ``circles`` ``[[x, y, r], ...]``,
+  ``goals[].net`` (polylines), ``ball_radius``;
+* dynamic: ``robots`` ``[[x, y, heading], ...]`` in agent order, ``shapes``, optional ``ball``
+  ``[x, y]``.
+
+``shapes`` (circles, rects, segments with ``fill``/``stroke`` colours, ``label``/``caption``
+texts) become outlines, flat discs and boxes, and labels.
 
 A world without ``robots`` in its dynamic scene gets no Foxglove channels (:func:`supports`).
 Everything is written in metres in the frame ``field`` (x towards the right goal, z up). The
@@ -207,8 +212,8 @@ def static_update(static: Scene, time_ns: int) -> dict[str, Any]:
         if net:
             lines.append(_line([(x * k, y * k) for x, y in net], 0, _GREY, width * 2))
     cubes = []
-    field = static.get("field")
-    if field and "length" in field and "width" in field:
+    field = static.get("field") or {}
+    if "length" in field and "width" in field:
         border = float(field.get("border", 0))
         size = {"x": (field["length"] + 2 * border) * k, "y": (field["width"] + 2 * border) * k, "z": 0.001}
         cubes.append(
@@ -218,6 +223,13 @@ def static_update(static: Scene, time_ns: int) -> dict[str, Any]:
                 "color": _GREEN,
             }
         )
+    elif "x" in field and "y" in field:
+        (x0, x1), (y0, y1) = field["x"], field["y"]
+        centre = {"x": (x0 + x1) / 2 * k, "y": (y0 + y1) / 2 * k, "z": -0.002}
+        size = {"x": abs(x1 - x0) * k, "y": abs(y1 - y0) * k, "z": 0.001}
+        cubes.append({"pose": {"position": centre, "orientation": _IDENTITY}, "size": size, "color": _GREEN})
+    texts: list[dict[str, Any]] = []
+    shapes(static.get("shapes", []), k, lines, cubes, texts)
     entity = {
         "timestamp": _stamp(time_ns),
         "frame_id": FRAME,
@@ -231,10 +243,76 @@ def static_update(static: Scene, time_ns: int) -> dict[str, Any]:
         "cylinders": [],
         "lines": lines,
         "triangles": [],
-        "texts": [],
+        "texts": texts,
         "models": [],
     }
     return {"deletions": [], "entities": [entity]}
+
+
+def _css(color: object, default: dict[str, float]) -> dict[str, float]:
+    """A CSS colour of the scene vocabulary (``#rrggbb`` or ``rgba(r, g, b, a)``) as a Foxglove colour."""
+    if not isinstance(color, str):
+        return default
+    text = color.strip()
+    if text.startswith("#") and len(text) == 7:
+        return _color(text)
+    if text.startswith("rgb") and "(" in text and text.endswith(")"):
+        try:
+            parts = [float(p) for p in text[text.index("(") + 1 : -1].split(",")]
+        except ValueError:
+            return default
+        if len(parts) < 3:
+            return default
+        alpha = min(max(parts[3], 0.0), 1.0) if len(parts) > 3 else 1.0
+        r, g, b = (min(max(v / 255.0, 0.0), 1.0) for v in parts[:3])
+        return {"r": r, "g": g, "b": b, "a": alpha}
+    return default
+
+
+def shapes(
+    items: list[dict[str, Any]],
+    k: float,
+    lines: list[dict[str, Any]],
+    cubes: list[dict[str, Any]],
+    texts: list[dict[str, Any]],
+) -> None:
+    """Append the primitives of scene-vocabulary ``shapes`` to ``lines``, ``cubes`` and ``texts``.
+
+    A circle is an outline (thick when filled), a rect a flat box in its fill colour, a segment a
+    line; ``label`` and ``caption`` become texts at the shape.
+    """
+    for item in items:
+        kind = item.get("shape")
+        fill = item.get("fill")
+        color = _css(item.get("stroke") or fill, _WHITE)
+        if kind == "circle":
+            x, y, r = item["x"] * k, item["y"] * k, item["r"] * k
+            loop = [(x + r * math.cos(a * math.tau / 24), y + r * math.sin(a * math.tau / 24)) for a in range(24)]
+            lines.append(_line(loop, 1, color, max(r * 0.3, 0.01) if fill else 0.02))
+        elif kind == "rect":
+            x, y = item["x"] * k, item["y"] * k
+            size = {"x": item["w"] * k, "y": item["h"] * k, "z": 0.05}
+            position = {"x": x, "y": y, "z": 0.025}
+            cubes.append(
+                {"pose": {"position": position, "orientation": _IDENTITY}, "size": size, "color": _css(fill, _GREY)}
+            )
+        elif kind == "segment":
+            x, y = item["x1"] * k, item["y1"] * k
+            lines.append(_line([(x, y), (item["x2"] * k, item["y2"] * k)], 2, color, 0.02))
+        else:
+            continue
+        text = item.get("label") or item.get("caption")
+        if text:
+            texts.append(
+                {
+                    "pose": {"position": {"x": x, "y": y, "z": 0.2}, "orientation": _IDENTITY},
+                    "billboard": True,
+                    "font_size": 12.0,
+                    "scale_invariant": True,
+                    "color": _WHITE,
+                    "text": str(text),
+                }
+            )
 
 
 class SceneBuilder:
@@ -247,7 +325,18 @@ class SceneBuilder:
     serialize it first.
     """
 
-    __slots__ = ("_agents", "_ball", "_ball_size", "_colors", "_entity", "_k", "_robot_size", "_robots", "_update")
+    __slots__ = (
+        "_agents",
+        "_ball",
+        "_ball_size",
+        "_colors",
+        "_entity",
+        "_k",
+        "_robot_size",
+        "_robots",
+        "_shapes_shown",
+        "_update",
+    )
 
     def __init__(self, static: Scene) -> None:
         self._k = _scale(static)
@@ -280,6 +369,7 @@ class SceneBuilder:
             "models": [],
         }
         self._update = {"deletions": [], "entities": [self._entity]}
+        self._shapes_shown = False
 
     def _add_robot(self, i: int) -> None:
         position = {"x": 0.0, "y": 0.0, "z": 0.05}
@@ -355,4 +445,16 @@ class SceneBuilder:
             entity["spheres"].clear()
         stamp = entity["timestamp"]
         stamp["sec"], stamp["nsec"] = divmod(time_ns, 1_000_000_000)
+        items = dynamic.get("shapes")
+        if items or self._shapes_shown:
+            # The world's moving shapes (objects, sensor rays): few, rebuilt every tick; an empty
+            # entity once they are gone replaces the last ones.
+            lines: list[dict[str, Any]] = []
+            cubes: list[dict[str, Any]] = []
+            texts: list[dict[str, Any]] = []
+            shapes(items or [], k, lines, cubes, texts)
+            self._shapes_shown = bool(items)
+            moving = {**entity, "id": "shapes", "arrows": [], "spheres": [], "cylinders": []}
+            moving.update({"lines": lines, "cubes": cubes, "texts": texts})
+            return {"deletions": [], "entities": [entity, moving]}
         return self._update

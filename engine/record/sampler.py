@@ -9,7 +9,7 @@ the engine's public per-tick views only and without converting anything:
 * the input symbols without parameters (``Engine.input_sampler``, overrides included) and the
   output/internal symbols (``Engine.output_sampler``), as tuples of raw values (exact floats,
   enums as host integers);
-* the root actions and the fault.
+* the root actions (``Engine.root_actions.roots``) and the fault.
 
 Converting for display (rounding, enum names) and comparing with the previous tick are left to
 the consumer, which can do it off the simulation's tick: the recorder encodes deltas, the
@@ -158,7 +158,8 @@ class AgentSampler:
             outputs, bad_out = self._one_by_one(self.tables.outputs, engine.output)
             unread += bad_out
         assignments = engine.snapshot().assignments if self._sites else ()
-        return AgentSample(engine.tick, engine.roots, path, assignments, inputs, outputs, engine.fault, unread)
+        roots = engine.root_actions.roots
+        return AgentSample(engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread)
 
     @staticmethod
     def _one_by_one(

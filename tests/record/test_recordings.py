@@ -422,9 +422,24 @@ def test_errands_round_trip(tmp_path: Path) -> None:
     recorder.close()
     with Recording(tmp_path / "e.mcap") as recording:
         assert len(recording) == len(snapshots) > 0
-        assert "/foxglove/scene" not in recording.topics()  # not a planar robots world: no Foxglove scene
+        assert recording.topics()["/foxglove/scene"] == "foxglove.SceneUpdate"  # the scene vocabulary's robots
         for view in recording.ticks():
             assert view.agents["robot"].tree() == engine.activation(snapshots[view.seq])
+    _validate_all(tmp_path / "e.mcap")  # the arena's shapes (static and moving) as Foxglove primitives
+
+
+def _validate_all(path: Path) -> Counter[str]:
+    with open(path, "rb") as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        assert summary is not None
+        validators = {i: jsonschema.Draft202012Validator(orjson.loads(s.data)) for i, s in summary.schemas.items()}
+        checked = Counter[str]()
+        for schema, _channel, message in reader.iter_messages(log_time_order=False):
+            assert schema is not None
+            validators[schema.id].validate(orjson.loads(message.data))
+            checked[schema.name] += 1
+    return checked
 
 
 def test_cli_records_errands(tmp_path: Path) -> None:
