@@ -17,6 +17,7 @@ Message layouts: :mod:`engine.record.schema` and docs/recordings.md.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 from collections.abc import Callable, Mapping, Sequence
@@ -126,8 +127,9 @@ class _Background:
 
 def _serve(conn: Connection, options: dict[str, Any]) -> None:
     """The writer process: run operations until ``close`` (reply with the stats) or ``abort``."""
-    encoder = RecordingEncoder(**options)
+    encoder: RecordingEncoder | None = None
     try:
+        encoder = RecordingEncoder(**options)
         while True:
             for op in conn.recv():
                 if op[0] == "close":
@@ -138,8 +140,10 @@ def _serve(conn: Connection, options: dict[str, Any]) -> None:
                     return
                 encoder.handle(op)
     except Exception as error:  # report it to the simulation side, which raises RecordingFailed
-        encoder.abort()
-        conn.send(("error", f"{type(error).__name__}: {error}"))
+        if encoder is not None:
+            encoder.abort()
+        with contextlib.suppress(OSError):
+            conn.send(("error", f"{type(error).__name__}: {error}"))
     finally:
         conn.close()
 

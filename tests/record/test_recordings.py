@@ -17,7 +17,7 @@ from mcap.reader import make_reader
 
 from engine.host import BehaviorLoop
 from engine.lang import compile_file
-from engine.record import Recorder, Recording, RecordingError
+from engine.record import Recorder, Recording, RecordingError, RecordingFailed
 from engine.record import schema as S
 from engine.runtime import Engine, Snapshot
 from examples.soccer.game import GameState
@@ -503,3 +503,61 @@ def test_series_reads_one_symbol_over_time(live: Live) -> None:
         assert {value for _, value in series["game.state"]} >= {"game.state.ready", "game.state.playing"}
         with pytest.raises(RecordingError, match="no agent"):
             recording.series("green7", ["ball.distance"])
+
+
+def test_rebind_follows_a_rebuilt_world(tmp_path: Path) -> None:
+    home, away = load_team(DEFAULT_HOME), load_team(DEFAULT_AWAY)
+    world = build_world(3, home, away, players=1)
+    recorder = Recorder(
+        tmp_path / "reset.mcap",
+        world,
+        {"behavior": home, "chase": away},
+        example="soccer",
+        behavior_hz=40,
+        physics_hz=120,
+    )
+    snapshots = []
+    for segment in range(2):
+        if segment == 1:  # a reset: a new world of another seed, new engines, the clock starts again
+            world = build_world(4, home, away, players=1)
+            recorder.rebind(world, [a.controller.engine for a in world.agents], 0)  # type: ignore[union-attr]
+        loop = BehaviorLoop(world)
+        engines = [a.controller.engine for a in world.agents]  # type: ignore[union-attr]
+        for _ in range(100):
+            now = loop.now_ms
+            loop.tick()
+            recorder.tick(now)
+            snapshots.append([(e, e.snapshot()) for e in engines])
+    with pytest.raises(ValueError, match="other agents"):
+        recorder.rebind(build_world(5, home, away, players=2), [None] * 4, 0)
+    recorder.close()
+    with Recording(tmp_path / "reset.mcap") as recording:
+        assert len(recording) == 200 and len(recording.static_scenes) == 2
+        assert [(e["kind"], e["seq"], e["data"]["seed"]) for e in recording.events] == [("reset", 100, 4)]
+        assert recording.tick(99).t == 99 * 25 and recording.tick(100).t == 0  # seq goes on, the clock restarts
+        for view in recording.ticks():
+            assert view.agents["blue1"].gen == (view.seq >= 100)
+            for name, (engine, snapshot) in zip(("blue1", "red1"), snapshots[view.seq], strict=True):
+                assert view.agents[name].tree() == engine.activation(snapshot)
+
+
+def test_a_failing_writer_process_is_reported(tmp_path: Path) -> None:
+    world = build_world(1, load_team(DEFAULT_HOME), load_team(DEFAULT_AWAY), players=1)
+    recorder = Recorder.for_world(
+        tmp_path / "missing" / "x.mcap",  # the folder does not exist: the writer process cannot open the file
+        world,
+        lambda a: ("behavior", "chase")[a.team_index],
+        example="soccer",
+        behavior_hz=40,
+        physics_hz=120,
+        background=True,
+    )
+    with pytest.raises(RecordingFailed, match="No such file or directory"):
+        loop = BehaviorLoop(world)
+        for _ in range(200):
+            now = loop.now_ms
+            loop.tick()
+            recorder.tick(now)
+        recorder.close()
+    recorder.abort()  # after a failure: no file, no process left, no second error
+    assert not (tmp_path / "missing").exists()
