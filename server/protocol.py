@@ -91,6 +91,7 @@ class Op(enum.StrEnum):
     EXPLAIN = "explain"
     HISTORY = "history"
     STATUS = "status"
+    WORLD_COMMAND = "world_command"
 
 
 class HelloReason(enum.StrEnum):

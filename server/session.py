@@ -334,6 +334,9 @@ class Session:
         ok, result, error = await self._send(op, args, owner)
         if not ok:
             raise CommandError(error)
+        if op in (Op.PAUSE, Op.RESUME):
+            # a paused simulation sends no sample that would carry the new state: mirror the answer
+            self.paused = bool(result["paused"])
         return result
 
     async def _send(self, op: str, args: Mapping[str, Any], owner: str | None) -> tuple[bool, Any, str | None]:

@@ -38,7 +38,15 @@ from typing import Any
 
 import orjson
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, Example, World
+from engine.host import (
+    DEFAULT_BEHAVIOR_HZ,
+    DEFAULT_PHYSICS_HZ,
+    BehaviorLoop,
+    CommandableWorld,
+    Example,
+    World,
+    WorldCommandError,
+)
 from engine.ir.model import Program, leaf_path
 from engine.runtime import DebugError, Debugger, Engine, EngineError
 from engine.types import Value
@@ -416,6 +424,25 @@ class Simulation:
 
     def _op_status(self, args: Mapping[str, Any], owner: str | None) -> Any:
         return self.status()
+
+    def _op_world_command(self, args: Mapping[str, Any], owner: str | None) -> Any:
+        """A command of the world itself (``engine.host.CommandableWorld``); without ``name``: the list."""
+        world = self.world
+        if not isinstance(world, CommandableWorld):
+            raise CommandError("this world has no commands")
+        name = args.get("name")
+        if name is None:
+            return {"commands": world.commands()}
+        given = args.get("args", {})
+        if not isinstance(name, str) or not isinstance(given, dict):
+            raise CommandError("name must be a command name and args an object")
+        try:
+            result = world.command(name, given)
+        except WorldCommandError as error:
+            raise CommandError(str(error)) from None
+        if self.paused:  # a paused client must see what the command changed
+            self.emit(self.sample(), False)
+        return result
 
     def _op_apply(self, args: Mapping[str, Any], owner: str | None) -> Any:
         """Internal: hot-swap a program the server compiled clean (``key``, ``program``, ``json``)."""

@@ -18,6 +18,10 @@ import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
 import { TopBar } from "./panels/topbar";
+import { DynamicsPanel } from "./panels/dynamics";
+import { FactsPanel } from "./panels/facts";
+import { PlanPanel } from "./panels/plan";
+import { panelsOf } from "./panels/world";
 import { Session, type SessionEvent } from "./session";
 import { h, isTyping, toast } from "./ui";
 
@@ -81,8 +85,11 @@ function main(): void {
         ["Space", "pause / resume"],
         [".", "step one tick (pauses first)"],
         ["← →  (in the timeline)", "step back / forward in time"],
-        ["L  or  End", "back to live"],
-        ["G / O / E", "option graph / option view / editor"],
+        ["L  or  End", "back to live (End also from a dropdown)"],
+        ["G / O", "option graph / option view"],
+        ["E", "editor, at the option shown in the option view"],
+        ["Esc then Tab (in the editor)", "move the focus out of the editor"],
+        ["D / P / F", "dual dynamics / plan / facts (worlds that have them)"],
         ["A / S / X", "activation tree / symbols / test panel"],
         ["/", "find an option in the graph"],
         ["J", "jump to the active option"],
@@ -118,6 +125,10 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
+  // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
+  const dynamics = new DynamicsPanel(session, connection);
+  const plan = new PlanPanel(session, connection);
+  const facts = new FactsPanel(session, connection);
 
   const rerender = new Set<SessionEvent>(["hello", "select", "cursor", "option", "history"]);
   const forceAll = (): void => {
@@ -129,9 +140,16 @@ function main(): void {
       { name: "graph", label: "Option graph", key: "G", pane: graph.element },
       { name: "option", label: "Option", key: "O", pane: optionView.element },
       { name: "editor", label: "Editor", key: "E", pane: editor.element },
+      { name: "dynamics", label: "Dynamics", key: "D", pane: dynamics.element },
+      { name: "plan", label: "Plan", key: "P", pane: plan.element },
+      { name: "facts", label: "Facts", key: "F", pane: facts.element },
     ],
     forceAll,
   );
+  const worldPanels = (): void => {
+    const announced = panelsOf(session.scene);
+    for (const name of ["dynamics", "plan", "facts"]) center.setAvailable(name, announced.includes(name));
+  };
   const right = layout.tabs(
     "right",
     [
@@ -191,6 +209,10 @@ function main(): void {
       if (center.isActive("graph")) graph.render(changes);
       if (center.isActive("option")) optionView.render(changes);
       if (center.isActive("editor")) editor.render(changes);
+      if (changes.has("hello")) worldPanels();
+      if (center.isActive("dynamics") || changes.has("hello")) dynamics.render(changes);
+      if (center.isActive("plan") || changes.has("hello")) plan.render(changes);
+      if (center.isActive("facts") || changes.has("hello")) facts.render(changes);
       if (right.isActive("activation")) activation.render(changes);
       if (right.isActive("symbols")) symbols.render(changes);
       if (right.isActive("test")) tester.render(changes);
@@ -211,7 +233,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 
@@ -219,7 +241,16 @@ function main(): void {
   document.addEventListener("keydown", (ev) => {
     if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
     if (isTyping(ev)) {
-      if (ev.key === "Escape") (document.activeElement as HTMLElement | null)?.blur();
+      const target = ev.target as HTMLElement;
+      // A dropdown keeps its arrows and letters, but End is "back to live" there too (natively
+      // it would pick the last choice: 20x in the speed dropdown).
+      if (target.tagName === "SELECT" && (ev.key === "End" || ev.key === "Escape")) {
+        target.blur();
+        if (ev.key === "End") session.setCursor(null);
+        ev.preventDefault();
+      } else if (ev.key === "Escape" && !target.closest(".cm-editor")) target.blur();
+      // In the editor Escape belongs to CodeMirror (closing completion, search, the lint panel);
+      // focus stays, so the next letters are text. Escape then Tab moves focus on.
       return;
     }
     const key = ev.key;
@@ -233,7 +264,14 @@ function main(): void {
     else if (key === "l" || key === "L" || key === "End") session.setCursor(null);
     else if (key === "g") center.activate("graph");
     else if (key === "o") center.activate("option");
-    else if (key === "e") center.activate("editor");
+    else if (key === "e") {
+      // E opens the file of the option shown in the option view, at its declaration; in the
+      // editor already it only gives the focus back to the text.
+      const option = center.isActive("editor") ? null : optionView.current();
+      center.activate("editor");
+      if (option?.span) editor.openSpan(option.span);
+      else editor.editorView.focus();
+    }
     else if (key === "a") right.activate("activation");
     else if (key === "s") {
       right.activate("symbols");
@@ -247,6 +285,8 @@ function main(): void {
       graph.jump();
     } else if (key === "w") {
       center.activate("option");
+    } else if ((key === "d" || key === "p" || key === "f") && center.isAvailable({ d: "dynamics", p: "plan", f: "facts" }[key])) {
+      center.activate({ d: "dynamics", p: "plan", f: "facts" }[key]);
     } else if (key === "t") layout.toggleTheme();
     else if (key === "?") help.showModal();
     else if (key === "ArrowLeft" && !session.isLive) session.stepCursor(-1);
@@ -255,6 +295,7 @@ function main(): void {
     ev.preventDefault();
   });
 
+  worldPanels(); // none until a world announces them (a remembered world tab falls back)
   connection.start();
   forceAll();
   requestAnimationFrame(loop);

@@ -197,7 +197,8 @@ export type CommandOp =
   | "reload"
   | "explain"
   | "history"
-  | "status";
+  | "status"
+  | "world_command";
 
 export interface Subscribe {
   type: "subscribe";

@@ -9,6 +9,7 @@
 /// `dash`, `label` (text centred on the shape) and `caption` (text below it).
 import type { AgentInfo, StaticScene, Tick } from "../protocol";
 import type { Session, SessionEvent } from "../session";
+import { type LabelBox, type LabelRequest, placeLabels } from "../labels";
 import { h } from "../ui";
 import { roleOf } from "./roles";
 
@@ -47,6 +48,8 @@ export class FieldPanel {
   private readonly canvas: HTMLCanvasElement;
   private readonly ctx: CanvasRenderingContext2D;
   private background: HTMLCanvasElement | null = null;
+  /// The robot labels drawn last, in canvas pixels (tests check that they never overlap).
+  labelBoxes: LabelBox[] = [];
   private scale = 1;
   private cx = 0;
   private cy = 0;
@@ -250,6 +253,8 @@ export class FieldPanel {
     ctx.font = `600 ${Math.max(9, Math.round(radius * 1.05))}px system-ui, sans-serif`;
     ctx.textAlign = "center";
     ctx.textBaseline = "middle";
+    const labels: Array<LabelRequest & { fault: boolean }> = [];
+    const labelSize = Math.max(9, Math.round(radius * 0.8));
     robots.forEach(([x, y, heading], i) => {
       const agent = session.agents[i];
       const state = tick.agents.find((a) => a.id === (agent?.id ?? i));
@@ -281,11 +286,22 @@ export class FieldPanel {
       const role = agent ? roleOf(session, agent.id, state ?? null) : null;
       const tag = [role, state?.forced ? "forced" : null, state?.fault ? "FAULT" : null].filter((s) => s).join(" · ");
       if (tag) {
-        ctx.font = `500 ${Math.max(9, Math.round(radius * 0.8))}px system-ui, sans-serif`;
-        ctx.fillStyle = state?.fault ? "#ffb3b3" : "rgba(255,255,255,0.92)";
-        ctx.fillText(tag, sx, sy + radius + Math.max(8, radius * 0.9));
+        ctx.font = `500 ${labelSize}px system-ui, sans-serif`;
+        labels.push({ cx: sx, cy: sy, radius: radius + 2, w: ctx.measureText(tag).width, h: labelSize, text: tag, fault: !!state?.fault });
         ctx.font = `600 ${Math.max(9, Math.round(radius * 1.05))}px system-ui, sans-serif`;
       }
+    });
+    // Labels last, where they overlap neither another label nor a robot (labels.ts).
+    ctx.font = `500 ${labelSize}px system-ui, sans-serif`;
+    ctx.textAlign = "left";
+    ctx.textBaseline = "top";
+    const boxes = placeLabels(labels);
+    this.labelBoxes = [];
+    boxes.forEach((box, i) => {
+      if (!box) return;
+      ctx.fillStyle = labels[i]?.fault ? "#ffb3b3" : "rgba(255,255,255,0.92)";
+      ctx.fillText(box.text, box.x, box.y);
+      this.labelBoxes.push(box);
     });
     if (scene?.ball) {
       const [bx, by] = this.toScreen(scene.ball[0], scene.ball[1]);
