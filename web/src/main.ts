@@ -62,7 +62,7 @@ function main(): void {
     center.activate("option");
   };
   const openBehavior = (id: number): void => {
-    const b = session.indexOf(session.selectedAgent)?.behaviorById.get(id);
+    const b = session.indexOf(session.selectedRobot)?.behaviorById.get(id);
     if (b) {
       tester.choose({ kind: "behavior", name: b.name });
       right.activate("test");
@@ -81,7 +81,7 @@ function main(): void {
       "table",
       {},
       ...[
-        ["1 … 9, 0", "select agent"],
+        ["1 … 9, 0", "select robot"],
         ["Space", "pause / resume"],
         [".", "step one tick (pauses first)"],
         ["← →  (in the timeline)", "step back / forward in time"],
@@ -254,11 +254,11 @@ function main(): void {
       return;
     }
     const key = ev.key;
-    const agents = session.agents;
+    const robots = session.robots;
     if (/^[0-9]$/.test(key)) {
       const i = key === "0" ? 9 : Number(key) - 1;
-      const agent = agents[i];
-      if (agent) session.selectAgent(agent.id);
+      const robot = robots[i];
+      if (robot) session.selectRobot(robot.id);
     } else if (key === " ") topbar.togglePause();
     else if (key === ".") topbar.step();
     else if (key === "l" || key === "L" || key === "End") session.setCursor(null);

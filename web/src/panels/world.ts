@@ -71,7 +71,7 @@ export function sceneOf(session: Session): DDScene | null {
 
 /// Run one world command; rejects with the server's message.
 export function worldCommand<T = unknown>(connection: Connection, name: string, args: Record<string, unknown> = {}): Promise<T> {
-  return connection.command<T>("world_command", { name, args });
+  return connection.command("world_command", { name, args }) as Promise<T>;
 }
 
 /// One form per command of `group`: its arguments as selects/inputs and a button to run it.
