@@ -154,6 +154,7 @@ class Declarations:
                     decl.unit if kind is Kind.DECIMAL else None,
                     decl.doc,
                     decl.name.span,
+                    owner,
                 )
             )
         return tuple(params)
