@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from engine.host import AgentController, Scene
-from engine.ir.model import Program
+from engine.ir.model import Program, short_name
 from engine.runtime import BasicBehavior, Engine
 from engine.trace.conformance import conformance_bindings
 from engine.types import Value
@@ -174,7 +174,7 @@ class _Skill(BasicBehavior):
         self.agent = agent
 
     def execute(self) -> None:
-        params = {name.rsplit(".", 1)[-1]: value for name, value in self.params.items()}
+        params = {short_name(name, self.name): value for name, value in self.params.items()}
         type(self).run(self.agent, params)
 
 

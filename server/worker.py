@@ -454,7 +454,7 @@ class Simulation:
         if not isinstance(given, dict):
             raise CommandError("params must be an object of parameter values")
         by_name = {p.name: p for p in declared}
-        by_short = {p.name.rsplit(".", 1)[-1]: p for p in declared}
+        by_short = {p.short_name: p for p in declared}  # dots kept: "robot.x" of "walk.to"
         result: dict[str, Value | str] = {}
         for key, value in given.items():
             param = by_name.get(key) or by_short.get(key)

@@ -30,7 +30,7 @@ from functools import partial
 from operator import attrgetter
 from typing import Any, ClassVar
 
-from engine.ir.model import Parameter
+from engine.ir.model import Parameter, short_name
 from engine.types import Kind, Ms, Value
 
 __all__ = ["BasicBehavior", "Bindings", "InputBinding", "OutputBinding"]
@@ -126,7 +126,8 @@ class BasicBehavior:
         self._names = tuple(names)
         for i, name in enumerate(names):
             self._index[name] = i
-            self._index.setdefault(name.rsplit(".", 1)[-1], i)
+            # the declared name: only the behavior's prefix goes ("walk.to.robot.x" -> "robot.x")
+            self._index.setdefault(short_name(name, self.name), i)
 
     def param(self, name: str) -> Value:
         """The current value of parameter ``name`` (qualified or short)."""
