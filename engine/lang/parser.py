@@ -40,6 +40,22 @@ IO_KEYWORDS = frozenset({"input", "output", "internal"})
 STATE_START = frozenset({"initial", "target", "state"})
 
 
+#: How deep decision trees (``if``/``else`` and braces, also of the common decision) may nest.
+#: Deeper input fails at once with ``nesting-too-deep`` instead of recursing to Python's limit.
+MAX_DECISION_DEPTH = 1000
+#: How deep expressions (parentheses, unary operators, call arguments, ``?:``) may nest.
+MAX_EXPRESSION_DEPTH = 1000
+
+
+class _TooDeepError(Exception):
+    """Nesting beyond a limit: the rest of the file is not parsed (like a RecursionError)."""
+
+    def __init__(self, token: Token, message: str) -> None:
+        super().__init__(message)
+        self.token = token
+        self.message = message
+
+
 class _SyntaxError(Exception):
     def __init__(self, token: Token, message: str, code: str = "syntax-error") -> None:
         super().__init__(message)
@@ -55,6 +71,9 @@ def parse_file(path: str, text: str, diagnostics: Diagnostics) -> ast.SourceFile
     parser = _Parser(path, text, tokens, diagnostics, truncated)
     try:
         return parser.parse()
+    except _TooDeepError as deep:
+        diagnostics.add("nesting-too-deep", deep.message, deep.token.span, path)
+        return ast.SourceFile(path, text)
     except RecursionError:
         token = parser.tok
         diagnostics.add(
@@ -71,6 +90,9 @@ class _Parser:
         self.diagnostics = diagnostics
         self.truncated = truncated
         self.pos = 0
+        #: current nesting of decision trees and of expressions (see the MAX_* limits)
+        self.decision_depth = 0
+        self.expression_depth = 0
 
     @functools.cached_property
     def depth(self) -> list[int]:
@@ -416,12 +438,33 @@ class _Parser:
         start = self.advance().span
         self.advance()  # 'decision'
         branches: list[ast.IfElse] = []
-        if self.tok.is_op("{") or self.tok.is_kw("if") or self.tok.type is TokenType.DOC_COMMENT:
+        if self.tok.is_op("{"):
+            # the braces of `common decision { }` are no nesting level (as `decision { }`'s)
+            self.advance()
+            self.parse_cdtree(branches)
+            self.expect_op("}")
+        elif self.tok.is_kw("if") or self.tok.type is TokenType.DOC_COMMENT:
             self.parse_cdtree(branches)
         return ast.CommonDecision(branches, self.span_from(start))
 
     def parse_cdtree(self, branches: list[ast.IfElse]) -> None:
         """``cdtree ::= '{' cdtree '}' | [DOC] if (exp) dtree [[DOC] else cdtree]``."""
+        self.enter_decision()
+        try:
+            self.parse_cdtree_level(branches)
+        finally:
+            self.decision_depth -= 1
+
+    def enter_decision(self) -> None:
+        self.decision_depth += 1
+        if self.decision_depth > MAX_DECISION_DEPTH:
+            raise _TooDeepError(
+                self.tok,
+                f"decision trees nest deeper than {MAX_DECISION_DEPTH} levels here; "
+                "split the decision with a sub-option or flatten it with && and ||",
+            )
+
+    def parse_cdtree_level(self, branches: list[ast.IfElse]) -> None:
         if self.tok.is_op("{"):
             self.advance()
             self.parse_cdtree(branches)
@@ -446,6 +489,15 @@ class _Parser:
 
     def parse_dtree(self) -> ast.DTree:
         token = self.tok
+        if token.is_kw("goto") or token.is_kw("stay"):
+            return self.parse_dtree_level(token)
+        self.enter_decision()
+        try:
+            return self.parse_dtree_level(token)
+        finally:
+            self.decision_depth -= 1
+
+    def parse_dtree_level(self, token: Token) -> ast.DTree:
         if token.is_op("{"):
             self.advance()
             tree = self.parse_dtree()
@@ -574,6 +626,22 @@ class _Parser:
 
     def parse_expression(self) -> ast.Expr:
         """``?:`` is non-associative: its else-branch may not itself be an unparenthesised ``?:``."""
+        self.enter_expression()
+        try:
+            return self.parse_conditional()
+        finally:
+            self.expression_depth -= 1
+
+    def enter_expression(self) -> None:
+        self.expression_depth += 1
+        if self.expression_depth > MAX_EXPRESSION_DEPTH:
+            raise _TooDeepError(
+                self.tok,
+                f"expressions nest deeper than {MAX_EXPRESSION_DEPTH} levels here "
+                "(parentheses, unary operators, calls)",
+            )
+
+    def parse_conditional(self) -> ast.Expr:
         condition = self.parse_binary(0)
         if not self.tok.is_op("?"):
             return condition
@@ -602,7 +670,11 @@ class _Parser:
         token = self.tok
         if token.is_op("-") or token.is_op("!"):
             self.advance()
-            operand = self.parse_unary()
+            self.enter_expression()
+            try:
+                operand = self.parse_unary()
+            finally:
+                self.expression_depth -= 1
             return ast.UnaryOp(token.text, operand, token.span.to(_expr_span(operand)), token.span)
         return self.parse_primary()
 
