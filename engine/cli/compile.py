@@ -16,7 +16,7 @@ import orjson
 
 from engine.cli import UsageError
 from engine.emit.ic import emit_ic
-from engine.emit.json import program_to_json
+from engine.emit.json import dumps, program_to_json
 from engine.files import write_atomically
 from engine.lang import compile_file, deep_recursion
 
@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
                 write_atomically(args.ic, text.encode("utf-8"))
             if args.json:
                 document = program_to_json(compilation.program, compilation.source_text)
-                write_atomically(args.json, orjson.dumps(document, option=orjson.OPT_INDENT_2))
+                write_atomically(args.json, dumps(document))
         except OSError as error:
             raise UsageError(f"cannot write output: {error.strerror}: {error.filename}") from error
     finished = time.perf_counter()

@@ -44,9 +44,7 @@ def render_expression(e: ir.Expression, option: str = "") -> str:
         case ir.InputRef(symbol=symbol, args=args):
             if not args:
                 return symbol
-            inner = ", ".join(
-                f"{ir.short_name(a.param, symbol)} = {render_expression(a.value, option)}" for a in args
-            )
+            inner = ", ".join(f"{ir.short_name(a.param, symbol)} = {render_expression(a.value, option)}" for a in args)
             return f"{symbol}({inner})"
         case ir.OutputRef(symbol=symbol):
             return symbol
@@ -259,3 +257,30 @@ class _Exporter:
 def program_to_json(program: ir.Program, source_text: SourceText | None = None) -> dict[str, Any]:
     """The JSON document of a program (plain dicts and lists, ready for orjson)."""
     return _Exporter(source_text).program(program)
+
+
+#: Nesting the standard library's encoder may need: a decision tree nests one object per level.
+_DEEP_RECURSION = 12_000
+
+
+def dumps(document: Any, *, indent: bool = True) -> bytes:
+    """``document`` as UTF-8 JSON, at any nesting depth.
+
+    orjson refuses documents nested deeper than 255 levels, which a long ``else if`` chain (one
+    object per level) reaches; those go through the standard library's encoder instead.
+    """
+    import orjson
+
+    try:
+        return orjson.dumps(document, option=orjson.OPT_INDENT_2 if indent else 0)
+    except orjson.JSONEncodeError:
+        import json
+        import sys
+
+        previous = sys.getrecursionlimit()
+        sys.setrecursionlimit(max(previous, _DEEP_RECURSION))
+        try:
+            text = json.dumps(document, indent=2 if indent else None, ensure_ascii=False, allow_nan=False)
+        finally:
+            sys.setrecursionlimit(previous)
+        return text.encode("utf-8")
