@@ -9,7 +9,6 @@ none is given.
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from pathlib import Path
 from typing import Any
@@ -49,6 +48,8 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import logging  # here, not at the top: `xabsl --help` imports this module
+
     import uvicorn
 
     from engine.cli import UsageError

@@ -12,19 +12,14 @@ import os
 import sys
 import time
 
-import orjson
-
 from engine.cli import UsageError
-from engine.emit.ic import emit_ic
-from engine.emit.json import dumps, program_to_json
-from engine.files import write_atomically
-from engine.lang import compile_file, deep_recursion
 
 #: Diagnostic codes of the whole-program lint that ``--no-lint`` silences.
 LINT_CODES = frozenset({"unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"})
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``compile`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "compile",
         help="check a behavior; write intermediate code (--ic) and a JSON description (--json)",
@@ -45,6 +40,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 
 def run(args: argparse.Namespace) -> int:
+    """Compile, print the diagnostics and a summary, write the outputs; returns the exit status."""
+    # Imported here, not at the top: `xabsl --help` and the other subcommands need none of it.
+    import orjson
+
+    from engine.emit.ic import emit_ic
+    from engine.emit.json import dumps, program_to_json
+    from engine.files import write_atomically
+    from engine.lang import compile_file, deep_recursion
+
     if not os.path.isfile(args.agents_file):
         raise UsageError(f"no such file: {args.agents_file}")
     started = time.perf_counter()

@@ -20,11 +20,12 @@ import argparse
 import json
 import os
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from engine.cli import UsageError
-from engine.files import write_atomically
-from engine.ir.model import Program
+
+if TYPE_CHECKING:  # the IR is imported when a trace runs, not for `xabsl --help`
+    from engine.ir.model import Program
 
 _IC_SUFFIXES = (".ic", ".dat")
 
@@ -89,6 +90,7 @@ def _load(args: argparse.Namespace) -> Program:
 
 
 def run(args: argparse.Namespace) -> int:
+    from engine.files import write_atomically
     from engine.runtime.errors import EngineError
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
