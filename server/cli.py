@@ -11,12 +11,11 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
 
 DEFAULT_EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "soccer"
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``serve`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "serve",

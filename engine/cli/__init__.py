@@ -9,10 +9,16 @@ Each subcommand module exposes ``register(subparsers)``, which adds its parser a
 0 success, 1 errors in the input behavior, 2 usage or I/O problems.
 
 Start-up is part of every command's time (``xabsl --help`` should cost little more than starting
-Python), so this module imports only ``argparse``: subcommand modules import their heavy parts
-(compiler, engine, server) when they run; the entry points are read straight from the installed
-distributions' ``entry_points.txt`` (what ``importlib.metadata`` reads, without its import cost of
-``email`` and friends); and a command line that names an engine subcommand loads no entry point.
+Python), so this module imports only ``argparse``:
+
+* the engine subcommands are listed in :data:`ENGINE_COMMANDS` with their one-line help; only
+  the module of the subcommand a command line names is imported (and registers itself), the
+  others appear in ``--help`` from the table; the modules import their heavy parts (compiler,
+  engine) only when they run;
+* the entry points are read straight from the installed distributions' ``entry_points.txt``
+  (what ``importlib.metadata`` reads, without its import cost of ``email`` and friends), and a
+  command line that names an engine subcommand loads none;
+* help is formatted without ``shutil`` (and the compression modules it imports) for the width.
 """
 
 from __future__ import annotations
@@ -22,10 +28,17 @@ import importlib
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from typing import Any
 
-#: Engine-level subcommand modules, in the order ``--help`` lists them.
-ENGINE_COMMANDS = ("engine.cli.compile", "engine.cli.trace", "engine.cli.plan")
+#: Engine-level subcommands in the order ``--help`` lists them: name -> (module, one-line help).
+#: The help must be the one the module's ``register`` gives (a test compares them).
+ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
+    "compile": (
+        "engine.cli.compile",
+        "check a behavior; write intermediate code (--ic) and a JSON description (--json)",
+    ),
+    "trace": ("engine.cli.trace", "run a behavior under the conformance host: input trace in, activation trace out"),
+    "plan": ("engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
+}
 #: The entry-point group of the subcommands of other layers.
 COMMAND_GROUP = "xabsl.commands"
 
@@ -79,30 +92,69 @@ def entry_points(group: str, path: Sequence[str] | None = None) -> list[tuple[st
     return found
 
 
-def load_entry_point(value: str) -> Callable[..., Any]:
+def load_entry_point(value: str) -> Callable[..., object]:
     """The object an entry point's ``module:attribute [extras]`` value names."""
     module_name, _, attribute = value.split("[", 1)[0].strip().partition(":")
-    target: Any = importlib.import_module(module_name.strip())
+    target: object = importlib.import_module(module_name.strip())
     for part in attribute.strip().split(".") if attribute.strip() else ():
         target = getattr(target, part)
-    return target  # type: ignore[no-any-return]
+    if not callable(target):
+        raise TypeError(f"entry point {value!r} is not callable")
+    return target
 
 
-def _engine_command_named(argv: Sequence[str]) -> bool:
-    """Whether the command line's first word is an engine subcommand (then no entry point is needed)."""
-    first = next((a for a in argv if not a.startswith("-")), None)
-    return first is not None and f"engine.cli.{first}" in ENGINE_COMMANDS
+def _terminal_columns() -> int:
+    """The terminal width as ``shutil.get_terminal_size`` finds it (``COLUMNS``, the tty, 80)."""
+    try:
+        columns = int(os.environ.get("COLUMNS", "0"))
+    except ValueError:
+        columns = 0
+    if columns <= 0:
+        try:
+            columns = os.get_terminal_size(sys.__stdout__.fileno()).columns if sys.__stdout__ else 0
+        except (AttributeError, ValueError, OSError):
+            columns = 0
+    return columns if columns > 0 else 80
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """argparse's formatter, taking the width without importing ``shutil``."""
+
+    def __init__(self, prog: str, indent_increment: int = 2, max_help_position: int = 24, width: int | None = None):
+        super().__init__(prog, indent_increment, max_help_position, _terminal_columns() - 2 if width is None else width)
+
+
+class _ArgumentParser(argparse.ArgumentParser):
+    """The parser class of ``xabsl`` and its subcommands (for :class:`_HelpFormatter`)."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        kwargs.setdefault("formatter_class", _HelpFormatter)
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+
+
+def _command_named(argv: Sequence[str] | None) -> str | None:
+    """The subcommand a command line names (its first word that is no option), if any."""
+    return next((a for a in argv if not a.startswith("-")), None) if argv is not None else None
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
-    """The ``xabsl`` parser; given ``argv`` naming an engine subcommand, without the entry points."""
-    parser = argparse.ArgumentParser(
+    """The ``xabsl`` parser for the command line ``argv`` (default: every subcommand in full).
+
+    Given ``argv``, only the subcommand it names is registered in full; the other engine
+    subcommands are listed by name and help, and the entry points are loaded only when
+    ``argv`` names no engine subcommand.
+    """
+    parser = _ArgumentParser(
         prog="xabsl",
         description="XABSL 2 toolchain, engine and studio for hierarchical state-machine behaviors.",
     )
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_ArgumentParser)
     subparsers.required = True
-    for module_name in ENGINE_COMMANDS:
+    named = _command_named(argv)
+    for name, (module_name, help_text) in ENGINE_COMMANDS.items():
+        if argv is not None and name != named:
+            subparsers.add_parser(name, help=help_text)
+            continue
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as error:
@@ -110,7 +162,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
                 raise
             continue
         module.register(subparsers)
-    if argv is not None and _engine_command_named(argv):
+    if named in ENGINE_COMMANDS:
         return parser
     for _, value in entry_points(COMMAND_GROUP):
         load_entry_point(value)(subparsers)

@@ -3,6 +3,7 @@ subcommands of other layers through the entry points exactly as ``importlib.meta
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -11,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import COMMAND_GROUP, entry_points, load_entry_point, main
+from engine.cli import COMMAND_GROUP, ENGINE_COMMANDS, build_parser, entry_points, load_entry_point, main
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -56,10 +57,29 @@ def _modules_after(argv: list[str]) -> set[str]:
 @pytest.mark.parametrize("argv", [["--help"], ["compile", "--help"], ["trace", "x"]])
 def test_building_the_parser_imports_nothing_heavy(argv: list[str]) -> None:
     modules = _modules_after(argv)
-    heavy = {"engine.lang", "engine.ir", "engine.emit.ic", "engine.runtime", "orjson", "importlib.metadata", "logging"}
+    heavy = {"engine.lang", "engine.ir", "engine.emit.ic", "engine.runtime", "orjson", "importlib.metadata"}
     assert modules & heavy == set()
+    if argv == ["--help"]:  # not even these (trace imports typing for its annotations)
+        assert modules & {"logging", "typing", "shutil", "json"} == set()
+    # only the named engine subcommand's module is imported
+    commands = {f"engine.cli.{name}" for name in ENGINE_COMMANDS}
+    assert modules & commands == ({f"engine.cli.{argv[0]}"} if argv[0] in ENGINE_COMMANDS else set())
     # an engine subcommand needs no entry point: the server's and the examples' modules stay out
     if argv[0] != "--help":
         assert not {"server.cli", "examples.cli"} & modules
     else:
         assert {"server.cli", "examples.cli"} <= modules
+
+
+def test_the_command_table_gives_each_module_s_own_help() -> None:
+    full = build_parser()  # every subcommand registered by its module
+    actions = next(a for a in full._actions if isinstance(a, argparse._SubParsersAction))
+    registered = {c.dest: c.help for c in actions._choices_actions}
+    assert {name: help_text for name, (_, help_text) in ENGINE_COMMANDS.items()} == {
+        name: registered[name] for name in ENGINE_COMMANDS
+    }
+
+
+def test_a_named_subcommand_parses_as_with_the_full_parser() -> None:
+    argv = ["compile", "agents.xabsl", "--ic", "out.ic", "--werror"]
+    assert vars(build_parser(argv).parse_args(argv)) == vars(build_parser().parse_args(argv))
