@@ -170,12 +170,23 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``xabsl`` command line; returns the exit status."""
+    """Run the ``xabsl`` command line; returns the exit status.
+
+    Called without ``argv`` (as the console script and ``python -m engine.cli`` do), a
+    subcommand that sets ``exit_at_once`` ends the process right after it: its results are
+    written and flushed, and tearing down the compiled program's objects one by one would only
+    cost time (a tenth of a second on a 200-file set).
+    """
     arguments = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(arguments)
     args = parser.parse_args(arguments)
     try:
-        return int(args.func(args))
+        status = int(args.func(args))
+        if argv is None and getattr(args, "exit_at_once", False):
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(status)
+        return status
     except UsageError as error:
         print(f"xabsl {args.command}: {error}", file=sys.stderr)
         return 2

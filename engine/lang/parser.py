@@ -92,6 +92,8 @@ class _Parser:
         self.diagnostics = diagnostics
         self.truncated = truncated
         self.pos = 0
+        #: the current token, ``tokens[pos]`` (kept by advance and seek: the parser reads it most)
+        self.tok = tokens[0]
         #: current nesting of decision trees and of expressions (see the MAX_* limits)
         self.decision_depth = 0
         self.expression_depth = 0
@@ -106,25 +108,31 @@ class _Parser:
         depth = 0
         for token in self.tokens:
             depths.append(depth)
-            if token.is_op("{"):
+            if token.text == "{":
                 depth += 1
-            elif token.is_op("}"):
+            elif token.text == "}":
                 depth = max(0, depth - 1)
         return depths
 
     # ---------------------------------------------------------------- token helpers
 
-    @property
-    def tok(self) -> Token:
-        return self.tokens[self.pos]
+    # Operator tests compare the text only (`tok.text == ";"`): no other kind of token can have
+    # an operator's text (strings keep their quotes, ranges their brackets, comments their
+    # markers, and words and numbers start with a letter, `_`, `@` or a digit).
+
+    def seek(self, pos: int) -> None:
+        """Go back (or forth) to the token at ``pos``."""
+        self.pos = pos
+        self.tok = self.tokens[pos]
 
     def peek(self, offset: int = 1) -> Token:
         return self.tokens[min(self.pos + offset, len(self.tokens) - 1)]
 
     def advance(self) -> Token:
-        token = self.tokens[self.pos]
-        if token.type is not TokenType.EOF:
+        token = self.tok
+        if token.type is not TokenType.EOF:  # the list ends with EOF: pos + 1 exists
             self.pos += 1
+            self.tok = self.tokens[self.pos]
         return token
 
     def error(self, expected: str, token: Token | None = None) -> _SyntaxError:
@@ -205,7 +213,7 @@ class _Parser:
             elif self.tok.is_kw("namespace"):
                 source.namespace = self.parse_namespace(doc)
             elif self.tok.is_kw("agent"):
-                self.pos = doc_start
+                self.seek(doc_start)
                 self.parse_agents(source)
             elif self.tok.type is not TokenType.EOF:
                 raise self.error("'include', 'option', 'namespace' or 'agent'")
@@ -237,7 +245,7 @@ class _Parser:
                     self.advance()
                 # a doc comment right before the resumed agent belongs to it
                 if self.pos > 0 and self.tokens[self.pos - 1].type is TokenType.DOC_COMMENT:
-                    self.pos -= 1
+                    self.seek(self.pos - 1)
 
     # ---------------------------------------------------------------- namespaces
 
@@ -250,7 +258,7 @@ class _Parser:
         self.expect_op("{")
         body = self.pos
         items: list[ast.NamespaceItem] = []
-        while not self.tok.is_op("}"):
+        while self.tok.text != "}":
             if self.tok.type is TokenType.EOF:
                 raise self.error("'}'")
             try:
@@ -267,11 +275,11 @@ class _Parser:
         while self.tok.type is not TokenType.EOF:
             previous = self.tokens[self.pos - 1]
             at_depth = self.depth[self.pos] == depth
-            if at_depth and (previous.is_op(";") or previous.is_op("}")):
-                if self.tok.is_op(";"):  # the ';' after an enum's '}'
+            if at_depth and (previous.text == ";" or previous.text == "}"):
+                if self.tok.text == ";":  # the ';' after an enum's '}'
                     self.advance()
                 return
-            if at_depth and self.tok.is_op("}"):
+            if at_depth and self.tok.text == "}":
                 return
             if self.depth[self.pos] < depth:
                 return
@@ -286,7 +294,7 @@ class _Parser:
             name = self.expect_ident("the basic behavior's name")
             self.expect_op("{")
             params = []
-            while not self.tok.is_op("}"):
+            while self.tok.text != "}":
                 params.append(self.parse_param_decl())
             self.advance()
             return ast.BehaviorDecl(name, params, self.span_from(start), doc)
@@ -297,7 +305,7 @@ class _Parser:
             name = self.expect_ident("the constant's name")
             self.expect_op("=")
             negative = False
-            if self.tok.is_op("-"):
+            if self.tok.text == "-":
                 self.advance()
                 negative = True
             if self.tok.type is not TokenType.NUMBER:
@@ -310,7 +318,7 @@ class _Parser:
             # `enum E { .. };` and `enum E internal { .. };` declare enumerations, while
             # `enum E internal name;` declares an internal symbol of type E
             after = self.peek(2)
-            if after.is_op("{") or (after.is_kw("internal") and self.peek(3).is_op("{")):
+            if after.text == "{" or (after.is_kw("internal") and self.peek(3).is_op("{")):
                 return self.parse_enum_decl(doc, start)
             if after.type is TokenType.KEYWORD and after.text in ("input", "output") and self.peek(3).is_op("{"):
                 raise _SyntaxError(
@@ -327,7 +335,7 @@ class _Parser:
             internal = True
         self.expect_op("{")
         elements = [self.expect_ident("an enum element")]
-        while self.tok.is_op(","):
+        while self.tok.text == ",":
             self.advance()
             elements.append(self.expect_ident("an enum element"))
         self.expect_op("}")
@@ -353,10 +361,10 @@ class _Parser:
         name = self.expect_ident("the symbol's name")
         range_, range_span, unit, unit_span = self.parse_range_unit()
         params = None
-        if self.tok.is_op("("):
+        if self.tok.text == "(":
             self.advance()
             params = []
-            while not self.tok.is_op(")"):
+            while self.tok.text != ")":
                 params.append(self.parse_param_decl())
             self.advance()
         self.expect_op(";")
@@ -414,7 +422,7 @@ class _Parser:
         except _SyntaxError as error:
             self.report(error)
             self.recover_to_state(self.depth[body])
-        while not self.tok.is_op("}"):
+        while self.tok.text != "}":
             if self.tok.type is TokenType.EOF:
                 raise self.error("'}' closing the option")
             try:
@@ -432,7 +440,7 @@ class _Parser:
             token = self.tok
             if token.type is TokenType.KEYWORD and token.text in STATE_START:
                 return
-            if token.is_op("}") and self.depth[self.pos] == depth:
+            if token.text == "}" and self.depth[self.pos] == depth:
                 return
             self.advance()
 
@@ -440,7 +448,7 @@ class _Parser:
         start = self.advance().span
         self.advance()  # 'decision'
         branches: list[ast.IfElse] = []
-        if self.tok.is_op("{"):
+        if self.tok.text == "{":
             # the braces of `common decision { }` are no nesting level (as `decision { }`'s)
             self.advance()
             self.parse_cdtree(branches)
@@ -467,7 +475,7 @@ class _Parser:
             )
 
     def parse_cdtree_level(self, branches: list[ast.IfElse]) -> None:
-        if self.tok.is_op("{"):
+        if self.tok.text == "{":
             self.advance()
             self.parse_cdtree(branches)
             self.expect_op("}")
@@ -487,7 +495,7 @@ class _Parser:
             branch.else_doc = else_doc
             self.parse_cdtree(branches)
         else:
-            self.pos = mark
+            self.seek(mark)
 
     def parse_dtree(self) -> ast.DTree:
         token = self.tok
@@ -500,7 +508,7 @@ class _Parser:
             self.decision_depth -= 1
 
     def parse_dtree_level(self, token: Token) -> ast.DTree:
-        if token.is_op("{"):
+        if token.text == "{":
             self.advance()
             tree = self.parse_dtree()
             self.expect_op("}")
@@ -565,7 +573,7 @@ class _Parser:
                 if isinstance(decision, ast.IfElse) and decision.doc is None:
                     decision.doc = doc
             else:
-                self.pos = mark
+                self.seek(mark)
                 decision = self.parse_dtree()
             self.expect_op("}")
         self.expect_kw("action")
@@ -588,14 +596,14 @@ class _Parser:
     def parse_action_block(self) -> list[ast.ActionStmt]:
         self.expect_op("{")
         actions: list[ast.ActionStmt] = []
-        while not self.tok.is_op("}"):
+        while self.tok.text != "}":
             actions.append(self.parse_action())
         self.advance()
         return actions
 
     def parse_action(self) -> ast.ActionStmt:
         name = self.expect_ident("an output symbol, option or basic behavior")
-        if self.tok.is_op("="):
+        if self.tok.text == "=":
             self.advance()
             value = self.parse_expression()
             self.expect_op(";")
@@ -603,7 +611,7 @@ class _Parser:
         explicit = None
         if self.tok.is_kw("option") or self.tok.is_kw("behavior"):
             explicit = self.advance().text
-        if not self.tok.is_op("("):
+        if self.tok.text != "(":
             raise self.error("'=' or '('")
         args = self.parse_call_args()
         self.expect_op(";")
@@ -612,13 +620,13 @@ class _Parser:
     def parse_call_args(self) -> list[ast.CallArg]:
         self.expect_op("(")
         args: list[ast.CallArg] = []
-        if not self.tok.is_op(")"):
+        if self.tok.text != ")":
             while True:
                 name = self.expect_ident("a parameter name")
                 self.expect_op("=")
                 value = self.parse_expression()
                 args.append(ast.CallArg(name, value, self.span_from(name.span)))
-                if not self.tok.is_op(","):
+                if self.tok.text != ",":
                     break
                 self.advance()
         self.expect_op(")")
@@ -645,13 +653,13 @@ class _Parser:
 
     def parse_conditional(self) -> ast.Expr:
         condition = self.parse_binary(0)
-        if not self.tok.is_op("?"):
+        if self.tok.text != "?":
             return condition
         op = self.advance()
         then = self.parse_expression()
         self.expect_op(":")
         otherwise = self.parse_binary(0)
-        if self.tok.is_op("?"):
+        if self.tok.text == "?":
             raise self.error("an operator or ')' (nested ?: needs parentheses)")
         return ast.CondOp(condition, then, otherwise, _expr_span(condition).to(_expr_span(otherwise)), op.span)
 
@@ -686,7 +694,7 @@ class _Parser:
 
     def parse_unary(self) -> ast.Expr:
         token = self.tok
-        if token.is_op("-") or token.is_op("!"):
+        if token.text == "-" or token.text == "!":
             self.advance()
             self.enter_expression()
             try:
@@ -709,11 +717,11 @@ class _Parser:
             return ast.Builtin(token.text, token.span)
         if token.type is TokenType.IDENTIFIER:
             self.advance()
-            if self.tok.is_op("("):
+            if self.tok.text == "(":
                 args = self.parse_call_args()
                 return ast.Call(ast.Name(token.text, token.span), args, self.span_from(token.span))
             return ast.Ident(token.text, token.span)
-        if token.is_op("("):
+        if token.text == "(":
             self.advance()
             inner = self.parse_expression()
             self.expect_op(")")
