@@ -20,6 +20,7 @@ from engine.cli import UsageError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``plan`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "plan",
         help="run GRAPHPLAN on a PDDL domain and problem and print the layered plan",
@@ -41,7 +42,7 @@ def _read(path: str) -> str:
         raise UsageError(f"{path}: cannot read: {error}") from None
 
 
-def _one_line(text: str) -> str:
+def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
 
@@ -66,6 +67,7 @@ def _parse_error(path: str, error: Exception) -> UsageError:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Parse, ground and plan; print the layered plan; returns the exit status."""
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 

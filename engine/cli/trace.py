@@ -31,6 +31,7 @@ _IC_SUFFIXES = (".ic", ".dat")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``trace`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "trace",
         help="run a behavior under the conformance host: input trace in, activation trace out",
@@ -90,6 +91,7 @@ def _load(args: argparse.Namespace) -> Program:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run one tick per input line and write the trace; returns the exit status."""
     from engine.files import write_atomically
     from engine.runtime.errors import EngineError
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner

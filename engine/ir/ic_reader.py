@@ -320,16 +320,18 @@ class _Reader:
             for name in list(all_enums):
                 if name in declared.enums and not all_enums[name].internal:
                     all_enums[name] = declared.enums[name]
-            for table, source in ((inputs, declared.inputs), (behaviors, declared.behaviors)):
-                for name in list(table):
-                    if name in source:
-                        table[name] = source[name]  # type: ignore[assignment]
-            for name, symbol in list(outputs.items()):
-                if name in declared.outputs and not symbol.internal:
+            for name in list(inputs):
+                if name in declared.inputs:
+                    inputs[name] = declared.inputs[name]
+            for name in list(behaviors):
+                if name in declared.behaviors:
+                    behaviors[name] = declared.behaviors[name]
+            for name, output in list(outputs.items()):
+                if name in declared.outputs and not output.internal:
                     outputs[name] = declared.outputs[name]
-            for symbol in [*inputs.values(), *outputs.values()]:
-                if symbol.enum is not None and symbol.enum not in all_enums and symbol.enum in declared.enums:
-                    all_enums[symbol.enum] = declared.enums[symbol.enum]
+            for symbol_enum in [s.enum for s in inputs.values()] + [s.enum for s in outputs.values()]:
+                if symbol_enum is not None and symbol_enum not in all_enums and symbol_enum in declared.enums:
+                    all_enums[symbol_enum] = declared.enums[symbol_enum]
         return Program(title, options, agents, all_enums, inputs, outputs, {}, behaviors)
 
     def enum_for(self, kind: Kind, key: str) -> str | None:
@@ -570,8 +572,8 @@ class _Reader:
                 # Which enumeration it belongs to is known once pass 1 has unified everything.
                 self.facts.literals.append((at, element))
                 return EnumLiteral(element, ""), f"lit:{at}"
-            enum = self.facts.literal_enums[at]
-            return EnumLiteral(element, enum), f"enum:{enum}"
+            element_enum = self.facts.literal_enums[at]
+            return EnumLiteral(element, element_enum), f"enum:{element_enum}"
         if code == "p":
             ref = self.param_ref(Kind.ENUM)
             return ref, f"param:{ref.param}"

@@ -55,6 +55,8 @@ class Constant:
 
 @dataclass(frozen=True, slots=True)
 class BooleanLiteral:
+    """``true`` or ``false``."""
+
     value: bool
     span: Span | None = None
     kind: Kind = Kind.BOOLEAN
@@ -549,13 +551,16 @@ class Program:
 
     @property
     def internal_enums(self) -> list[Enumeration]:
+        """The internal enumerations (engine storage), in declaration order."""
         return [e for e in self.enums.values() if e.internal]
 
     @property
     def internal_symbols(self) -> list[OutputSymbol]:
+        """The internal symbols (engine storage), in declaration order."""
         return [s for s in self.outputs.values() if s.internal]
 
     def agent(self, name: str) -> Agent:
+        """The agent called ``name`` (KeyError if there is none)."""
         for agent in self.agents:
             if agent.name == name:
                 return agent

@@ -71,10 +71,12 @@ class Compilation:
 
     @property
     def errors(self) -> list[Diagnostic]:
+        """The error diagnostics, in report order."""
         return [d for d in self.diagnostics if d.is_error]
 
     @property
     def warnings(self) -> list[Diagnostic]:
+        """The warnings (and lint findings), in report order."""
         return [d for d in self.diagnostics if not d.is_error]
 
     @property

@@ -30,6 +30,7 @@ class LoadedProgram:
 
 
 def display_path(real: str, base: str) -> str:
+    """How diagnostics name the file ``real``: relative to ``base`` when below it."""
     relative = os.path.relpath(real, base)
     return real if relative.startswith("..") else relative
 

@@ -120,6 +120,14 @@ class _Parser:
     # an operator's text (strings keep their quotes, ranges their brackets, comments their
     # markers, and words and numbers start with a letter, `_`, `@` or a digit).
 
+    def at(self, kind: TokenType) -> bool:
+        """Whether the current token is of ``kind``.
+
+        Unlike reading ``self.tok.type`` twice, a call is no narrowing that a type checker
+        carries over an ``advance()`` in between.
+        """
+        return self.tok.type is kind
+
     def seek(self, pos: int) -> None:
         """Go back (or forth) to the token at ``pos``."""
         self.pos = pos
@@ -241,7 +249,7 @@ class _Parser:
             except _SyntaxError as error:
                 self.report(error)
                 self.advance()
-                while self.tok.type is not TokenType.EOF and not self.tok.is_kw("agent"):
+                while not self.at(TokenType.EOF) and not self.tok.is_kw("agent"):
                     self.advance()
                 # a doc comment right before the resumed agent belongs to it
                 if self.pos > 0 and self.tokens[self.pos - 1].type is TokenType.DOC_COMMENT:
@@ -311,7 +319,7 @@ class _Parser:
             if self.tok.type is not TokenType.NUMBER:
                 raise self.error("a number")
             text = self.advance().text
-            unit = self.expect_string() if self.tok.type is TokenType.STRING else None
+            unit = self.expect_string() if self.at(TokenType.STRING) else None
             self.expect_op(";")
             return ast.ConstDecl(name, text, negative, unit, self.span_from(start), doc)
         if token.is_kw("enum") and self.peek().type is TokenType.IDENTIFIER:

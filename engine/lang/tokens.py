@@ -26,6 +26,8 @@ from engine.types import Span
 
 
 class TokenType(enum.Enum):
+    """The kinds of token (``value`` is how messages name them)."""
+
     IDENTIFIER = "identifier"
     KEYWORD = "keyword"
     NUMBER = "number"
@@ -88,9 +90,11 @@ class Token(NamedTuple):
     span: Span
 
     def is_op(self, text: str) -> bool:
+        """Whether this is the operator ``text``."""
         return self.type is TokenType.OPERATOR and self.text == text
 
     def is_kw(self, text: str) -> bool:
+        """Whether this is the keyword ``text``."""
         return self.type is TokenType.KEYWORD and self.text == text
 
     def describe(self) -> str:
@@ -237,7 +241,7 @@ def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
             pos = end
             continue
         else:
-            comment = _KIND[rule]  # type: ignore[index]
+            comment = _KIND[rule]
         # a token that may span lines: a comment, a string or a range
         col = pos - line_start + 1
         newlines = count("\n", pos, end)
