@@ -517,7 +517,7 @@ class OptionChecker:
                     None,
                     common_branch.span,
                 )
-            decision = _number_leaves(_resolve_stay(decision, state.name.text))
+            decision = _finish_tree(decision, state.name.text)
             actions = tuple(common_action) + tuple(self.actions(state.actions))
             built.append(
                 ir.State(
@@ -593,29 +593,21 @@ class OptionChecker:
             )
 
 
-def _resolve_stay(tree: ir.DecisionTree, state: str) -> ir.DecisionTree:
-    """``stay`` (target None) becomes ``state``; nodes are rebuilt directly (no ``replace``)."""
-    if isinstance(tree, ir.Transition):
-        target = state if tree.target is None else tree.target
-        return ir.Transition(target, target == state, tree.leaf, tree.span)
-    return ir.If(
-        tree.condition,
-        _resolve_stay(tree.then, state),
-        _resolve_stay(tree.otherwise, state),
-        tree.text,
-        tree.doc,
-        tree.else_doc,
-        tree.span,
-    )
+def _finish_tree(tree: ir.DecisionTree, state: str) -> ir.DecisionTree:
+    """The state's final decision tree, rebuilt once (nodes are frozen, so no ``replace``).
 
-
-def _number_leaves(tree: ir.DecisionTree) -> ir.DecisionTree:
-    """Number the leaves in pre-order (then-branch first), from 0."""
-    counter = iter(range(1 << 30))
+    ``stay`` (target None) becomes ``state``, and the leaves are numbered in pre-order
+    (then-branch first) from 0.
+    """
+    counter = 0
 
     def visit(node: ir.DecisionTree) -> ir.DecisionTree:
+        nonlocal counter
         if isinstance(node, ir.Transition):
-            return ir.Transition(node.target, node.stay, next(counter), node.span)
+            target = state if node.target is None else node.target
+            leaf = counter
+            counter += 1
+            return ir.Transition(target, target == state, leaf, node.span)
         then = visit(node.then)
         return ir.If(node.condition, then, visit(node.otherwise), node.text, node.doc, node.else_doc, node.span)
 
