@@ -46,11 +46,8 @@ def run(args: argparse.Namespace) -> int:
     # program's hundreds of thousands of live objects (once more when `compile_file` re-enables
     # it), so it stays off for the command. Reference counting still frees what dies.
     gc.disable()
-    # Imported here, not at the top: `xabsl --help` and the other subcommands need none of it.
-    import orjson
-
-    from engine.emit.ic import emit_ic
-    from engine.emit.json import dumps, program_to_json
+    # Imported here, not at the top: `xabsl --help` and the other subcommands need none of it;
+    # the emitters and orjson (which imports uuid, platform, datetime) only when asked for.
     from engine.files import write_atomically
     from engine.lang import compile_file, deep_recursion
 
@@ -67,10 +64,14 @@ def run(args: argparse.Namespace) -> int:
     if not failed and compilation.program is not None:
         try:
             if args.ic:
+                from engine.emit.ic import emit_ic
+
                 with deep_recursion():
                     text = emit_ic(compilation.program)
                 write_atomically(args.ic, text.encode("utf-8"))
             if args.json:
+                from engine.emit.json import dumps, program_to_json
+
                 document = program_to_json(compilation.program, compilation.source_text)
                 write_atomically(args.json, dumps(document))
         except OSError as error:
@@ -88,6 +89,8 @@ def run(args: argparse.Namespace) -> int:
         "emit_ms": round((finished - emit_started) * 1000, 1),
     }
     if args.format == "json":
+        import orjson
+
         sys.stdout.buffer.write(
             orjson.dumps({"ok": not failed, "diagnostics": [d.as_dict() for d in diagnostics], "summary": summary})
         )

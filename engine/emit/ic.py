@@ -11,7 +11,6 @@ Expressions are emitted by one ``match`` over the IR node types (``_expression``
 
 from __future__ import annotations
 
-import decimal
 import math
 from collections.abc import Callable, Iterable
 from typing import TypeVar, assert_never
@@ -42,6 +41,8 @@ def format_number(value: float) -> str:
         return "Infinity" if value > 0 else "-Infinity" if value < 0 else "NaN"
     if value == int(value):
         return str(int(value))
+    import decimal  # here: only non-integral literals need it (an import less at start-up)
+
     sign = "-" if value < 0 else ""
     digits_tuple = decimal.Decimal(repr(abs(value))).normalize().as_tuple()
     digits = "".join(map(str, digits_tuple.digits))
