@@ -21,12 +21,13 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from engine.errors import ServerError
 from engine.files import write_atomically
 
 SUFFIX = ".xabsl"
 
 
-class FileError(Exception):
+class FileError(ServerError):
     """A refused file operation; ``status`` is the HTTP status to answer with."""
 
     def __init__(self, status: int, message: str, **extra: Any) -> None:

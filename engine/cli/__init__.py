@@ -29,6 +29,8 @@ import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
 
+from engine.errors import CommandLineError
+
 #: Engine-level subcommands in the order ``--help`` lists them: name -> (module, one-line help).
 #: The help must be the one the module's ``register`` gives (a test compares them).
 ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
@@ -43,7 +45,7 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
 COMMAND_GROUP = "xabsl.commands"
 
 
-class UsageError(Exception):
+class UsageError(CommandLineError):
     """A problem with the command line or the files it names (exit status 2)."""
 
 

@@ -23,6 +23,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from engine.cli import UsageError
+from engine.errors import CommandLineError
 
 if TYPE_CHECKING:  # the IR is imported when a trace runs, not for `xabsl --help`
     from engine.ir.model import Program
@@ -53,7 +54,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.set_defaults(func=run)
 
 
-class _BehaviorError(Exception):
+class _BehaviorError(CommandLineError):
     """The behavior cannot be compiled, loaded or run (exit status 1)."""
 
 
@@ -92,8 +93,8 @@ def _load(args: argparse.Namespace) -> Program:
 
 def run(args: argparse.Namespace) -> int:
     """Run one tick per input line and write the trace; returns the exit status."""
+    from engine.errors import EngineError
     from engine.files import write_atomically
-    from engine.runtime.errors import EngineError
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
     if not os.path.isfile(args.inputs):

@@ -30,6 +30,8 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
+from engine.errors import DynamicsError
+
 #: Function name -> (minimum arity, maximum arity or None for variadic, Python spelling).
 FUNCTIONS: Mapping[str, tuple[int, int | None, str]] = {
     "max": (1, None, "_max"),
@@ -92,7 +94,7 @@ RUNTIME: Mapping[str, object] = {
 }
 
 
-class ExprError(ValueError):
+class ExprError(DynamicsError, ValueError):
     """A malformed expression or an unknown name; the message shows the text and a caret."""
 
     def __init__(self, message: str, text: str, col: int | None = None) -> None:

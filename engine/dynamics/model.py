@@ -70,6 +70,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.dynamics import expr as ex
+from engine.errors import DynamicsError
 
 FORMAT = "xabsl-dd-model/1"
 
@@ -82,7 +83,7 @@ _ACTIVATION_KEYS = {"lambda", "k", "theta", "sigma"}
 _PLACEHOLDER = re.compile(r"\{(\w+)\}")
 
 
-class ModelError(ValueError):
+class ModelError(DynamicsError, ValueError):
     """A DD model file is invalid; the message names the file, the key and the problem."""
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 
+from engine.errors import CompileError
 from engine.lang import ast
 from engine.lang.diagnostics import Diagnostics
 from engine.lang.tokens import Token, TokenType, doc_text, tokenize
@@ -49,7 +50,7 @@ MAX_DECISION_DEPTH = 1000
 MAX_EXPRESSION_DEPTH = 1000
 
 
-class _TooDeepError(Exception):
+class _TooDeepError(CompileError):
     """Nesting beyond a limit: the rest of the file is not parsed (like a RecursionError)."""
 
     def __init__(self, token: Token, message: str) -> None:
@@ -58,7 +59,7 @@ class _TooDeepError(Exception):
         self.message = message
 
 
-class _SyntaxError(Exception):
+class _SyntaxError(CompileError):
     def __init__(self, token: Token, message: str, code: str = "syntax-error") -> None:
         super().__init__(message)
         self.token = token

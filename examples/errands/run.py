@@ -95,6 +95,7 @@ def main(args: argparse.Namespace) -> int:
     except ValueError as error:  # a tick the model's stability check rejects, or one that does not divide 1 s
         raise UsageError(str(error)) from None
     perturb(world, args.perturb)
+    assert world.engine is not None  # build_world compiles and attaches the monitor
     if args.render:
         from engine.emit.dot import option_graph, state_machine
 
