@@ -80,6 +80,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(args: argparse.Namespace) -> int:
     """Load the world plug-in, compile its behaviors, serve the studio until interrupted."""
     import logging  # here, not at the top: `xabsl --help` imports this module
+    from typing import Any
 
     import uvicorn
 

@@ -24,6 +24,7 @@ Python), so this module imports only ``argparse``:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import sys
@@ -185,8 +186,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         status = int(args.func(args))
         if argv is None and getattr(args, "exit_at_once", False):
-            sys.stdout.flush()
-            sys.stderr.flush()
+            for stream in (sys.stdout, sys.stderr):
+                # a reader that went away (`| head`) is not the command's failure
+                with contextlib.suppress(OSError):
+                    stream.flush()
             os._exit(status)
         return status
     except UsageError as error:
