@@ -44,10 +44,10 @@ def _parameters(owner: str, params: Iterable[Parameter | tuple[str, Kind]]) -> t
     result = []
     for p in params:
         if isinstance(p, Parameter):
-            result.append(Parameter(_qualify(owner, p.name), p.kind, p.enum))
+            result.append(Parameter(_qualify(owner, p.name), p.kind, p.enum, owner=owner))
         else:
             name, kind = p
-            result.append(Parameter(_qualify(owner, name), kind))
+            result.append(Parameter(_qualify(owner, name), kind, owner=owner))
     return tuple(result)
 
 

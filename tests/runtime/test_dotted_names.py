@@ -83,3 +83,20 @@ def test_dotted_parameters_are_bound_by_their_whole_names(program: Program) -> N
     assert engine.output("keeper.save.out") == engine.enum_value("save.mode.dive.left")
     assert engine.output("keeper.hand.out") == engine.enum_value("hand.left")
     assert engine.output("keeper.phase.now") == engine.enum_value("keeper.phase.react")
+
+
+def test_forced_basic_behavior_and_option_take_dotted_parameter_names(program: Program) -> None:
+    bindings, values = conformance_bindings(program)
+    Dive.seen = []
+    bindings.behavior(Dive)
+    engine = Engine(bindings, program)
+    engine.root_actions.force_behavior("keeper.dive.to", {"robot.x": 3.0, "x": 1.0, "state.fast": True})
+    engine.execute(0)
+    assert engine.fault is None
+    assert Dive.seen == [{"x": 1.0, "robot.x": 3.0, "state.fast": True, "target.hand": 0}]
+    engine.root_actions.force_option("guard", {"robot.x": 900.0, "use.hands": True})
+    engine.execute(100)
+    guard = engine.activation()[0]
+    assert isinstance(guard, OptionNode) and guard.option == "guard"
+    assert guard.params["guard.robot.x"] == 900.0 and guard.params["guard.x"] == 0.0
+    assert guard.state == "save"  # @use.hands && @robot.x > @x
