@@ -86,7 +86,7 @@ def test_dotted_parameters_are_bound_by_their_whole_names(program: Program) -> N
 
 
 def test_forced_basic_behavior_and_option_take_dotted_parameter_names(program: Program) -> None:
-    bindings, values = conformance_bindings(program)
+    bindings, _ = conformance_bindings(program)
     Dive.seen = []
     bindings.behavior(Dive)
     engine = Engine(bindings, program)
