@@ -20,7 +20,7 @@ from importlib.metadata import entry_points
 from engine.errors import CommandLineError
 
 #: Engine-level subcommand modules, in the order ``--help`` lists them.
-ENGINE_COMMANDS = ("engine.cli.compile", "engine.cli.trace", "engine.cli.plan")
+ENGINE_COMMANDS = ("engine.cli.compile", "engine.cli.docs", "engine.cli.trace", "engine.cli.plan")
 
 
 class UsageError(CommandLineError):
