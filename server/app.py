@@ -31,6 +31,7 @@ from engine.emit.dot import GraphvizMissing
 from engine.ir.model import Program
 from server import frames
 from server.clients import Client, Hub
+from server.docs import router as docs_router
 from server.files import BehaviorFiles, FileError
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
 from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION, Command, Op, ProtocolError, parse_command
@@ -476,6 +477,7 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.add_exception_handler(FileError, _file_error)
     app.add_exception_handler(CommandError, _command_error)
     app.include_router(router)
+    app.include_router(docs_router)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")
     else:

@@ -11,6 +11,6 @@ Modules: :mod:`.xref` (cross references), :mod:`.graphs` (DOT with links, batche
 :mod:`.pages` (HTML), :mod:`.assets` (CSS and the search script), :mod:`.site` (the writer).
 """
 
-from engine.docs.site import DocsResult, build, generate, write
+from engine.docs.site import DocsResult, build, generate, program_digest, write
 
-__all__ = ["DocsResult", "build", "generate", "write"]
+__all__ = ["DocsResult", "build", "generate", "program_digest", "write"]

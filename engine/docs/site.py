@@ -7,6 +7,7 @@ files there alone. :func:`generate` does both and says how long each stage took.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -21,6 +22,19 @@ from engine.docs.pages import Renderer, Site, fragment
 from engine.docs.xref import cross_references, own_decision
 from engine.emit.dot import reachable_options
 from engine.files import write_atomically
+
+#: Changes whenever the pages change for the same program, so cached documentation is redone.
+DOCS_VERSION = 1
+
+
+def program_digest(program: ir.Program) -> str:
+    """A digest of everything the documentation shows of ``program`` (and of this generator's version).
+
+    The IR is frozen data whose ``repr`` lists every field (doc comments and spans included), so
+    two programs with the same digest have the same documentation.
+    """
+    text = f"xabsl-docs {DOCS_VERSION}\n{program!r}"
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
 
 
 @dataclass
