@@ -32,7 +32,8 @@ th, td { text-align: left; padding: .25em .8em .25em 0; border-bottom: 1px solid
 th { font-weight: 600; font-size: .9em; }
 code, pre { font-family: ui-monospace, "SFMono-Regular", Menlo, Consolas, monospace; font-size: .9em; }
 pre.tree, pre.actions { background: var(--soft); padding: .6em .8em; border-radius: 4px; overflow-x: auto;
-  margin: .3em 0 .8em; }
+  margin: .3em 0 .8em; white-space: pre-wrap; }
+[id] { scroll-margin-top: 3.5em; }
 pre .comment { color: #6a7a55; }
 pre .keyword { color: #8a3b9c; }
 .leaf:target, section:target > h3, h3:target, tr:target { background: #fff3b0; }

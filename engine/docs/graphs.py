@@ -22,7 +22,10 @@ from engine.emit.dot import option_graph, quote, reachable_options, render_svg, 
 
 #: Where an SVG document starts in ``dot``'s output (labels are escaped, so never inside one).
 _SVG_START = "<?xml "
-_EDGE_ANCHOR = re.compile(r'<g id="a_leaf_(\d+)_(\d+)"><a ')
+#: an edge's anchor (leaf ids, the anchor's attributes, its content) and the label lines after it
+_EDGE_ANCHOR = re.compile(
+    r'<g id="a_leaf_(\d+)_(\d+)"><a ([^>]*)>(.*?)</a>\n</g>\n((?:<text[^>]*>[^<]*</text>\n)*)', re.S
+)
 
 
 def _with_links(dot: str, links: Sequence[tuple[str, str]]) -> str:
@@ -56,11 +59,18 @@ def state_machine_dot(option: ir.Option, state_href: Callable[[str], str]) -> st
 
 
 def link_leaves(svg: str, leaf_href: Callable[[int, int], str]) -> str:
-    """Give every transition edge of a state-machine SVG the ``href`` of its decision-tree leaf."""
+    """Give every transition edge of a state-machine SVG the ``href`` of its decision-tree leaf.
+
+    Graphviz wraps an edge's path and arrowhead in the tooltip's ``<a>`` and writes the label's
+    ``<text>`` lines after it; they move inside it, so the label is what a reader clicks.
+    """
 
     def replace(match: re.Match[str]) -> str:
         href = leaf_href(int(match.group(1)), int(match.group(2)))
-        return f'{match.group(0)}xlink:href="{href}" '
+        return (
+            f'<g id="a_leaf_{match.group(1)}_{match.group(2)}"><a xlink:href="{href}" {match.group(3)}>'
+            f"{match.group(4)}{match.group(5)}</a>\n</g>\n"
+        )
 
     return _EDGE_ANCHOR.sub(replace, svg)
 

@@ -15,7 +15,7 @@ from engine.docs import generate
 from engine.docs.xref import own_decision
 from engine.emit.dot import reachable_options
 from engine.lang import compile_file
-from tests.docs.sitecheck import Page, broken_links, read_site, search_index, svg_nodes
+from tests.docs.sitecheck import SVG, XLINK, Page, broken_links, read_site, search_index, svg_nodes
 from tests.kit import KIT, SETS
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -89,6 +89,12 @@ def test_every_graph_is_svg_with_its_nodes(documented: Documented) -> None:
         (svg,) = page.svgs
         ids = {g.get("id") for g in svg_nodes(svg)}
         assert ids == {"initial", *(f"state_{s.index}" for s in program.options[name].states)}, name
+        # every transition edge links to its leaf, its label inside the link (what one clicks)
+        for edge in (g for g in svg.iter(SVG + "g") if (g.get("id") or "").startswith("leaf_")):
+            (link,) = edge.iter(SVG + "a")
+            _, state, leaf = (edge.get("id") or "").split("_")
+            assert link.get(XLINK + "href") in (f"#leaf-{state}-{leaf}", "#common-decision")
+            assert len(list(link.iter(SVG + "text"))) == len(list(edge.iter(SVG + "text"))) > 0
     for name, page in by_heading(pages, "agent").items():
         (svg,) = page.svgs
         root = program.agent(name).root
