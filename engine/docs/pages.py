@@ -209,15 +209,19 @@ class Renderer:
             items.append(f"<li>{self.link(self.site.option(option), option)}: {', '.join(parts)}</li>")
         return f'<ul class="places">{"".join(items)}</ul>'
 
-    def parameters(self, params: Sequence[ir.Parameter], anchors: bool = False) -> str:
-        """A parameter table: name, type, range, unit, description."""
+    def parameters(self, params: Sequence[ir.Parameter], option: bool = False) -> str:
+        """A parameter table: name, type, range, unit, description.
+
+        Option parameters are written ``@name`` (as the option's body reads them) and anchored.
+        """
         if not params:
             return '<p class="muted">no parameters</p>'
         rows = []
         for p in params:
-            anchor = f' id="param-{_e(p.short_name)}"' if anchors else ""
+            anchor = f' id="param-{_e(p.short_name)}"' if option else ""
+            name = ("@" if option else "") + p.short_name
             rows.append(
-                f"<tr{anchor}><td><code>@{_e(p.short_name)}</code></td><td>{self.kind(p.kind, p.enum)}</td>"
+                f"<tr{anchor}><td><code>{_e(name)}</code></td><td>{self.kind(p.kind, p.enum)}</td>"
                 f"<td>{_e(p.range or '')}</td><td>{_e(p.unit or '')}</td><td>{_e((p.doc or '').strip())}</td></tr>"
             )
         return (
@@ -329,7 +333,7 @@ class Renderer:
         if meta:
             parts.append(f'<p class="muted">{" · ".join(meta)}</p>')
         parts.append(self.doc(option.doc))
-        parts.append("<h2>Parameters</h2>" + self.parameters(option.params, anchors=True))
+        parts.append("<h2>Parameters</h2>" + self.parameters(option.params, option=True))
         parts.append('<h2>State machine</h2><div class="graph">' + svg + "</div>")
         parts.append("<h2>Called from</h2>" + self.places(refs.option_callers.get(option.name), "no option calls it"))
         callees: list[str] = []

@@ -109,15 +109,33 @@ def build(program: ir.Program, jobs: int | None = None, timings: dict[str, float
     return {path: data.encode("utf-8") if isinstance(data, str) else data for path, data in files.items()}
 
 
+#: The list of files the last :func:`write` put into a folder (one relative path a line).
+MANIFEST = ".xabsl-docs"
+
+
 def write(files: dict[str, bytes], folder: str | os.PathLike[str], jobs: int = 4) -> None:
-    """Write ``files`` below ``folder`` (created if missing), each atomically."""
+    """Write ``files`` below ``folder`` (created if missing), each atomically.
+
+    Pages a previous run wrote that this one does not (an option since renamed) are removed,
+    so no stale page links to a missing one; files the documentation did not write stay.
+    """
     root = Path(folder)
-    for sub in {Path(path).parent for path in files}:
+    for sub in sorted({Path(path).parent for path in files}):
         (root / sub).mkdir(parents=True, exist_ok=True)
+    manifest = root / MANIFEST
+    try:
+        previous = manifest.read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        previous = []
     # fsync per file is I/O wait, not CPU: a few threads overlap it
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         for future in [pool.submit(write_atomically, root / path, data) for path, data in files.items()]:
             future.result()
+    for stale in set(previous) - set(files):
+        target = (root / stale).resolve()
+        if target.is_relative_to(root.resolve()) and target.is_file():
+            target.unlink()
+    write_atomically(manifest, "".join(f"{path}\n" for path in sorted(files)).encode("utf-8"))
 
 
 def generate(program: ir.Program, folder: str | os.PathLike[str], jobs: int | None = None) -> DocsResult:

@@ -10,10 +10,12 @@ from pathlib import Path
 import pytest
 
 from engine.cli import main
-from engine.docs import build
+from engine.docs import build, write
 from engine.docs.xref import cross_references
+from engine.ir.ic_reader import read_ic_file
 from engine.lang import Compilation
 from tests.docs.sitecheck import broken_links, read_site
+from tests.kit import KIT
 
 SOURCES = {
     "agents.xabsl": '/*** Title: Tiny <set> & co */\ninclude "s.xabsl"; include "b.xabsl"; include "o.xabsl";\n'
@@ -117,7 +119,7 @@ def test_parameters_show_type_range_unit_and_doc(site: dict[str, str]) -> None:
     row = text_of(site["options/top.html"], r'<tr id="param-stop">(.*?)</tr>')
     assert row == "@stopdecimal0..1000mmthe distance to stop at"
     kick = text_of(site["behaviors.html"], r'<h3 id="b-kick">.*?<table>(.*?)</table>')
-    assert "@strengthdecimal0..11" in kick
+    assert "strengthdecimal0..11" in kick
 
 
 def test_cross_references_count_readers_writers_callers(compile_sources: Callable[..., Compilation]) -> None:
@@ -160,3 +162,34 @@ def test_cli_writes_the_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert main(["docs", str(tmp_path / "missing.xabsl"), "-o", str(out)]) == 2
     (tmp_path / "file").write_text("")
     assert main(["docs", str(agents), "-o", str(tmp_path / "file")]) == 2
+
+
+def test_a_second_run_removes_the_pages_of_options_gone(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    agents = tmp_path / "set" / "agents.xabsl"
+    agents.parent.mkdir()
+    for name, text in SOURCES.items():
+        (agents.parent / name).write_text(text)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    assert main(["docs", str(agents), "-o", str(out)]) == 0
+    assert (out / "options" / "top.html").is_file()
+    (agents.parent / "o.xabsl").write_text(SOURCES["o.xabsl"].replace("option top", "option start"))
+    (agents.parent / "agents.xabsl").write_text(SOURCES["agents.xabsl"].replace(", top)", ", start)"))
+    assert main(["docs", str(agents), "-o", str(out)]) == 0
+    assert not (out / "options" / "top.html").exists() and (out / "options" / "start.html").is_file()
+    assert (out / "notes.txt").read_text() == "mine"
+    assert broken_links(out, read_site(out)) == []
+
+
+def test_programs_read_from_intermediate_code_are_documented(tmp_path: Path) -> None:
+    """No spans, no source text: conditions in the canonical rendering, every link still valid."""
+    program = read_ic_file(KIT / "decisions" / "expected.ic")
+    files = build(program)
+    write(files, tmp_path)
+    pages = read_site(tmp_path)
+    assert broken_links(tmp_path, pages) == []
+    assert {p.heading for p in pages.values() if p.heading.startswith("option ")} == {
+        f"option {name}" for name in program.options
+    }
+    assert '<pre class="tree">' in files[next(p for p in files if p.startswith("options/"))].decode()
