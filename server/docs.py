@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import os
 import shutil
+import subprocess
 import tempfile
 import threading
 from html import escape
@@ -50,15 +51,14 @@ class DocsCache:
         self.generated = 0
 
     def digest(self, program: Program) -> str:
-        """The program's digest, computed once per program object."""
+        """The program's digest, computed once per program object (tens of ms for a large set)."""
         cached = self._digests.get(id(program))
         if cached is not None and cached[0] is program:
             return cached[1]
         digest = program_digest(program)
-        self._digests = {k: v for k, v in self._digests.items() if k != id(program)}
+        if len(self._digests) >= 2 * KEEP:
+            self._digests.clear()
         self._digests[id(program)] = (program, digest)
-        if len(self._digests) > 2 * KEEP:
-            self._digests = dict(list(self._digests.items())[-KEEP:])
         return digest
 
     def folder(self, program: Program) -> Path:
@@ -73,9 +73,14 @@ class DocsCache:
             staging = Path(tempfile.mkdtemp(prefix=".new-", dir=self.root))
             try:
                 generate(program, staging)
-                if folder.exists():  # a broken leftover (no index.html): replace it
-                    shutil.rmtree(folder)
-                os.replace(staging, folder)
+                if folder.exists() and not (folder / "index.html").is_file():
+                    shutil.rmtree(folder)  # a broken leftover
+                try:
+                    os.replace(staging, folder)
+                except OSError:
+                    # another studio sharing the cache renamed its (identical) folder in first
+                    if not (folder / "index.html").is_file():
+                        raise
             finally:
                 if staging.exists():
                     shutil.rmtree(staging, ignore_errors=True)
@@ -139,6 +144,9 @@ async def docs_file(request: Request, program: str, path: str) -> Response:
         folder = await asyncio.to_thread(_cache(request).folder, state.running)
     except GraphvizMissing as error:
         raise HTTPException(503, str(error)) from None
+    except subprocess.CalledProcessError as error:
+        detail = error.stderr.decode("utf-8", "replace").strip() if error.stderr else str(error)
+        raise HTTPException(503, f"Graphviz could not lay out a graph: {detail}") from None
     target = (folder / (path or "index.html")).resolve()
     if not target.is_relative_to(folder.resolve()) or not target.is_file():
         raise HTTPException(404, f"no documentation page {path!r}")

@@ -193,3 +193,11 @@ def test_programs_read_from_intermediate_code_are_documented(tmp_path: Path) -> 
         f"option {name}" for name in program.options
     }
     assert '<pre class="tree">' in files[next(p for p in files if p.startswith("options/"))].decode()
+
+
+def test_without_graphviz_the_command_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))  # no dot on it
+    assert main(["docs", str(KIT / "decisions" / "agents.xabsl"), "-o", str(tmp_path / "out")]) == 2
+    assert "Graphviz 'dot' is not installed" in capsys.readouterr().err

@@ -71,3 +71,12 @@ def test_a_hot_reload_documents_the_new_behavior(studio: tuple[TestClient, DocsC
     # an unchanged behavior is served from the cache
     client.get("/docs/demo/index.html")
     assert cache.generated == 2
+
+
+def test_without_graphviz_docs_answer_503(
+    studio: tuple[TestClient, DocsCache, Path], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    client, _, _ = studio
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    response = client.get("/docs/demo/index.html")
+    assert response.status_code == 503 and "Graphviz" in response.json()["detail"]
