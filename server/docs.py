@@ -13,7 +13,6 @@ from __future__ import annotations
 import asyncio
 import os
 import shutil
-import subprocess
 import tempfile
 import threading
 from html import escape
@@ -22,7 +21,7 @@ from pathlib import Path
 from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
 
-from engine.docs import generate, program_digest
+from engine.docs import GraphLayoutError, generate, program_digest
 from engine.emit.dot import GraphvizMissing
 from engine.ir.model import Program
 from server.session import Session
@@ -144,9 +143,8 @@ async def docs_file(request: Request, program: str, path: str) -> Response:
         folder = await asyncio.to_thread(_cache(request).folder, state.running)
     except GraphvizMissing as error:
         raise HTTPException(503, str(error)) from None
-    except subprocess.CalledProcessError as error:
-        detail = error.stderr.decode("utf-8", "replace").strip() if error.stderr else str(error)
-        raise HTTPException(503, f"Graphviz could not lay out a graph: {detail}") from None
+    except GraphLayoutError as error:
+        raise HTTPException(503, str(error)) from None
     target = (folder / (path or "index.html")).resolve()
     if not target.is_relative_to(folder.resolve()) or not target.is_file():
         raise HTTPException(404, f"no documentation page {path!r}")

@@ -35,7 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 def run(args: argparse.Namespace) -> int:
     """Compile, then write the documentation; print one summary line."""
-    from engine.docs import generate
+    from engine.docs import GraphLayoutError, generate
 
     if not os.path.isfile(args.agents_file):
         raise UsageError(f"no such file: {args.agents_file}")
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     try:
         result = generate(compilation.program, args.out, args.jobs)
-    except GraphvizMissing as error:
+    except (GraphvizMissing, GraphLayoutError) as error:
         raise UsageError(str(error)) from error
     except OSError as error:
         raise UsageError(f"cannot write output: {error.strerror}: {error.filename}") from error

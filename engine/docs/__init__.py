@@ -11,6 +11,7 @@ Modules: :mod:`.xref` (cross references), :mod:`.graphs` (DOT with links, batche
 :mod:`.pages` (HTML), :mod:`.assets` (CSS and the search script), :mod:`.site` (the writer).
 """
 
+from engine.docs.graphs import GraphLayoutError
 from engine.docs.site import DocsResult, build, generate, program_digest, write
 
-__all__ = ["DocsResult", "build", "generate", "program_digest", "write"]
+__all__ = ["DocsResult", "GraphLayoutError", "build", "generate", "program_digest", "write"]

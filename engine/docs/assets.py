@@ -40,6 +40,7 @@ pre .keyword { color: #8a3b9c; }
 .graph { overflow: auto; border: 1px solid var(--line); border-radius: 4px; padding: .5em; margin: .5em 0 1em;
   max-height: 80vh; }
 .graph svg { max-width: 100%; height: auto; }
+.graph.wide svg { max-width: none; }
 .graph a:hover text { text-decoration: underline; }
 ul.places { margin: .2em 0 .8em; padding-left: 1.2em; }
 ul.columns { columns: 18em; padding-left: 1.2em; }

@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import os
 import re
+import subprocess
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
 from engine import ir
 from engine.emit.dot import option_graph, quote, reachable_options, render_svg, state_machine
+from engine.errors import EmitError
 
 #: Where an SVG document starts in ``dot``'s output (labels are escaped, so never inside one).
 _SVG_START = "<?xml "
@@ -26,6 +28,10 @@ _SVG_START = "<?xml "
 _EDGE_ANCHOR = re.compile(
     r'<g id="a_leaf_(\d+)_(\d+)"><a ([^>]*)>(.*?)</a>\n</g>\n((?:<text[^>]*>[^<]*</text>\n)*)', re.S
 )
+
+
+class GraphLayoutError(EmitError, RuntimeError):
+    """Graphviz refused a graph (the message names the graph and quotes ``dot``)."""
 
 
 def _with_links(dot: str, links: Sequence[tuple[str, str]]) -> str:
@@ -86,8 +92,8 @@ def render_all(dots: Sequence[str], jobs: int | None = None) -> list[str]:
 
     Raises:
         GraphvizMissing: when ``dot`` is not installed.
-        subprocess.CalledProcessError: when ``dot`` rejects a graph (the batch is retried one
-            graph at a time first, so the error names that graph's input).
+        GraphLayoutError: when ``dot`` rejects a graph or times out (a failed batch is retried
+            one graph at a time, so the error names the graph).
     """
     if not dots:
         return []
@@ -112,7 +118,7 @@ def render_all(dots: Sequence[str], jobs: int | None = None) -> list[str]:
         except Exception:  # one bad graph fails its batch: find it (and render the rest) alone
             documents = []
         if len(documents) != len(share):
-            documents = [render_svg(dots[i]) for i in share]
+            documents = [_render_one(dots[i]) for i in share]
         for i, document in zip(share, documents, strict=True):
             result[i] = document
 
@@ -120,3 +126,13 @@ def render_all(dots: Sequence[str], jobs: int | None = None) -> list[str]:
         for future in [pool.submit(run, share) for share in shares]:
             future.result()
     return result
+
+
+def _render_one(dot: str) -> str:
+    try:
+        return render_svg(dot)
+    except subprocess.CalledProcessError as error:
+        detail = error.stderr.decode("utf-8", "replace").strip() if error.stderr else str(error)
+        raise GraphLayoutError(f"Graphviz could not lay out {dot.split('{', 1)[0].strip()}: {detail}") from error
+    except subprocess.TimeoutExpired as error:
+        raise GraphLayoutError(f"Graphviz took too long on {dot.split('{', 1)[0].strip()}") from error

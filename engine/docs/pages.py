@@ -416,7 +416,8 @@ class Renderer:
             meta.append(where)
         parts.append(f'<p class="muted">{" · ".join(meta)}</p>')
         parts.append(self.doc(agent.doc))
-        parts.append('<h2>Option graph</h2><div class="graph">' + svg + "</div>")
+        # natural size in a scroll box: fitted to the page, a large option graph's names get unreadable
+        parts.append('<h2>Option graph</h2><div class="graph wide">' + svg + "</div>")
         parts.append(f"<h2>Options ({len(options)})</h2>" + self.option_list(options))
         return self.page(self.site.agent(agent.name), f"agent {agent.name}", "\n".join(p for p in parts if p))
 

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from engine.cli import main
-from engine.docs import build, write
+from engine.docs import GraphLayoutError, build, write
+from engine.docs.graphs import render_all
 from engine.docs.xref import cross_references
 from engine.ir.ic_reader import read_ic_file
 from engine.lang import Compilation
@@ -201,3 +202,12 @@ def test_without_graphviz_the_command_says_so(
     monkeypatch.setenv("PATH", str(tmp_path))  # no dot on it
     assert main(["docs", str(KIT / "decisions" / "agents.xabsl"), "-o", str(tmp_path / "out")]) == 2
     assert "Graphviz 'dot' is not installed" in capsys.readouterr().err
+
+
+def test_a_graph_graphviz_refuses_is_named() -> None:
+    good = "digraph a { x -> y }\n"
+    bad = 'digraph "option broken" { x -> }\n'
+    with pytest.raises(GraphLayoutError, match=r'could not lay out digraph "option broken": .*syntax error'):
+        render_all([good, bad, good], jobs=1)
+    svgs = render_all([good, good, good], jobs=2)
+    assert len(svgs) == 3 and all(s.startswith("<?xml") and "<svg" in s for s in svgs)
