@@ -24,7 +24,7 @@ from typing import Any
 from examples.soccer.game import GameState
 from examples.soccer.world import TEAM_NAMES, SoccerWorld
 
-__all__ = ["KEYS", "arrange"]
+__all__ = ["KEYS", "arrange", "setup_from_scene"]
 
 KEYS = ("game_state", "kickoff", "ball", "ball_velocity", "robots")
 _MM_PER_M = 1000.0
@@ -88,3 +88,24 @@ def _point(value: Any, where: str, size: int, limit_x: float, limit_y: float) ->
     if abs(x) > limit_x or abs(y) > limit_y:
         raise ValueError(f"{where}: ({x:g}, {y:g}) mm is off the field")
     return [float(v) for v in value]
+
+
+def setup_from_scene(scene: Mapping[str, Any], status: Mapping[str, Any], names: list[str]) -> dict[str, Any]:
+    """The setup keys that put a match back into the situation of a dynamic scene and status.
+
+    ``scene`` is ``SoccerWorld.dynamic_scene()`` (robots in agent order, ``names``), ``status``
+    its ``status()``; what the scene does not hold (velocities, the referee's clocks) is not kept.
+    """
+    setup: dict[str, Any] = {}
+    state = status.get("game_state")
+    if isinstance(state, str) and state in {s.name.lower() for s in GameState}:
+        setup["game_state"] = state
+        if status.get("kickoff_team") in TEAM_NAMES:
+            setup["kickoff"] = status["kickoff_team"]
+    ball = scene.get("ball")
+    if isinstance(ball, list) and len(ball) == 2:
+        setup["ball"] = [float(v) for v in ball]
+    robots = scene.get("robots")
+    if isinstance(robots, list) and len(robots) == len(names):
+        setup["robots"] = {name: [float(v) for v in pose[:3]] for name, pose in zip(names, robots, strict=True)}
+    return setup

@@ -99,6 +99,12 @@ class SoccerExample:
             raise TypeError("the soccer setup arranges SoccerWorld matches")
         arrange(world, setup)
 
+    def setup_from_scene(self, scene: Mapping[str, Any], status: Mapping[str, Any], names: list[str]) -> dict[str, Any]:
+        """The setup that reproduces a scene ("Save as test" in the studio)."""
+        from examples.soccer.setup import setup_from_scene
+
+        return setup_from_scene(scene, status, names)
+
 
 def example(path: Path, robots: int = 5, half_duration_s: float = 600.0) -> SoccerExample:
     """The soccer world plug-in for the example folder ``path`` (``robots``: players per team)."""
