@@ -474,7 +474,7 @@ class TestForce(BaseModel):
 
 
 class TestDraftBody(BaseModel):
-    """"Save as test": the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
+    """Save as test: the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
 
     name: str = Field(min_length=1, max_length=120)
     robot: str = Field(min_length=1, max_length=120)

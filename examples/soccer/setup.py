@@ -18,7 +18,8 @@ naming them.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from functools import partial
 from typing import Any
 
 from examples.soccer.game import GameState
@@ -37,7 +38,7 @@ def arrange(world: SoccerWorld, setup: Mapping[str, Any]) -> None:
         raise ValueError(f"unknown soccer setup key(s) {', '.join(sorted(unknown))} (known: {', '.join(KEYS)})")
     limit_x = (world.dims.half_length + 1.0) * _MM_PER_M
     limit_y = (world.dims.half_width + 1.0) * _MM_PER_M
-    actions = []
+    actions: list[Callable[[], None]] = []
     if "game_state" in setup:
         name = setup["game_state"]
         states = {s.name.lower(): s for s in GameState}
@@ -48,12 +49,12 @@ def arrange(world: SoccerWorld, setup: Mapping[str, Any]) -> None:
             if setup["kickoff"] not in TEAM_NAMES:
                 raise ValueError(f"kickoff must be one of {', '.join(TEAM_NAMES)}, got {setup['kickoff']!r}")
             kickoff = TEAM_NAMES.index(setup["kickoff"])
-        actions.append(lambda state=states[name], kickoff=kickoff: world.game.set_state(state, kickoff))
+        actions.append(partial(world.game.set_state, states[name], kickoff))
     elif "kickoff" in setup:
         raise ValueError("kickoff goes with game_state")
     if "ball" in setup:
         bx, by = _point(setup["ball"], "ball", 2, limit_x, limit_y)
-        actions.append(lambda: world.place_ball(bx / _MM_PER_M, by / _MM_PER_M))
+        actions.append(partial(world.place_ball, bx / _MM_PER_M, by / _MM_PER_M))
     if "ball_velocity" in setup:
         vx, vy = _point(setup["ball_velocity"], "ball_velocity", 2, 10_000.0, 10_000.0)
 
@@ -70,9 +71,7 @@ def arrange(world: SoccerWorld, setup: Mapping[str, Any]) -> None:
         if agent is None:
             raise ValueError(f"no robot {name!r} (robots: {', '.join(by_name)})")
         x, y, heading = _point(pose, f"robots.{name}", 3, limit_x, limit_y)
-        actions.append(
-            lambda a=agent, x=x, y=y, h=heading: world.place_robot(a, x / _MM_PER_M, y / _MM_PER_M, math.radians(h))
-        )
+        actions.append(partial(world.place_robot, agent, x / _MM_PER_M, y / _MM_PER_M, math.radians(heading)))
     for action in actions:
         action()
 

@@ -28,6 +28,7 @@ DEFAULT_RECORDINGS = Path("xabsl-test-recordings")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add ``xabsl test`` to the command line (the ``xabsl.commands`` entry point)."""
     parser = subparsers.add_parser(
         "test",
         help="run behavior test suites (*.xabsl-test.toml): setups, forced options, timed assertions",

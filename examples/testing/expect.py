@@ -92,7 +92,7 @@ def matches(actual: Any, wanted: Any) -> bool:
     if isinstance(wanted, list):
         if isinstance(actual, bool) or not isinstance(actual, int | float):
             return False
-        return wanted[0] - TOLERANCE <= actual <= wanted[1] + TOLERANCE
+        return bool(wanted[0] - TOLERANCE <= actual <= wanted[1] + TOLERANCE)
     if isinstance(wanted, bool) or isinstance(actual, bool):
         return isinstance(wanted, bool) and isinstance(actual, bool) and actual is wanted
     if isinstance(wanted, str):
@@ -148,9 +148,7 @@ class Monitor:
             return
         ok, values = self.holds(view.tree, engine)
         self._last = (view.tick, t, values)
-        if e.quantifier == "always" and not ok:
-            self.failure = Failure(e, view.tick, t, values)
-        elif e.quantifier == "never" and ok:
+        if (e.quantifier == "always" and not ok) or (e.quantifier == "never" and ok):
             self.failure = Failure(e, view.tick, t, values)
         elif e.quantifier == "eventually":
             if not ok:
@@ -177,8 +175,10 @@ class Monitor:
             self._changes += 1
             if self._changes > e.max_changes:
                 self.failure = Failure(
-                    e, view.tick, view.t_ms, f"{e.symbol} changed {_fmt(self._previous)} -> {_fmt(value)}, "
-                    f"change {self._changes}"
+                    e,
+                    view.tick,
+                    view.t_ms,
+                    f"{e.symbol} changed {_fmt(self._previous)} -> {_fmt(value)}, change {self._changes}",
                 )
         self._seen = True
         self._previous = value
@@ -269,9 +269,7 @@ def _compare(comparator: str, actual: Any, wanted: Any) -> bool:
 def _params_text(params: dict[str, Any], enums: dict[str, str], engine: Engine) -> str:
     if not params:
         return ""
-    shown = ", ".join(
-        f"{k.rsplit('.', 1)[-1]}={_fmt(engine.enum_element(enums.get(k), v))}" for k, v in params.items()
-    )
+    shown = ", ".join(f"{k.rsplit('.', 1)[-1]}={_fmt(engine.enum_element(enums.get(k), v))}" for k, v in params.items())
     return f" ({shown})"
 
 

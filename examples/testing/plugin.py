@@ -25,6 +25,7 @@ _RESULTS = pytest.StashKey[list[CaseResult]]()
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
+    """The plugin's option: where failing tests leave their recordings."""
     group = parser.getgroup("xabsl", "XABSL behavior tests")
     group.addoption(
         "--xabsl-recordings",
@@ -35,10 +36,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    """Start collecting the results (for the coverage summary)."""
     config.stash[_RESULTS] = []
 
 
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Collector | None:
+    """Collect ``*.xabsl-test.toml`` files."""
     if file_path.name.endswith(SUFFIX):
         return SuiteFile.from_parent(parent, path=file_path)
     return None
@@ -48,6 +51,7 @@ class SuiteFile(pytest.File):
     """A test file: its ``[[test]]`` tables are the items."""
 
     def collect(self) -> Iterator[pytest.Item]:
+        """One item per ``[[test]]``; a bad file is a collection error with the file's message."""
         try:
             suite = load_suite(self.path)
         except SpecError as error:
@@ -68,6 +72,7 @@ class BehaviorTest(pytest.Item):
         self.case = case
 
     def runtest(self) -> None:
+        """Run the test; a failure raises :class:`BehaviorFailure` with the report."""
         config = self.config
         folder = config.getoption("--xabsl-recordings")
         recordings = Path(folder) if folder else Path(tempfile.gettempdir()) / "xabsl-test-recordings"
@@ -77,15 +82,18 @@ class BehaviorTest(pytest.Item):
             raise BehaviorFailure(result.report())
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> str:
+        """The report (assertions, ticks, values, recording) instead of a traceback."""
         if isinstance(excinfo.value, BehaviorFailure):
             return str(excinfo.value)
         return str(super().repr_failure(excinfo))
 
     def reportinfo(self) -> tuple[Path, int, str]:
+        """Where the test is: the file."""
         return self.path, 0, f"behavior test {self.case.id}"
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    """The coverage of the behavior tests that ran."""
     results = config.stash.get(_RESULTS, [])
     if not results:
         return

@@ -25,7 +25,7 @@ from typing import Any, Protocol, runtime_checkable
 from engine.errors import XabslError
 from engine.host import BehaviorLoop, CommandableWorld, World, WorldCommandError
 from engine.ir.model import Program
-from engine.record import Recorder, Recording
+from engine.record import Recorder, Recording, RecordingError
 from engine.record.fork import resimulate
 from engine.record.writer import engines_of
 from engine.runtime import Engine
@@ -159,7 +159,11 @@ class _Run:
                 self.engine.root_actions.select_agent(case.agent)
             if case.force is not None:
                 kind, name, params = case.force
-                force = self.engine.root_actions.force_option if kind == "option" else self.engine.root_actions.force_behavior
+                force = (
+                    self.engine.root_actions.force_option
+                    if kind == "option"
+                    else self.engine.root_actions.force_behavior
+                )
                 force(name, params)
         except (XabslError, ValueError) as error:
             raise TestSetupError(str(error)) from None
@@ -193,7 +197,7 @@ class _Run:
         try:
             with Recording(recording) as opened:
                 return resimulate(opened, self._build, tick, verify=verify)
-        except (XabslError, OSError, ValueError) as error:
+        except (RecordingError, XabslError, OSError, ValueError) as error:
             raise TestSetupError(f"from tick {tick} of {recording}: {error}") from None
 
     def _check_names(self, expects: tuple[Expect, ...]) -> None:
@@ -217,7 +221,9 @@ class _Run:
         case, loop, engine = self.case, self.loop, self.engine
         monitors = [Monitor(e) for e in case.expects]
         coverage = Coverage()
-        key = self.plugin.program_key(next(a for a in self.world.agents if a.name == self.robot)) or ""
+        # Keyed by world and program: two examples may both call their program "behavior".
+        program_key = self.plugin.program_key(next(a for a in self.world.agents if a.name == self.robot))
+        key = f"{self.plugin.name}/{program_key}"
         coverage.add_program(key, engine.program)
         period = 1000.0 / self.plugin.behavior_hz
         ticks = max(1, round(case.duration * 1000 / period))
@@ -254,7 +260,11 @@ class _Run:
             if engine.fault is not None:
                 fault = Failure(Expect("the behavior runs without a fault", "always"), tick, t, str(engine.fault))
                 break
-            if all(m.decided for m in monitors) or (stop_after is not None and tick >= stop_after):
+            # A recording run goes on past the decisions: a second after the failing tick.
+            if stop_after is not None:
+                if tick >= stop_after:
+                    break
+            elif all(m.decided for m in monitors):
                 break
             if self.world.finished:
                 break

@@ -1,4 +1,4 @@
-""""Save as test": a behavior test file that reproduces what the studio's tester set up, for the user to edit.
+"""Save as test: a behavior test file that reproduces what the studio's tester set up, for the user to edit.
 
 :func:`draft_test` writes the TOML of one suite with one test: the world plug-in and its options
 (``path``, ``world``, ``options``), the session's seed, the world's situation when the world can
@@ -20,7 +20,7 @@ from typing import Any
 
 from examples.testing.spec import SUFFIX, parse_suite
 
-__all__ = ["DraftError", "draft_test", "draft_file_name", "toml_value"]
+__all__ = ["DraftError", "draft_file_name", "draft_test", "toml_value"]
 
 
 class DraftError(ValueError):
@@ -89,7 +89,9 @@ def draft_test(
         robot: the robot the tester drove.
         tests_folder: where the file will be (paths in it are relative to this folder).
         example_path: the path the studio serves (example folder, behavior folder or agents file).
-        world, options, seed: how the studio runs the world.
+        world: the world plug-in named with ``--world`` (None: the folder's own).
+        options: the plug-in's options (``robots``...).
+        seed: the session's seed.
         setup: the world's situation as setup keys (None: the world cannot say).
         force: ``(kind, name, params)`` forced as root, params with enum values as element names.
         overrides: input symbol -> value (enums as element names).
@@ -129,11 +131,14 @@ def draft_test(
         lines.append(f"inputs = [{{ t = 0, set = {toml_value(dict(overrides))} }}]")
     expects = []
     for option, state in active:
-        expects.append(f"[[test.expect]]\nwithin = {toml_value(float(duration))}\noption = {toml_value(option)}\nstate = {toml_value(state)}")
+        expects.append(
+            f"[[test.expect]]\nwithin = {toml_value(float(duration))}\n"
+            f"option = {toml_value(option)}\nstate = {toml_value(state)}"
+        )
     for behavior in dict.fromkeys(behaviors):
         expects.append(f"[[test.expect]]\nwithin = {toml_value(float(duration))}\nbehavior = {toml_value(behavior)}")
     if not expects:
-        expects.append("[[test.expect]]\nnever = true\nsymbol = \"CHANGE.ME\"\nequals = 0")
+        expects.append('[[test.expect]]\nnever = true\nsymbol = "CHANGE.ME"\nequals = 0')
     text = "\n".join(lines) + "\n\n" + "\n\n".join(expects) + "\n"
     parse_suite(text, tests_folder / draft_file_name(name))  # what we write must be a valid suite
     return text

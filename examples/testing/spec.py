@@ -378,8 +378,8 @@ class _Parser:
         params = self.table(e.get("params", {}), f"{where}.params")
         if params and kind == "symbol":
             raise self.error(f"{where}.params", "params go with option or behavior")
-        for key, value in params.items():
-            self.param_value(value, f"{where}.params.{key}")
+        for key, given in params.items():
+            self.param_value(given, f"{where}.params.{key}")
         symbol = self.string(e["symbol"], f"{where}.symbol") if kind == "symbol" else None
         comparators = [c for c in COMPARATORS if c in e]
         comparator: str | None = None

@@ -18,7 +18,10 @@ seed = 1
 duration = 2
 """
 
-INPUTS = 'inputs = [{ t = 0, set = { go = false, level = 5 } }, { t = 500, set = { go = true } }, { t = 1000, set = { level = 20 } }]'
+INPUTS = (
+    "inputs = [{ t = 0, set = { go = false, level = 5 } }, { t = 500, set = { go = true } }, "
+    "{ t = 1000, set = { level = 20 } }]"
+)
 
 
 @pytest.fixture

@@ -84,7 +84,9 @@ def test_window_eventually_must_start_in_window(write_suite: Callable[..., Path]
 
 
 def test_all_failures_are_reported(write_suite: Callable[..., Path]) -> None:
-    body = '[[test.expect]]\nnever = true\noption = "helper"\n[[test.expect]]\nalways = true\nsymbol = "level"\nbelow = 10'
+    body = (
+        '[[test.expect]]\nnever = true\noption = "helper"\n[[test.expect]]\nalways = true\nsymbol = "level"\nbelow = 10'
+    )
     result = run(write_suite, body)
     assert [f.tick for f in result.failures] == [20, 40]
     assert "tick 20" in result.report() and "tick 40" in result.report()
@@ -122,7 +124,8 @@ params = { speed = 100, direction = 0 }
 
 
 def test_selected_agent(write_suite: Callable[..., Path]) -> None:
-    body = '[[test]]\nname = "a"\nagent = "helper_only"\n[[test.expect]]\nalways = true\noption = "helper"\nstate = "turning"'
+    body = '[[test]]\nname = "a"\nagent = "helper_only"\n'
+    body += '[[test.expect]]\nalways = true\noption = "helper"\nstate = "turning"'
     assert run_case(load_suite(write_suite(body)).cases[0]).ok
 
 
@@ -159,7 +162,10 @@ state = "busy"
         ('[[test.expect]]\nalways = true\nsymbol = "nope"\nequals = 1', "the behavior has no symbol nope"),
         ('robot = "robot9"\n[[test.expect]]\nalways = true\noption = "top"', "no robot 'robot9'"),
         ('setup = { ball = [0, 0] }\n[[test.expect]]\nalways = true\noption = "top"', "offers no setup"),
-        ('force = { option = "top", params = { x = 1 } }\n[[test.expect]]\nalways = true\noption = "top"', "no parameter x"),
+        (
+            'force = { option = "top", params = { x = 1 } }\n[[test.expect]]\nalways = true\noption = "top"',
+            "no parameter x",
+        ),
     ],
 )
 def test_errors_name_what_is_wrong(write_suite: Callable[..., Path], body: str, error: str) -> None:
@@ -171,9 +177,12 @@ def test_errors_name_what_is_wrong(write_suite: Callable[..., Path], body: str, 
 def test_coverage_counts_what_ran(write_suite: Callable[..., Path]) -> None:
     result = run(write_suite, '[[test.expect]]\nalways = true\noption = "top"')
     assert result.coverage is not None
-    figures = result.coverage.programs["behavior"].figures()
+    figures = result.coverage.programs["behavior/behavior"].figures()
     assert figures["options"] == (2, 2)
     assert figures["states"] == (4, 4)
     # idle -> busy and busy -> high ran; high -> idle never did.
     assert figures["transitions"] == (2, 3)
-    assert result.coverage.programs["behavior"].reached_transitions == {("top", "idle", "busy"), ("top", "busy", "high")}
+    assert result.coverage.programs["behavior/behavior"].reached_transitions == {
+        ("top", "idle", "busy"),
+        ("top", "busy", "high"),
+    }

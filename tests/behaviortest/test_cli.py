@@ -57,7 +57,7 @@ def test_exit_status_and_output(suite: Path, tmp_path: Path, capsys: pytest.Capt
     assert "fixture::stays idle: FAILED" in out
     assert "tick 20 (t = 0.5 s): never in 0 s..end: option top in state busy active failed: top in state busy" in out
     assert "2 passed, 1 failed, 0 errors" in out
-    assert "coverage of behavior: options 2/2 (100%), states 4/4 (100%), transitions 2/3 (67%)" in out
+    assert "coverage of behavior/behavior: options 2/2 (100%), states 4/4 (100%), transitions 2/3 (67%)" in out
 
 
 def test_usage_errors(suite: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -75,7 +75,9 @@ def test_junit_is_valid(suite: Path, tmp_path: Path) -> None:
     root = ET.parse(out).getroot()
     assert root.tag == "testsuites"
     [testsuite] = list(root)
-    assert testsuite.attrib["tests"] == "3" and testsuite.attrib["failures"] == "1" and testsuite.attrib["errors"] == "0"
+    assert (
+        testsuite.attrib["tests"] == "3" and testsuite.attrib["failures"] == "1" and testsuite.attrib["errors"] == "0"
+    )
     cases = {c.attrib["name"]: c for c in testsuite.iter("testcase")}
     assert set(cases) == {"goes busy", "stays idle", "kicks when high"}
     [failure] = cases["stays idle"].findall("failure")

@@ -10,7 +10,9 @@ pytest_plugins = ["pytester"]
 
 
 def test_collects_and_reports(pytester: pytest.Pytester) -> None:
-    body = one_test('[[test.expect]]\nwithin = 0.6\noption = "top"\nstate = "busy"').replace('name = "t"', 'name = "ok"')
+    body = one_test('[[test.expect]]\nwithin = 0.6\noption = "top"\nstate = "busy"').replace(
+        'name = "t"', 'name = "ok"'
+    )
     body += one_test('[[test.expect]]\nnever = true\nbehavior = "kick"').replace('name = "t"', 'name = "no kick"')
     pytester.makefile(".xabsl-test.toml", team=HEAD + body)
     pytester.makefile(".toml", ignored=HEAD + body)  # not a behavior test file name
@@ -23,7 +25,7 @@ def test_collects_and_reports(pytester: pytest.Pytester) -> None:
             "*tick 40 (t = 1 s): never in 0 s..end: basic behavior kick called failed: kick (strength=1)*",
             "*recording: *rec/fixture--no_kick.mcap (tick 40)*",
             "*xabsl behavior test coverage*",
-            "coverage of behavior: options 2/2*",
+            "coverage of behavior/behavior: options 2/2*",
         ]
     )
     assert (pytester.path / "rec" / "fixture--no_kick.mcap").is_file()

@@ -1,4 +1,4 @@
-""""Save as test": the draft is a valid suite that reproduces the tester's situation and passes."""
+""" "Save as test": the draft is a valid suite that reproduces the tester's situation and passes."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 
 from examples.soccer.studio import SoccerExample
 from examples.testing.runner import run_case
-from examples.testing.save import DraftError, draft_test, draft_file_name, toml_value
+from examples.testing.save import DraftError, draft_file_name, draft_test, toml_value
 from examples.testing.spec import load_suite
 from server.session import Session
 from tests.server.conftest import LiveServer
@@ -22,7 +22,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def test_toml_values_and_names() -> None:
-    assert toml_value({"a b": [1, 2.5, True], "c": "x\"y"}) == '{ "a b" = [1, 2.5, true], c = "x\\"y" }'
+    assert toml_value({"a b": [1, 2.5, True], "c": 'x"y'}) == '{ "a b" = [1, 2.5, true], c = "x\\"y" }'
     assert draft_file_name("Goalie clears!") == "goalie_clears.xabsl-test.toml"
     with pytest.raises(DraftError):
         toml_value(float("nan"))

@@ -21,11 +21,14 @@ def parse(body: str) -> object:
     [
         ('[[test]]\nname = "a"\n', "test 'a': a test needs at least one [[test.expect]] table"),
         ("", "a suite needs at least one [[test]] table"),
-        ('[[test]]\nname = "a"\nbogus = 1\n[[test.expect]]\nalways = true\noption = "top"', "test[1]: unknown key(s) bogus"),
+        (
+            '[[test]]\nname = "a"\nbogus = 1\n[[test.expect]]\nalways = true\noption = "top"',
+            "test[1]: unknown key(s) bogus",
+        ),
         ('[[test]]\n[[test.expect]]\noption = "top"', "give exactly one of always, never"),
         ('[[test]]\n[[test.expect]]\nalways = true\nnever = true\noption = "top"', "give exactly one of always"),
         ('[[test]]\n[[test.expect]]\nalways = false\noption = "top"', "expect[1].always: write it as `= true`"),
-        ('[[test]]\n[[test.expect]]\nalways = true', "give exactly one of option, behavior, symbol"),
+        ("[[test]]\n[[test.expect]]\nalways = true", "give exactly one of option, behavior, symbol"),
         ('[[test]]\n[[test.expect]]\nalways = true\nsymbol = "x"', "a symbol needs exactly one of equals"),
         ('[[test]]\n[[test.expect]]\nalways = true\nstate = "s"\nbehavior = "b"', "a state belongs to an option"),
         ('[[test]]\n[[test.expect]]\nwithin = -1\noption = "top"', "expect[1].within: expected seconds"),
@@ -34,9 +37,15 @@ def parse(body: str) -> object:
         ('[[test]]\n[[test.expect]]\nalways = true\nfrom = 2\nuntil = 1\noption = "top"', "until is before from"),
         ('[[test]]\n[[test.expect]]\nalways = true\nbehavior = "b"\nparams = { p = [3, 1] }', "empty range"),
         ('[[test]]\n[[test.expect]]\nmax_changes = -1\nsymbol = "m"', "max_changes = N"),
-        ('[[test]]\nforce = { option = "a", behavior = "b" }\n[[test.expect]]\nalways = true\noption = "a"', "exactly one of option, behavior"),
+        (
+            '[[test]]\nforce = { option = "a", behavior = "b" }\n[[test.expect]]\nalways = true\noption = "a"',
+            "exactly one of option, behavior",
+        ),
         ('[[test]]\ninputs = [{ t = -5 }]\n[[test.expect]]\nalways = true\noption = "a"', "must be >= 0"),
-        ('[[test]]\nname = "a"\n[[test.expect]]\nalways = true\noption = "a"\n[[test]]\nname = "a"\n[[test.expect]]\nalways = true\noption = "a"', "two tests are named 'a'"),
+        (
+            '[[test]]\nname = "a"\n[[test.expect]]\nalways = true\noption = "a"\n' * 2,
+            "two tests are named 'a'",
+        ),
         ("[[test]\n", "not valid TOML"),
     ],
 )
