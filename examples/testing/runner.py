@@ -310,7 +310,7 @@ def run_case(case: Case, recordings: Path | None = None) -> CaseResult:
         result.status = "failed"
         if recordings is not None:
             first = min(f.tick for f in result.failures)
-            result.recording = str(_record(case, recordings, first))
+            result.recording = str(_record(case, recordings, first).resolve())
             result.recording_tick = first
     result.seconds = time.perf_counter() - started
     return result
