@@ -1,10 +1,10 @@
-import { readFileSync } from "node:fs";
 import { describe, expect, it } from "vitest";
 import { type BehaviorDescription, indexDescription } from "../src/description";
 import { testDraftBody } from "../src/panels/testdraft";
 import type { RobotState } from "../src/protocol";
+import demo from "./fixtures/demo.json";
 
-const description = JSON.parse(readFileSync(new URL("./fixtures/demo.json", import.meta.url), "utf8")) as BehaviorDescription;
+const description = demo as unknown as BehaviorDescription;
 const index = indexDescription(description);
 
 function robot(over: Partial<RobotState>): RobotState {
