@@ -132,3 +132,15 @@ def test_module_entry_point_runs(suite: Path, tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "1 passed, 0 failed" in done.stdout
+
+
+def test_register_adds_the_subcommand(suite: Path) -> None:
+    import argparse
+
+    from examples.testing.cli import register
+
+    parser = argparse.ArgumentParser(prog="xabsl")
+    register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["test", str(suite), "-k", "busy", "--jobs", "2", "--no-recordings", "-q"])
+    assert (args.keyword, args.jobs, args.no_recordings) == ("busy", 2, True)
+    assert args.func(args) == 0

@@ -16,7 +16,9 @@ SOCCER = Path(__file__).resolve().parents[2] / "examples" / "soccer"
 
 def test_arrange_places_and_sets_the_game() -> None:
     world = build_world(1, players_per_team=2)
-    arrange(world, {"game_state": "playing", "kickoff": "red", "ball": [1000, -500], "robots": {"red2": [200, 300, 90]}})
+    arrange(
+        world, {"game_state": "playing", "kickoff": "red", "ball": [1000, -500], "robots": {"red2": [200, 300, 90]}}
+    )
     scene = world.dynamic_scene()
     assert scene["ball"] == [1000, -500]
     assert scene["robots"][3] == [200, 300, 90.0]
@@ -51,7 +53,9 @@ def suite(body: str, tmp: Path) -> str:
 
 def test_from_a_tick_of_a_recording(tmp_path: Path) -> None:
     # A failing test of a plain seeded match leaves a deterministic recording ...
-    failing = suite('[[test]]\nname = "rec"\nduration = 3\n[[test.expect]]\nnever = true\noption = "play_soccer"', tmp_path)
+    failing = suite(
+        '[[test]]\nname = "rec"\nduration = 3\n[[test.expect]]\nnever = true\noption = "play_soccer"', tmp_path
+    )
     [case] = parse_suite(failing, tmp_path / "a.xabsl-test.toml").cases
     result = run_case(case, tmp_path / "rec")
     assert result.status == "failed" and result.recording is not None
@@ -75,7 +79,9 @@ state = "ready"
     forked = run_case(fork)
     assert forked.ok, forked.report()
     # Beyond the recording: refused with the recording's message.
-    [late] = parse_suite(suite(body.replace("tick = 30", "tick = 5000"), tmp_path), tmp_path / "c.xabsl-test.toml").cases
+    [late] = parse_suite(
+        suite(body.replace("tick = 30", "tick = 5000"), tmp_path), tmp_path / "c.xabsl-test.toml"
+    ).cases
     refused = run_case(late)
     assert refused.status == "error" and "outside the recording" in (refused.error or "")
 
