@@ -18,9 +18,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from engine.cli import UsageError
+from engine.files import write_atomically
 from examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, run_world, summary
 
 PERTURBATIONS = ("none", "teleport-mug", "remove-book", "block-cb")
@@ -100,7 +100,10 @@ def main(args: argparse.Namespace) -> int:
 
         program = world.engine.program
         text = option_graph(program, "execute_plan") + "\n" + state_machine(program.options["execute_plan"])
-        Path(args.render).write_text(text)
+        try:
+            write_atomically(args.render, text.encode("utf-8"))
+        except OSError as error:
+            raise UsageError(f"cannot write {args.render}: {error.strerror or error}") from None
     stats = run_world(world, duration)
     out = summary(world)
     out["real_time_factor"] = round(stats.real_time_factor, 1)
