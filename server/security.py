@@ -206,6 +206,7 @@ class SecurityMiddleware:
         self.policy = policy
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Check one request or handshake, then pass it on (or answer 401/403/413 here)."""
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
