@@ -92,8 +92,10 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("--duration must be positive")
     try:
         world = build_world(args.seed, plan=args.plan, dt=args.dt, noise=args.noise)
-    except ValueError as error:  # a tick the model's stability check rejects, or one that does not divide 1 s
-        raise UsageError(str(error)) from None
+    except ValueError as error:  # a bad model file (ModelError), a tick the stability check rejects, or
+        raise UsageError(str(error)) from None  # one that does not divide 1 s
+    except OSError as error:  # an unreadable model or PDDL file
+        raise UsageError(f"{error.filename or ''}: {error.strerror or error}") from None
     perturb(world, args.perturb)
     if args.render:
         from engine.emit.dot import option_graph, state_machine
