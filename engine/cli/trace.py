@@ -18,18 +18,21 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
+from collections.abc import Iterator
 from typing import Any
 
 from engine.cli import UsageError
-from engine.files import write_atomically
+from engine.files import read_regular, write_atomically
 from engine.ir.model import Program
 
 _IC_SUFFIXES = (".ic", ".dat")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``trace`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "trace",
         help="run a behavior under the conformance host: input trace in, activation trace out",
@@ -88,11 +91,77 @@ def _load(args: argparse.Namespace) -> Program:
         raise UsageError(f"{path}: not a text file ({error.reason})") from None
 
 
+#: The largest input trace read (a 10,000-tick trace is about 1 MB).
+MAX_INPUT_BYTES = 256 * 1024 * 1024
+
+
+class _BadNumber(ValueError):
+    """A number in an input line that is not a finite double (NaN, Infinity, 1e999, 10**400)."""
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(f"{text} is not a finite number")
+    return value
+
+
+def _finite_int(text: str) -> int:
+    if len(text) > 400:  # int() itself refuses over 4,300 digits; no double has 400
+        raise _BadNumber(f"the integer {text[:20]}... ({len(text)} digits) is out of range")
+    value = int(text)
+    if len(text) > 300:
+        try:
+            float(value)
+        except OverflowError:
+            raise _BadNumber(f"the integer {text[:20]}... is out of range") from None
+    return value
+
+
+def _constant(text: str) -> Any:
+    raise _BadNumber(f"{text} is not a finite number")
+
+
+def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
+    """``(line number, tick number, parsed line)`` of every non-blank line of an input trace.
+
+    Only a regular file of at most MAX_INPUT_BYTES is read; NaN, Infinity and numbers beyond the
+    double range are refused (they would reach the output, which would then not be JSON).
+
+    Raises:
+        UsageError: naming the file, the line and the tick.
+    """
+    try:
+        data = read_regular(path, MAX_INPUT_BYTES)
+    except OSError as error:
+        raise UsageError(f"{path}: cannot read: {error.strerror or error}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        raise UsageError(f"{path}:{line}: not UTF-8 text (byte 0x{data[error.start]:02x})") from None
+    tick = 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if not raw.strip():
+            continue
+        tick += 1
+        try:
+            line = json.loads(raw, parse_float=_finite_float, parse_int=_finite_int, parse_constant=_constant)
+        except json.JSONDecodeError as error:
+            raise UsageError(f"{path}:{number}: not JSON ({error.msg})") from None
+        except _BadNumber as error:
+            raise UsageError(f"{path}:{number}: tick {tick}: {error}") from None
+        except RecursionError:
+            raise UsageError(f"{path}:{number}: tick {tick}: nested too deeply") from None
+        yield number, tick, line
+
+
 def run(args: argparse.Namespace) -> int:
+    """Trace the behavior over the input trace; the exit status as in the module docstring."""
     from engine.runtime.errors import EngineError
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
-    if not os.path.isfile(args.inputs):
+    if not os.path.exists(args.inputs):
         raise UsageError(f"no such file: {args.inputs}")
     try:
         program = _load(args)
@@ -104,17 +173,12 @@ def run(args: argparse.Namespace) -> int:
             if args.agent not in {a.name for a in program.agents}:
                 raise UsageError(f"unknown agent {args.agent!r} (--agent)")
             runner.select_agent(args.agent)
-        with open(args.inputs, encoding="utf-8") as source:
-            lines = source.read().splitlines()
         records: list[str] = []
-        for number, text in enumerate(lines, start=1):
-            if not text.strip():
-                continue
+        for number, tick, line in _input_lines(args.inputs):
             try:
-                line: Any = json.loads(text)
-            except json.JSONDecodeError as error:
-                raise UsageError(f"{args.inputs}:{number}: not JSON ({error.msg})") from None
-            records.append(json.dumps(runner.tick(line), separators=(",", ":")))
+                records.append(json.dumps(runner.tick(line), separators=(",", ":")))
+            except TraceInputError as error:
+                raise UsageError(f"{args.inputs}:{number}: tick {tick}: {error}") from None
     except TraceInputError as error:
         raise UsageError(f"{args.inputs}: {error}") from None
     except (_BehaviorError, TraceFaultError) as error:
