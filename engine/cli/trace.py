@@ -169,6 +169,9 @@ def run(args: argparse.Namespace) -> int:
             runner = TraceRunner(program)
         except EngineError as error:
             raise _BehaviorError(str(error).replace("\n", "; ")) from None
+        except ValueError as error:  # the host cannot bind a symbol (an IC without its declarations)
+            hint = " (for intermediate code, --declarations AGENTS_XABSL gives the declarations)"
+            raise _BehaviorError(f"{args.agents_file}: {error}{hint if args.declarations is None else ''}") from None
         if args.agent is not None:
             if args.agent not in {a.name for a in program.agents}:
                 raise UsageError(f"unknown agent {args.agent!r} (--agent)")
@@ -176,9 +179,16 @@ def run(args: argparse.Namespace) -> int:
         records: list[str] = []
         for number, tick, line in _input_lines(args.inputs):
             try:
-                records.append(json.dumps(runner.tick(line), separators=(",", ":")))
-            except TraceInputError as error:
-                raise UsageError(f"{args.inputs}:{number}: tick {tick}: {error}") from None
+                output = runner.tick(line)
+            except TraceInputError as error:  # its message names the tick
+                raise UsageError(f"{args.inputs}:{number}: {error}") from None
+            try:
+                records.append(json.dumps(output, separators=(",", ":"), allow_nan=False))
+            except ValueError:  # finite inputs can still overflow to inf in the behavior's arithmetic
+                raise _BehaviorError(
+                    f"{args.inputs}:{number}: tick {tick}: the behavior computed a non-finite value "
+                    "(NaN or Infinity), which a JSON trace cannot carry"
+                ) from None
     except TraceInputError as error:
         raise UsageError(f"{args.inputs}: {error}") from None
     except (_BehaviorError, TraceFaultError) as error:

@@ -108,8 +108,18 @@ class ExprError(ValueError):
         self.col = col
         self.reason = message
         where = f" at column {col + 1}" if col is not None else ""
-        caret = f"\n    {text}\n    {' ' * col}^" if col is not None else f"\n    {text}"
+        shown, at = _window(text, col if col is not None else 0)
+        caret = f"\n    {shown}\n    {' ' * at}^" if col is not None else f"\n    {shown}"
         super().__init__(f"{message}{where}{caret}")
+
+
+def _window(text: str, col: int, width: int = 50) -> tuple[str, int]:
+    """At most ``width`` characters of ``text`` either side of ``col``, and col's place in them."""
+    start = max(0, col - width)
+    shown = text[start : col + width]
+    prefix = "..." if start > 0 else ""
+    suffix = "..." if col + width < len(text) else ""
+    return prefix + shown + suffix, len(prefix) + col - start
 
 
 # --- tree ----------------------------------------------------------------------------------------

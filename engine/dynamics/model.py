@@ -320,6 +320,14 @@ def _too_deep(text: str, limit: int) -> tuple[int, int] | None:
 _show = ex.short_repr
 
 
+def _elide(text: str, limit: int) -> str:
+    """``text``, or its start and end around "..." when longer than ``limit`` characters."""
+    if len(text) <= limit:
+        return text
+    half = (limit - 3) // 2
+    return f"{text[:half]}...{text[-half:]}"
+
+
 def build_model(data: Mapping[str, object], source: str = "<model>", dt: float | None = None) -> DDModel:
     """Validate and compile model data (the parsed JSON); see the module docstring for the format."""
     return _Builder(data, source).build(dt)
@@ -331,7 +339,9 @@ class _Builder:
         self.source = source
 
     def err(self, key: str, msg: str) -> ModelError:
-        return ModelError(f"{self.source}: {key}: {msg}")
+        # Keys and names come from the file and may be megabytes long: keep each line readable.
+        lines = [_elide(line, 300) for line in msg.split("\n")]
+        return ModelError(f"{self.source}: {_elide(key, 200)}: " + "\n".join(lines))
 
     def table(self, key: str, value: object, allowed: set[str] | None = None) -> dict[str, object]:
         if not isinstance(value, dict):

@@ -64,3 +64,23 @@ def test_unreadable_inputs_exit_2_with_one_line(agents_ic: Path, capsys: pytest.
     status = main(["trace", str(agents_ic), "--inputs", str(inputs)])
     err = capsys.readouterr().err
     assert status == 2 and str(inputs) in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_computed_infinity_is_a_fault_naming_the_tick_not_invalid_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    folder = KIT / "arithmetic"
+    lines = (folder / "in.jsonl").read_text().splitlines()
+    first = json.loads(lines[0])
+    decimals = [k for k, v in first.get("set", {}).items() if isinstance(v, float | int) and not isinstance(v, bool)]
+    assert decimals, first
+    first["set"] = {k: 1.7e308 for k in decimals}  # finite, but sums and products overflow
+    inputs = tmp_path / "in.jsonl"
+    inputs.write_text(json.dumps(first) + "\n")
+    out = tmp_path / "out.jsonl"
+    status = main(["trace", str(folder / "expected.ic"), "--inputs", str(inputs), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 1 and f"{inputs}:1: tick 1:" in err and "non-finite" in err, err
+    assert not out.exists()
