@@ -24,10 +24,12 @@ through ``engine.files.write_atomically`` (temp file, fsync, rename).
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import os
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +78,16 @@ def encode(text: str, encoding: str, path: str) -> bytes:
 def version_of(data: bytes) -> str:
     """The version of a file's content (16 hex digits of SHA-256)."""
     return hashlib.sha256(data).hexdigest()[:16]
+
+
+@contextmanager
+def _os_errors(path: str) -> Iterator[None]:
+    """A failed write, rename or unlink as a FileError (403 not permitted, else 409), never a 500."""
+    try:
+        yield
+    except OSError as error:
+        status = 403 if error.errno in (errno.EACCES, errno.EPERM, errno.EROFS) else 409
+        raise FileError(status, f"cannot change {path}: {error.strerror or error}") from None
 
 
 class BehaviorFiles:
@@ -134,16 +146,16 @@ class BehaviorFiles:
         if must_exist:
             if not candidate.exists():
                 raise FileError(404, f"no such file: {path}")
-            real = candidate.resolve(strict=True)
+            real = Path(os.path.realpath(candidate, strict=True))
             if not real.is_file():
                 raise FileError(404, f"not a file: {path}")
         else:
             parent = candidate.parent
             if not parent.is_dir():
                 raise FileError(404, f"no such folder: {Path(path).parent.as_posix()}")
-            real = parent.resolve(strict=True) / candidate.name
-            if real.is_symlink():
-                real = real.resolve()
+            real = Path(os.path.realpath(parent, strict=True)) / candidate.name
+            if real.is_symlink():  # a link to a new name, a dangling link or a loop
+                real = Path(os.path.realpath(real))
         if not any(real.is_relative_to(folder) for folder in self.folders):
             raise FileError(403, f"{path} is outside the behavior folders")
         return real
@@ -165,7 +177,7 @@ class BehaviorFiles:
                         continue
                     real = Path(directory, name)
                     try:
-                        if not any(real.resolve().is_relative_to(f) for f in self.folders):
+                        if not any(Path(os.path.realpath(real)).is_relative_to(f) for f in self.folders):
                             continue  # a symlink out of the folders is not listed (nor served)
                         data = read_regular(real, MAX_FILE_BYTES)
                     except OSError:
@@ -205,7 +217,8 @@ class BehaviorFiles:
             if current != if_match:
                 raise FileError(409, f"{path} changed since version {if_match}", version=current)
             data = encode(text, decode(old)[1], path)
-            write_atomically(real, data)
+            with _os_errors(path):
+                write_atomically(real, data)
         return version_of(data)
 
     def create(self, path: str, text: str) -> str:
@@ -213,9 +226,10 @@ class BehaviorFiles:
         real = self.resolve(path, must_exist=False, writable=True)
         data = encode(text, "utf-8", path)
         with self._lock:
-            if real.exists() or (self.root / path).is_symlink():
+            if os.path.lexists(real) or (self.root / path).is_symlink():
                 raise FileError(409, f"{path} exists already")
-            write_atomically(real, data)
+            with _os_errors(path):
+                write_atomically(real, data)
         return version_of(data)
 
     def delete(self, path: str, if_match: str | None) -> None:
@@ -226,7 +240,8 @@ class BehaviorFiles:
                 current = version_of(self._bytes(real, path))
                 if current != if_match:
                     raise FileError(409, f"{path} changed since version {if_match}", version=current)
-            real.unlink()
+            with _os_errors(path):
+                real.unlink()
 
     def rename(self, path: str, new_path: str, if_match: str | None) -> str:
         """Move a file to ``new_path`` (409 if that exists); returns the file's version."""
@@ -236,7 +251,8 @@ class BehaviorFiles:
             current = version_of(self._bytes(real, path))
             if if_match is not None and current != if_match:
                 raise FileError(409, f"{path} changed since version {if_match}", version=current)
-            if target.exists():
+            if os.path.lexists(target) or (self.root / new_path).is_symlink():
                 raise FileError(409, f"{new_path} exists already")
-            os.rename(real, target)
+            with _os_errors(new_path):
+                os.rename(real, target)
         return current

@@ -237,3 +237,25 @@ def test_latin1_file_stays_latin1_and_refuses_what_latin1_cannot_hold(files: Beh
 def test_a_new_file_is_utf8(files: BehaviorFiles) -> None:
     files.create("behavior/options/n.xabsl", "/* € */\r\n")
     assert (files.root / "behavior" / "options" / "n.xabsl").read_bytes() == "/* € */\r\n".encode()
+
+
+def test_symlink_loops_dangling_links_and_folders_are_4xx_and_not_listed(files: BehaviorFiles) -> None:
+    behavior = files.root / "behavior"
+    os.symlink(behavior / "b.xabsl", behavior / "a.xabsl")
+    os.symlink(behavior / "a.xabsl", behavior / "b.xabsl")  # a loop: RuntimeError in Path.resolve
+    os.symlink(behavior / "nowhere.xabsl", behavior / "dangling.xabsl")
+    (behavior / "folder.xabsl").mkdir()
+    assert [f["path"] for f in files.list()] == ["behavior/agents.xabsl", "behavior/options/o.xabsl"]
+    for path in ("behavior/a.xabsl", "behavior/dangling.xabsl", "behavior/folder.xabsl"):
+        for act in (
+            lambda p: files.read(p),
+            lambda p: files.write(p, "x", "0"),
+            lambda p: files.delete(p, None),
+            lambda p: files.rename(p, "behavior/z.xabsl", None),
+            lambda p: files.rename("behavior/options/o.xabsl", p, None),
+            lambda p: files.create(p, "x"),
+        ):
+            with pytest.raises(FileError) as refused:
+                act(path)
+            assert 400 <= refused.value.status < 500, (path, refused.value.message)
+    assert (behavior / "options" / "o.xabsl").read_text() == "option o {}\n"
