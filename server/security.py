@@ -76,6 +76,8 @@ def check_token(token: str | None, loopback: bool) -> None:
         return
     if not token.strip():
         raise TokenError("the token is empty (an unset shell variable?): give a real one or leave --token out")
+    if not all("!" <= c <= "~" for c in token):
+        raise TokenError("the token must be printable ASCII without spaces (it travels in headers and URLs)")
     if not loopback and len(token) < MIN_TOKEN_CHARS:
         raise TokenError(
             f"the token is {len(token)} characters; off loopback it must have at least {MIN_TOKEN_CHARS} "

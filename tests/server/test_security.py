@@ -47,6 +47,12 @@ def test_a_short_token_is_refused_off_loopback() -> None:
     assert SecurityPolicy.for_host("127.0.0.1", "t0k").token == "t0k"
 
 
+@pytest.mark.parametrize("token", ["é" * 30, "a b" * 10, "tab\t" * 8, "x" * 30 + "\n"])
+def test_a_token_headers_cannot_carry_is_refused(token: str) -> None:
+    with pytest.raises(TokenError, match="printable ASCII"):
+        SecurityPolicy.for_host("0.0.0.0", token)
+
+
 def test_a_policy_cannot_be_made_with_an_empty_token() -> None:
     with pytest.raises(TokenError):
         SecurityPolicy(token="")
