@@ -15,7 +15,8 @@ named ``*.xabsl`` would otherwise block the listing for ever), each at most
 Files are kept as they are: the text is returned exactly as stored (CR, CRLF and LF line ends
 untouched), decoded as UTF-8 or, when that fails, as latin-1; a save encodes with the encoding
 the file has on disk, so an unchanged save writes the same bytes. Text that the file's encoding
-cannot hold (a lone surrogate; a character beyond latin-1 in a latin-1 file) is a 422.
+cannot hold (a lone surrogate; a character beyond latin-1 in a latin-1 file) is a 400 (not 422,
+which a save answers when the saved file does not compile).
 
 A file's ``version`` is a hash of its bytes: ``If-Match`` compares it under a lock, so two editors
 saving the same file cannot overwrite each other silently (the second gets 409). Writes go
@@ -62,7 +63,7 @@ def decode(data: bytes) -> tuple[str, str]:
 
 
 def encode(text: str, encoding: str, path: str) -> bytes:
-    """``text`` in ``encoding``, or FileError(422) naming the first character it cannot hold."""
+    """``text`` in ``encoding``, or FileError(400) naming the first character it cannot hold."""
     try:
         return text.encode(encoding)
     except UnicodeEncodeError as error:
@@ -72,7 +73,7 @@ def encode(text: str, encoding: str, path: str) -> bytes:
             why = f"a lone surrogate U+{ord(char):04X} (not valid Unicode)"
         else:
             why = f"U+{ord(char):04X} {char!r}, which {path} ({encoding}) cannot hold"
-        raise FileError(422, f"cannot save {path}: line {line} has {why}") from None
+        raise FileError(400, f"cannot save {path}: line {line} has {why}") from None
 
 
 def version_of(data: bytes) -> str:

@@ -230,7 +230,7 @@ def test_latin1_file_stays_latin1_and_refuses_what_latin1_cannot_hold(files: Beh
     assert real.read_bytes() == "/* été à 20 °C */\n".encode("latin-1")
     with pytest.raises(FileError) as refused:
         files.write("behavior/options/o.xabsl", "/* 20 € */\n", version)
-    assert refused.value.status == 422 and "latin-1" in refused.value.message
+    assert refused.value.status == 400 and "latin-1" in refused.value.message
     assert real.read_bytes() == "/* été à 20 °C */\n".encode("latin-1")
 
 
