@@ -1,8 +1,8 @@
 """Shared pieces of the fuzz suite: hypothesis settings, byte and JSON mutators, a time bound.
 
 Each fuzz test feeds mutated real inputs to one reader of the project (the compiler, the trace
-input, the Dual Dynamics model loader, the PDDL reader) and asserts "a diagnostic or a clean
-error, never another exception, within a time bound". Mutations are those that broke things
+input, the Dual Dynamics model loader, the PDDL reader, the studio's file API) and asserts "a
+diagnostic or a clean error, never another exception, within a time bound". Mutations are those that broke things
 before (issue 18): deep nesting (one slice repeated thousands of times), huge and non-finite
 numbers, lone surrogates, non-UTF-8 bytes, NUL, CR line ends, truncation.
 
