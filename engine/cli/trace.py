@@ -9,9 +9,11 @@ conformance kit (see :mod:`engine.trace.conformance`). For intermediate code,
 parameter order) from the sources, which the IC cannot carry.
 
 Exit status: 0 success; 1 the behavior does not compile, load or run (diagnostics, link or
-option-graph errors, a fault during the trace); 2 usage and input problems (a missing file, a
-malformed input line, an unknown or parameterized symbol in ``set``, a value of the wrong type,
-an unqualified enum element, an unknown agent), reported as one line on stderr.
+option-graph errors, a fault during the trace, a NaN or infinity it computed, which the JSON
+output cannot carry); 2 usage and input problems (a missing file or one that is not a regular
+file, a malformed input line, NaN, Infinity or a number beyond the double range, an unknown or
+parameterized symbol in ``set``, a value of the wrong type, an unqualified enum element, an
+unknown agent), reported as one line on stderr naming the line and the tick.
 """
 
 from __future__ import annotations
