@@ -19,6 +19,7 @@ from engine.cli import UsageError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``plan`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "plan",
         help="run GRAPHPLAN on a PDDL domain and problem and print the layered plan",
@@ -69,6 +70,7 @@ def _parse_error(path: str, error: Exception) -> UsageError:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Plan, print the layered plan; 0 with a plan, 1 without, 2 for unreadable or bad PDDL."""
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 
