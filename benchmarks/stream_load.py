@@ -174,7 +174,7 @@ def main() -> int:
         str(port),
         "--speed",
         str(args.speed),
-        "--players",
+        "--robots",
         str(args.players),
     ]
     server = subprocess.Popen(

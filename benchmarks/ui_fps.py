@@ -22,7 +22,7 @@ from pathlib import Path
 import uvicorn
 
 from server.app import WEB_DIST, create_app
-from server.examples import DemoExample
+from server.bench_world import BenchExample
 from server.protocol import MAX_MESSAGE_BYTES
 from server.security import SecurityPolicy
 from server.session import Session
@@ -95,7 +95,7 @@ def main() -> None:
     try:
         behavior = root / "bench"
         write_behavior(behavior)
-        session = Session(DemoExample(behavior, n_agents=AGENTS))
+        session = Session(BenchExample(behavior, robots=AGENTS))
         port = free_port()
         app = create_app(session, SecurityPolicy(token=None), WEB_DIST)
         config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", ws_max_size=MAX_MESSAGE_BYTES)

@@ -18,18 +18,23 @@ import os
 import stat
 import tempfile
 
+from engine.errors import XabslError
+
 #: Default bound for one input file read with :func:`read_regular`.
 MAX_INPUT_BYTES = 64 * 1024 * 1024
 
 
-class NotRegularFile(OSError):
-    """The path names a device, FIFO, socket or folder where a regular file is needed."""
+class NotRegularFile(XabslError, OSError):
+    """The path names a device, FIFO, socket or folder where a regular file is needed.
+
+    An ``OSError`` too, so callers that report I/O problems report this one the same way.
+    """
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         super().__init__(errno.EINVAL, "not a regular file", os.fspath(path))
 
 
-class FileTooLarge(OSError):
+class FileTooLarge(XabslError, OSError):
     """An input file over the size limit of its reader."""
 
     def __init__(self, path: str | os.PathLike[str], limit: int) -> None:

@@ -21,19 +21,42 @@ in ``world.agents`` order so that a run is reproducible bit for bit.
 Time: the loop owns the behavior clock. ``now_ms`` is an integer (the engine's millisecond
 clock, ``engine.types.Ms``) computed from the tick count, never from the wall clock, so a run is a
 pure function of the world's seed and the controllers.
+
+Worlds as plug-ins: an :class:`Example` is what the studio (``xabsl serve``) needs to run one
+world with XABSL engines: the behavior sources to compile, a world per seed, which program each
+robot runs and the controller that runs it. A folder declares its world with a module
+``studio.py`` exposing ``example(path, **options) -> Example`` (or an installed distribution
+registers such a factory under the entry-point group :data:`WORLDS_GROUP`); the loader is
+``server.examples.load_example``. docs/architecture.md describes the contract.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from time import perf_counter
-from typing import Any, Protocol, TypeAlias, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias, runtime_checkable
 
+from engine.errors import HostError
 from engine.types import Ms
 
+if TYPE_CHECKING:  # the loop itself needs neither the IR nor the runtime
+    from engine.ir.model import Program
+    from engine.runtime import Engine
+
 #: A scene or status: JSON-able plain data (dicts, lists, str, int, float, bool, None) that
-#: ``orjson.dumps`` accepts without options. Worlds document their own keys.
+#: ``orjson.dumps`` accepts without options. Worlds document their own keys; the studio's field
+#: draws these without knowing the world (lengths in the scene's ``units``, mm by default):
+#:
+#: * static: ``field`` ``{"x": [lo, hi], "y": [lo, hi]}`` (the rectangle shown), ``walls``
+#:   ``[[x1, y1, x2, y2], ...]``, ``teams`` ``[{"name", "color"}]``, ``agents``, ``robot_radius``;
+#: * dynamic: ``robots`` ``[[x, y, heading_deg], ...]`` in agent order;
+#: * both: ``shapes``, a list of ``{"shape": "circle", "x", "y", "r"}``, ``{"shape": "rect",
+#:   "x", "y", "w", "h"}`` (centre and size) or ``{"shape": "segment", "x1", "y1", "x2", "y2"}``,
+#:   each with optional ``fill``, ``stroke`` (CSS colours), ``dash`` (bool), ``label`` (text on
+#:   the shape) and ``caption`` (text below it).
 Scene: TypeAlias = dict[str, Any]
 
 #: The default physics rate. 120 Hz keeps a kicked ball (at most ~5 m/s) under one ball radius
@@ -127,6 +150,144 @@ class World(Protocol):
         ...
 
 
+#: The entry-point group under which installed distributions register world factories
+#: (``name = "package.module:example"``); ``xabsl serve PATH --world NAME`` picks one.
+WORLDS_GROUP = "xabsl.worlds"
+
+#: The module an example folder holds to say how the studio runs it.
+STUDIO_MODULE = "studio"
+
+#: The attribute of :data:`STUDIO_MODULE` that builds the folder's :class:`Example`.
+STUDIO_FACTORY = "example"
+
+
+@dataclass(frozen=True, slots=True)
+class BehaviorSource:
+    """One behavior set of an example: the agents file compiled as one program, named ``key``.
+
+    Attributes:
+        key: the program's name in the session (``behavior``, ``chase``); robots run it by key.
+        folder: the folder the agents file lies in.
+        agents_file: the agents file, root of the include closure.
+        folders: every folder of the include closure (the studio serves the behavior's files
+            from these only); empty means just ``folder``.
+    """
+
+    key: str
+    folder: Path
+    agents_file: Path
+    folders: tuple[Path, ...] = ()
+
+    @property
+    def file_folders(self) -> tuple[Path, ...]:
+        """The folders whose files belong to this behavior set (``folders``, else ``folder``)."""
+        return self.folders or (self.folder,)
+
+
+class ExampleError(HostError, ValueError):
+    """A path the studio cannot run: no such folder, no behavior, a broken plug-in, bad options."""
+
+
+def behavior_source(agents_file: Path, key: str | None = None) -> BehaviorSource:
+    """The behavior set of ``agents_file``, with the folders of its include closure.
+
+    Args:
+        agents_file: the agents file (any name, anywhere on disk).
+        key: the program's name; defaults to the folder's name for ``agents.xabsl``, else the
+            file's stem.
+
+    Raises:
+        ExampleError: ``agents_file`` is not a file.
+    """
+    from engine.lang.diagnostics import Diagnostics
+    from engine.lang.loader import load
+
+    agents_file = agents_file.resolve()
+    if not agents_file.is_file():
+        raise ExampleError(f"{agents_file}: no such agents file")
+    folder = agents_file.parent
+    if key is None:
+        key = folder.name if agents_file.name == "agents.xabsl" else agents_file.stem
+    # Display names are relative to the agents file's folder, or absolute outside it.
+    loaded = load(str(agents_file), Diagnostics(), str(folder))
+    found = {(folder / f.path).resolve().parent for f in loaded.files} | {folder}
+    # A folder below another one adds nothing: the studio serves subfolders too.
+    folders = tuple(sorted(f for f in found if not any(f != g and f.is_relative_to(g) for g in found)))
+    return BehaviorSource(key, folder, agents_file, folders)
+
+
+def common_root(sources: Sequence[BehaviorSource]) -> Path:
+    """The deepest folder holding every file folder of ``sources`` (API paths are relative to it)."""
+    folders = [str(f) for s in sources for f in s.file_folders]
+    return Path(os.path.commonpath(folders)) if folders else Path.cwd()
+
+
+@runtime_checkable
+class Example(Protocol):
+    """A world plug-in: what the studio needs to run one world whose robots run XABSL agents.
+
+    Attributes:
+        name: shown in the studio's title and status.
+        root: the folder the studio's file paths and diagnostics are relative to.
+        sources: the behavior sets to compile (one program each).
+        preload: modules the simulation process imports ahead (the forkserver preloads them once,
+            so starting and resetting a simulation stays cheap).
+        behavior_hz, physics_hz: the rates the world is built for (see :class:`BehaviorLoop`).
+    """
+
+    # Read-only properties, so that a plain attribute or a property both implement them.
+    @property
+    def name(self) -> str:
+        """The example's name, shown in the studio."""
+        ...
+
+    @property
+    def root(self) -> Path:
+        """The folder file paths and diagnostics are relative to."""
+        ...
+
+    @property
+    def sources(self) -> Sequence[BehaviorSource]:
+        """The behavior sets to compile, one program each."""
+        ...
+
+    @property
+    def preload(self) -> Sequence[str]:
+        """Modules the simulation process imports ahead."""
+        ...
+
+    @property
+    def behavior_hz(self) -> int:
+        """Behavior ticks per simulated second the world is built for."""
+        ...
+
+    @property
+    def physics_hz(self) -> int:
+        """Physics steps per simulated second the world is built for."""
+        ...
+
+    def build_world(self, seed: int) -> World:
+        """Return a fresh world for ``seed``; its agents have no controllers yet."""
+        ...
+
+    def program_key(self, agent: Agent) -> str | None:
+        """Return the key of the behavior set ``agent`` runs (None: no XABSL engine)."""
+        ...
+
+    def make_controller(self, agent: Agent, program: Program) -> tuple[AgentController, Engine]:
+        """Return ``agent``'s controller for ``program`` and the engine inside it.
+
+        Raises:
+            engine.runtime.EngineError: the program does not link with this world's bindings.
+        """
+        ...
+
+
+#: What ``studio.py`` and the :data:`WORLDS_GROUP` entry points provide:
+#: ``example(path, **options)``, ``path`` being the folder or file the user named.
+ExampleFactory: TypeAlias = Callable[..., Example]
+
+
 @dataclass(slots=True)
 class PhaseTimes:
     """Wall-clock seconds spent per phase of the loop, for benchmarks.
@@ -142,6 +303,7 @@ class PhaseTimes:
 
     @property
     def total(self) -> float:
+        """Seconds measured over all phases."""
         return self.perception + self.engine + self.actuation + self.physics
 
     def shares(self) -> dict[str, float]:

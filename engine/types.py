@@ -52,6 +52,7 @@ class Span(NamedTuple):
         return Span(self.file, self.line, self.col, other.end_line, other.end_col, self.start, other.end)
 
     def as_dict(self) -> dict[str, object]:
+        """The span as a JSON-ready dict (the field names as keys)."""
         return {
             "file": self.file,
             "line": self.line,

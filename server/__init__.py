@@ -3,8 +3,8 @@
 One module per concern:
 
 * ``protocol``  message types, the schema version, close codes, limits (what the UI codes against)
-* ``examples``  adapters from an example folder to a world whose agents run XABSL engines
-* ``demo_world`` a small kinematic world for behaviors without a world of their own (the demo)
+* ``examples``  the world plug-in loader: from ``xabsl serve PATH`` to an ``engine.host.Example``
+* ``bench_world`` the bench world, for behaviors without a world of their own
 * ``worker``    the simulation process: world, engines, commands, one sample per tick
 * ``channel``   the non-blocking pipe between the server and the simulation process
 * ``session``   the server's end of it: starts, restarts and stops the process, records frames

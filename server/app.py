@@ -84,7 +84,7 @@ class Studio:
     def __init__(self, session: Session, policy: SecurityPolicy) -> None:
         self.session = session
         self.policy = policy
-        self.files = BehaviorFiles(session.example.root, [s.folder for s in session.example.sources])
+        self.files = BehaviorFiles(session.example.root, [f for s in session.example.sources for f in s.file_folders])
         self.graphs = GraphCache()
         self.hub: Hub | None = None
         self.write_lock = asyncio.Lock()

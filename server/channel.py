@@ -21,11 +21,13 @@ import socket
 import struct
 from typing import Any
 
+from engine.errors import ServerError
+
 _HEADER = struct.Struct("<I")
 _READ_SIZE = 1 << 20
 
 
-class ChannelClosed(ConnectionError):
+class ChannelClosed(ServerError, ConnectionError):
     """The other end closed the socket (its process ended)."""
 
 

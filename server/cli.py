@@ -1,4 +1,8 @@
-"""``xabsl serve``: run an example in a live studio session (FastAPI on uvicorn).
+"""``xabsl serve PATH``: run a world and its XABSL behaviors in a live studio session (FastAPI on uvicorn).
+
+PATH is an example folder (its ``studio.py`` says how to run it), a behavior folder or an agents
+file anywhere on disk (both run in the bench world); ``--world NAME`` picks an installed world
+plug-in instead (``server.examples`` is the loader).
 
 Registered through the ``xabsl.commands`` entry point (``serve = "server.cli:register"``) so the
 engine's command line never imports the server. Binds to 127.0.0.1 unless told otherwise; off
@@ -14,20 +18,39 @@ import sys
 from pathlib import Path
 from typing import Any
 
-DEFAULT_EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "soccer"
+
+def _option(text: str) -> tuple[str, Any]:
+    """``KEY=VALUE`` of ``--world-option``: the value as JSON when it parses, else the text."""
+    import json
+
+    key, sep, value = text.partition("=")
+    if not sep or not key.isidentifier():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        return key, json.loads(value)
+    except ValueError:
+        return key, value
 
 
 def register(subparsers: Any) -> None:
     """Add the ``serve`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "serve",
-        help="run an example in the live studio (web UI + websocket API)",
-        description="Run an example world with its XABSL behaviors and serve the studio: the web UI at /, "
+        help="run a world and its behaviors in the live studio (web UI + websocket API)",
+        description="Run a world with its XABSL behaviors and serve the studio: the web UI at /, "
         "the REST API under /api (schema at /api/openapi.json), the live session on the websocket /ws "
-        "(docs/protocol.md).",
+        "(docs/protocol.md). PATH is an example folder with a studio.py, a behavior folder with "
+        "agents.xabsl, or an agents file anywhere on disk (both run in the bench world).",
     )
     parser.add_argument(
-        "example", nargs="?", default=str(DEFAULT_EXAMPLE), help="example folder (default: examples/soccer)"
+        "path",
+        metavar="PATH",
+        nargs="?",
+        default=".",
+        help="example folder, behavior folder or agents file (default: the current folder)",
+    )
+    parser.add_argument(
+        "--world", default=None, metavar="NAME", help="run PATH in this world plug-in (xabsl.worlds entry point)"
     )
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     parser.add_argument("--port", type=int, default=8000, help="port (default 8000; 0 picks a free one)")
@@ -42,13 +65,22 @@ def register(subparsers: Any) -> None:
         metavar="ORIGIN",
         help="also accept this Origin (e.g. http://localhost:5173 for the Vite dev server)",
     )
-    parser.add_argument("--players", type=int, default=None, help="players per team (soccer)")
+    parser.add_argument("--robots", type=int, default=None, help="robots (per team, in a world with teams)")
+    parser.add_argument(
+        "--world-option",
+        action="append",
+        type=_option,
+        default=[],
+        metavar="KEY=VALUE",
+        help="an option of the world plug-in (VALUE as JSON, else text), e.g. half_duration_s=300",
+    )
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    """Load the world plug-in, compile its behaviors, serve the studio until interrupted."""
     import uvicorn
 
     from engine.cli import UsageError
@@ -64,12 +96,20 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--token: {error}") from None
     if not MIN_SPEED <= args.speed <= MAX_SPEED:
         raise UsageError(f"--speed must be in {MIN_SPEED:g}..{MAX_SPEED:g}")
-    options = {"players_per_team": args.players} if args.players else {}
+    options: dict[str, Any] = dict(args.world_option)
+    if args.robots is not None:
+        options["robots"] = args.robots
     try:
-        example = load_example(args.example, **options)
-    except (ExampleError, TypeError) as error:
+        example = load_example(args.path, args.world, **options)
+    except ExampleError as error:
         raise UsageError(str(error)) from None
-    session = Session(example, seed=args.seed, speed=args.speed)
+    session = Session(
+        example,
+        seed=args.seed,
+        speed=args.speed,
+        behavior_hz=example.behavior_hz,
+        physics_hz=example.physics_hz,
+    )
     session.paused = args.paused
     for key, state in session.programs.items():
         comp = state.compilation

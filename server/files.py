@@ -34,6 +34,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from engine.errors import ServerError
 from engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
 
 SUFFIX = ".xabsl"
@@ -44,7 +45,7 @@ MAX_NAME_BYTES = 255
 MAX_PATH_BYTES = 4096
 
 
-class FileError(Exception):
+class FileError(ServerError):
     """A refused file operation; ``status`` is the HTTP status to answer with."""
 
     def __init__(self, status: int, message: str, **extra: Any) -> None:

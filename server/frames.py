@@ -202,13 +202,14 @@ class AgentSampler:
         fault = engine.fault
         if fault is not None:
             parts["fault"] = {"message": fault.message, "option": fault.option, "state": fault.state}
-        root = engine.forced
-        if root is not None:
+        forced = engine.root_actions.forced
+        if forced:
+            root = forced[0]
             if root.kind == "option":
                 parts["forced"] = [OPTION_NODE, self.codec.option_ids.get(root.name, -1)]
             else:
                 parts["forced"] = [BEHAVIOR_NODE, self.codec.behavior_ids.get(root.name, -1)]
-        overrides = engine.overrides
+        overrides = engine.root_actions.overrides
         if overrides:
             program = self.codec.program
             parts["overrides"] = {

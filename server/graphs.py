@@ -12,10 +12,11 @@ import threading
 from collections import OrderedDict
 
 from engine.emit.dot import option_graph, render_svg, state_machine
+from engine.errors import ServerError
 from engine.ir.model import Program
 
 
-class GraphError(LookupError):
+class GraphError(ServerError, LookupError):
     """No such agent or option in the program."""
 
 

@@ -15,6 +15,8 @@ from typing import Any
 
 import orjson
 
+from engine.errors import ServerError
+
 #: The schema version sent in ``hello``; a client that does not know it must not go on.
 VERSION = 1
 
@@ -104,7 +106,7 @@ class HelloReason(enum.StrEnum):
 OPTION_NODE, BEHAVIOR_NODE = 0, 1
 
 
-class ProtocolError(ValueError):
+class ProtocolError(ServerError, ValueError):
     """A client message that cannot be carried out; its text goes into the error reply."""
 
 

@@ -29,6 +29,7 @@ from urllib.parse import parse_qs, urlsplit
 import orjson
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from engine.errors import ServerError
 from server.protocol import MAX_BODY_BYTES
 
 TOKEN_HEADER = "x-xabsl-token"
@@ -40,7 +41,7 @@ PUBLIC_API = frozenset({"/api/openapi.json", "/api/docs", "/api/docs/oauth2-redi
 MIN_TOKEN_CHARS = 22
 
 
-class TokenError(ValueError):
+class TokenError(ServerError, ValueError):
     """A token that must not be used: empty, or too short for a server off loopback."""
 
 

@@ -34,12 +34,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from engine.emit.json import program_to_json
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorSource, Example
 from engine.ir.model import Program
 from engine.lang import Compilation, compile_file
 from server import worker
 from server.channel import Channel, ChannelClosed
-from server.examples import BehaviorSource, Example
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.protocol import HelloReason, Op
 from server.worker import CommandError, WorkerConfig, check_seed, check_speed
@@ -335,6 +334,9 @@ class Session:
         ok, result, error = await self._send(op, args, owner)
         if not ok:
             raise CommandError(error)
+        if op in (Op.PAUSE, Op.RESUME):
+            # a paused simulation sends no sample that would carry the new state: mirror the answer
+            self.paused = bool(result["paused"])
         return result
 
     async def _send(self, op: str, args: Mapping[str, Any], owner: str | None) -> tuple[bool, Any, str | None]:

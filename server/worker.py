@@ -38,12 +38,11 @@ from typing import Any
 
 import orjson
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, World
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, Example, World
 from engine.ir.model import Program, leaf_path
-from engine.runtime import DebugError, Engine, EngineError
-from engine.types import Kind, Value
+from engine.runtime import DebugError, Debugger, Engine, EngineError
+from engine.types import Value
 from server.channel import Channel, ChannelClosed
-from server.examples import Example
 from server.frames import AgentSampler, ProgramCodec
 from server.protocol import MAX_SPEED, MAX_STEP_TICKS, MIN_SPEED, HelloReason
 
@@ -52,7 +51,7 @@ from server.protocol import MAX_SPEED, MAX_STEP_TICKS, MIN_SPEED, HelloReason
 Sample = tuple[Any, ...]
 
 
-class CommandError(ValueError):
+class CommandError(DebugError, ValueError):
     """A command that cannot be carried out (bad agent, unknown option, wrong value...)."""
 
 
@@ -319,28 +318,32 @@ class Simulation:
         name = args.get("name")
         if not isinstance(name, str):
             raise CommandError("name (an XABSL agent of the program) is required")
-        engine.select_agent(name)
+        engine.root_actions.select_agent(name)
         return None
 
     def _op_force_option(self, args: Mapping[str, Any], owner: str | None) -> Any:
         index, engine, codec = self._agent(args)
         option = self._named(args.get("option"), codec.option_ids, "option")
-        params = self._params(args.get("params"), codec.program.options[option].params, codec)
-        engine.debug.force_option(option, params)
+        params = args.get("params")
+        if params is not None and not isinstance(params, dict):
+            raise CommandError("params must be an object of parameter values")
+        engine.root_actions.force_option(option, params, by_index=True)
         self._own(index, "root", owner)
         return None
 
     def _op_force_behavior(self, args: Mapping[str, Any], owner: str | None) -> Any:
         index, engine, codec = self._agent(args)
         behavior = self._named(args.get("behavior"), codec.behavior_ids, "basic behavior")
-        params = self._params(args.get("params"), codec.program.behaviors[behavior].params, codec)
-        engine.debug.force_behavior(behavior, params)
+        params = args.get("params")
+        if params is not None and not isinstance(params, dict):
+            raise CommandError("params must be an object of parameter values")
+        engine.root_actions.force_behavior(behavior, params, by_index=True)
         self._own(index, "root", owner)
         return None
 
     def _op_release(self, args: Mapping[str, Any], owner: str | None) -> Any:
         index, engine, _ = self._agent(args)
-        engine.debug.release()
+        engine.root_actions.release()
         self._owners.pop((index, "root"), None)
         return None
 
@@ -348,35 +351,34 @@ class Simulation:
         index, engine, codec = self._agent(args)
         ids = {s.name: s.index for s in codec.program.inputs.values()}
         name = self._named(args.get("symbol"), ids, "input symbol")
-        symbol = codec.program.inputs[name]
         if "value" not in args:
             raise CommandError("value is required")
-        engine.debug.override_input(name, self._value(args["value"], symbol.kind, symbol.enum, codec, name))
+        engine.root_actions.override_input(name, args["value"], by_index=True)
         self._own(index, "input:" + name, owner)
         return None
 
     def _op_release_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
         index, engine, codec = self._agent(args)
         if args.get("symbol") is None:
-            engine.debug.release_inputs()
+            engine.root_actions.release_inputs()
             for key in [k for k in self._owners if k[0] == index and k[1].startswith("input:")]:
                 del self._owners[key]
             return None
         ids = {s.name: s.index for s in codec.program.inputs.values()}
         name = self._named(args.get("symbol"), ids, "input symbol")
-        engine.debug.release_input(name)
+        engine.root_actions.release_input(name)
         self._owners.pop((index, "input:" + name), None)
         return None
 
     def _op_reset_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
         _, engine, _ = self._agent(args)
-        engine.debug.reset()
+        engine.reset()
         return None
 
     def _op_explain(self, args: Mapping[str, Any], owner: str | None) -> Any:
         _, engine, codec = self._agent(args)
         option = self._named(args.get("option"), codec.option_ids, "option")
-        explanation = engine.debug.explain(option)
+        explanation = Debugger(engine).explain(option)
         states = codec.state_ids[option]
         ir_option = codec.program.options[option]
         decided = ir_option.state(explanation.decided_in)
@@ -448,32 +450,6 @@ class Simulation:
             raise CommandError(f"unknown {what} id {value}")
         raise CommandError(f"{what} must be a name or an id")
 
-    def _params(self, given: Any, declared: Any, codec: ProgramCodec) -> dict[str, Value | str]:
-        if given is None:
-            return {}
-        if not isinstance(given, dict):
-            raise CommandError("params must be an object of parameter values")
-        by_name = {p.name: p for p in declared}
-        by_short = {p.name.rsplit(".", 1)[-1]: p for p in declared}
-        result: dict[str, Value | str] = {}
-        for key, value in given.items():
-            param = by_name.get(key) or by_short.get(key)
-            if param is None:
-                raise CommandError(f"no parameter {key!r}")
-            result[param.name] = self._value(value, param.kind, param.enum, codec, param.name)
-        return result
-
-    @staticmethod
-    def _value(value: Any, kind: Kind, enum: str | None, codec: ProgramCodec, name: str) -> Value | str:
-        if kind is Kind.ENUM and isinstance(value, int) and not isinstance(value, bool):
-            element = codec.element(enum, value)
-            if element is None:
-                raise CommandError(f"{name}: no element {value} in enum {enum}")
-            return element
-        if kind is Kind.DECIMAL and isinstance(value, int | float) and not isinstance(value, bool):
-            return float(value)
-        return value
-
     def _own(self, agent: int, what: str, owner: str | None) -> None:
         if owner is None:
             self._owners.pop((agent, what), None)
@@ -492,9 +468,9 @@ class Simulation:
                 continue
             try:
                 if what == "root":
-                    engine.debug.release()
+                    engine.root_actions.release()
                 else:
-                    engine.debug.release_input(what.removeprefix("input:"))
+                    engine.root_actions.release_input(what.removeprefix("input:"))
                 released += 1
             except (DebugError, EngineError):
                 continue

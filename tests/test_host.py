@@ -14,9 +14,12 @@ from engine.host import (
     Agent,
     AgentController,
     BehaviorLoop,
+    ExampleError,
     PhaseTimes,
     Scene,
     World,
+    behavior_source,
+    common_root,
     run_headless,
 )
 
@@ -184,3 +187,35 @@ def test_engine_never_imports_pymunk():
             if any(n.split(".")[0] == "pymunk" for n in names):
                 offenders.append(str(path))
     assert offenders == []
+
+
+# -- behavior sources of world plug-ins ------------------------------------------------------------
+
+
+def _write(path: Path, text: str) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def test_a_behavior_source_knows_the_folders_of_its_include_closure(tmp_path: Path) -> None:
+    agents = _write(
+        tmp_path / "src" / "behavior" / "agents.xabsl",
+        'include "options/a.xabsl";\ninclude "../common/symbols.xabsl";\n',
+    )
+    _write(tmp_path / "src" / "behavior" / "options" / "a.xabsl", 'include "../../common/symbols.xabsl";\n')
+    _write(tmp_path / "src" / "common" / "symbols.xabsl", 'namespace s("s") { float input x; }\n')
+    source = behavior_source(agents)
+    assert source.key == "behavior" and source.agents_file == agents.resolve()
+    # options/ lies below behavior/: served with it, not listed apart
+    assert source.file_folders == ((tmp_path / "src" / "behavior").resolve(), (tmp_path / "src" / "common").resolve())
+    assert common_root([source]) == (tmp_path / "src").resolve()
+    assert behavior_source(agents, "home").key == "home"
+
+
+def test_a_behavior_source_of_another_name_and_a_missing_one(tmp_path: Path) -> None:
+    lone = _write(tmp_path / "Team.xabsl", "/* no includes */\n")
+    source = behavior_source(lone)
+    assert source.key == "Team" and source.file_folders == (tmp_path.resolve(),)
+    with pytest.raises(ExampleError, match="no such agents file"):
+        behavior_source(tmp_path / "nope.xabsl")

@@ -17,11 +17,13 @@ import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
 
+from engine.errors import CommandLineError
+
 #: Engine-level subcommand modules, in the order ``--help`` lists them.
 ENGINE_COMMANDS = ("engine.cli.compile", "engine.cli.trace", "engine.cli.plan")
 
 
-class UsageError(Exception):
+class UsageError(CommandLineError):
     """A problem with the command line or the files it names (exit status 2)."""
 
 

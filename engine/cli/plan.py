@@ -74,8 +74,9 @@ def run(args: argparse.Namespace) -> int:
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 
+    from engine.errors import PlanningError
     from engine.planning.graphplan import format_stats, graphplan
-    from engine.planning.strips import PlanningError, ground
+    from engine.planning.strips import ground
 
     domain_text, problem_text = _read(args.domain), _read(args.problem)
     try:

@@ -27,6 +27,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from engine.cli import UsageError
+from engine.errors import CommandLineError
 from engine.files import read_regular, write_atomically
 from engine.ir.model import Program
 
@@ -56,7 +57,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.set_defaults(func=run)
 
 
-class _BehaviorError(Exception):
+class _BehaviorError(CommandLineError):
     """The behavior cannot be compiled, loaded or run (exit status 1)."""
 
 
@@ -160,7 +161,7 @@ def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
 
 def run(args: argparse.Namespace) -> int:
     """Trace the behavior over the input trace; the exit status as in the module docstring."""
-    from engine.runtime.errors import EngineError
+    from engine.errors import EngineError
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
     if not os.path.exists(args.inputs):

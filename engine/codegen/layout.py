@@ -6,10 +6,14 @@ behavior; the code generator (:mod:`engine.codegen.python`) only turns those dec
 global names and list indices. Flat lists (one for all option parameters, one for all basic
 behavior parameters, one for all stored symbols) let the engine snapshot a tick with a few
 C-level tuple copies (§2.12 activation tree, recorded cheaply).
+
+:data:`STORAGE` is the one schema of those lists: their names in Python and in generated code,
+what they hold after a load, and whether snapshots, ``reset()`` and hot reload copy them.
 """
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 
 from engine.ir.model import Assignment, Program
@@ -19,6 +23,78 @@ from engine.types import Kind
 ParamSpec = tuple[str, Kind]
 
 _GROUP = {Kind.DECIMAL: 0, Kind.BOOLEAN: 1, Kind.ENUM: 2}
+
+#: Tick stamp of "never executed": never equal to ``tick - 1`` for a real tick (ticks start at 1).
+NEVER = -10
+
+
+class Per(enum.Enum):
+    """What one element of a storage list belongs to (and so how long the list is)."""
+
+    OPTION = "option"
+    OPTION_PARAMETER = "option parameter"
+    BEHAVIOR = "basic behavior"
+    BEHAVIOR_PARAMETER = "basic behavior parameter"
+    SYMBOL = "output or internal symbol"
+    ASSIGNMENT = "output assignment"
+
+
+class Start(enum.Enum):
+    """What a storage list holds after a load."""
+
+    #: :data:`NEVER` (a tick stamp)
+    NEVER = "never"
+    #: ``0`` (a clock value in ms)
+    ZERO_MS = "0 ms"
+    #: ``0.0`` (a time the decision saw)
+    ZERO_TIME = "0.0"
+    #: ``None`` (nothing recorded yet)
+    NOTHING = "None"
+    #: the option's initial state
+    INITIAL_STATE = "initial state"
+    #: the parameter's default value (:func:`default_value`)
+    DEFAULT = "default value"
+    #: the symbol's initial value (the host's, or the first enum element, §2.1)
+    INITIAL_VALUE = "initial value"
+
+
+@dataclass(frozen=True, slots=True)
+class StorageList:
+    """One flat list of the engine's storage (see :data:`STORAGE`)."""
+
+    #: the name of the list in the Python API and in :class:`engine.runtime.activation.Snapshot`
+    field: str
+    #: the global the generated code reads it through (short: it is written thousands of times)
+    name: str
+    per: Per
+    start: Start
+    #: copied into every snapshot of a tick
+    snapshot: bool
+    #: kept across a hot reload, by name (options: only while their active state still exists)
+    reload: bool
+    #: set back to :data:`NEVER` by ``Engine.reset()`` (every option and behavior restarts)
+    reset: bool = False
+
+
+#: The engine's storage: every per-tick value a behavior touches lives in one of these lists.
+#: The runtime's storage object, the generated code's globals, snapshots, ``reset()`` and hot
+#: reload are all derived from this table (snapshot order is table order).
+STORAGE: tuple[StorageList, ...] = (
+    StorageList("states", "S", Per.OPTION, Start.INITIAL_STATE, snapshot=True, reload=True),
+    StorageList("last_tick", "LT", Per.OPTION, Start.NEVER, snapshot=True, reload=True, reset=True),
+    StorageList("previous_tick", "PV", Per.OPTION, Start.NEVER, snapshot=False, reload=True, reset=True),
+    StorageList("activated", "TA", Per.OPTION, Start.ZERO_MS, snapshot=True, reload=True),
+    StorageList("state_entered", "TS", Per.OPTION, Start.ZERO_MS, snapshot=True, reload=True),
+    StorageList("decisions", "LF", Per.OPTION, Start.NOTHING, snapshot=True, reload=False),
+    StorageList("decision_state_time", "SD", Per.OPTION, Start.ZERO_TIME, snapshot=True, reload=True),
+    StorageList("option_params", "PP", Per.OPTION_PARAMETER, Start.DEFAULT, snapshot=True, reload=True),
+    StorageList("behavior_params", "BP", Per.BEHAVIOR_PARAMETER, Start.DEFAULT, snapshot=True, reload=False),
+    StorageList("behavior_last_tick", "BLT", Per.BEHAVIOR, Start.NEVER, snapshot=True, reload=True, reset=True),
+    StorageList("behavior_previous_tick", "BPV", Per.BEHAVIOR, Start.NEVER, snapshot=False, reload=True, reset=True),
+    StorageList("behavior_activated", "BTA", Per.BEHAVIOR, Start.ZERO_MS, snapshot=True, reload=True),
+    StorageList("assignments", "AV", Per.ASSIGNMENT, Start.NOTHING, snapshot=True, reload=False),
+    StorageList("outputs", "OV", Per.SYMBOL, Start.INITIAL_VALUE, snapshot=True, reload=True),
+)
 
 
 def engine_order(params: tuple[ParamSpec, ...]) -> list[int]:
@@ -42,6 +118,8 @@ def default_value(kind: Kind) -> float | bool | int:
 
 @dataclass(frozen=True, slots=True)
 class OptionSlot:
+    """Where one option lives: its index in the per-option lists, its parameters, its states."""
+
     index: int
     #: start of this option's parameters in the flat option-parameter list
     offset: int
@@ -55,6 +133,8 @@ class OptionSlot:
 
 @dataclass(frozen=True, slots=True)
 class InputSlot:
+    """How one input symbol is read: host callable ``I{index}`` (or attribute of ``IA{index}``)."""
+
     index: int
     #: the host function's parameters in registration order (also the positional call order)
     params: tuple[ParamSpec, ...] = ()
@@ -64,6 +144,8 @@ class InputSlot:
 
 @dataclass(frozen=True, slots=True)
 class OutputSlot:
+    """Where one output or internal symbol lives: the engine's list, or a host setter/getter."""
+
     index: int
     #: True: the value lives in the engine's flat symbol list; False: host setter/getter
     stored: bool
@@ -71,6 +153,8 @@ class OutputSlot:
 
 @dataclass(frozen=True, slots=True)
 class BehaviorSlot:
+    """Where one basic behavior lives: its index in the per-behavior lists, its parameters."""
+
     index: int
     offset: int
     params: tuple[ParamSpec, ...]

@@ -29,7 +29,8 @@ every bytecode of the prologue counts):
 Expressions are inlined as Python expressions (§2.8): short-circuit ``and``/``or``, exact float
 comparisons, ``/`` with the 1e-7 rule inlined, ``%`` through :mod:`engine.codegen.support`.
 Symbols and parameters are reached through module globals bound by the engine (see
-:class:`engine.codegen.layout.Layout`): flat lists indexed by constants, and host callables.
+:class:`engine.codegen.layout.Layout`): the flat lists of :data:`engine.codegen.layout.STORAGE`
+(``LT``, ``S``, ``PP``...) indexed by constants, and host callables.
 Every generated line remembers the option, state and IR span it came from (``origins``), which
 is how faults and the debugger point back at XABSL source.
 """
@@ -42,6 +43,7 @@ from dataclasses import dataclass, field
 from types import CodeType
 
 from engine.codegen.layout import Layout, OptionSlot, default_value, engine_order
+from engine.errors import LoadError
 from engine.ir.model import (
     ActionDone,
     Argument,
@@ -75,8 +77,8 @@ from engine.types import Kind, Span
 __all__ = ["CodegenError", "GeneratedOption", "GeneratedProgram", "Origin", "expression_source", "generate"]
 
 
-class CodegenError(ValueError):
-    """A program the code generator cannot turn into Python (the engine reports it as a LoadError)."""
+class CodegenError(LoadError, ValueError):
+    """A program the code generator cannot turn into Python (so the engine cannot load it)."""
 
 
 _MASK = "0xFFFFFFFF"

@@ -34,6 +34,8 @@ import reprlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
+from engine.errors import DynamicsError
+
 #: The deepest expression tree accepted (a real drive or target is under 10 levels deep). The
 #: generated Python nests one parenthesis per level, and CPython's parser stops at 200.
 MAX_DEPTH = 64
@@ -100,7 +102,7 @@ RUNTIME: Mapping[str, object] = {
 }
 
 
-class ExprError(ValueError):
+class ExprError(DynamicsError, ValueError):
     """A malformed expression or an unknown name; the message shows the text and a caret."""
 
     def __init__(self, message: str, text: str, col: int | None = None) -> None:

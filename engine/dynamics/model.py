@@ -72,6 +72,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.dynamics import expr as ex
+from engine.errors import DynamicsError
 from engine.files import read_regular
 
 FORMAT = "xabsl-dd-model/1"
@@ -92,7 +93,7 @@ MAX_JSON_DEPTH = 64
 _MAX_INT_DIGITS = 400
 
 
-class ModelError(ValueError):
+class ModelError(DynamicsError, ValueError):
     """A DD model file is invalid; the message names the file, the key and the problem."""
 
 

@@ -21,6 +21,7 @@ import shutil
 import subprocess
 
 from engine import ir
+from engine.errors import EmitError
 
 _GRAPH_STYLE = (
     'graph [rankdir=LR, fontname="Helvetica", fontsize=11, bgcolor="transparent", nodesep=0.25, ranksep=0.45];\n'
@@ -102,6 +103,7 @@ def state_machine(option: ir.Option) -> str:
     """The state machine of one option as DOT: states, and one edge per state-changing leaf."""
     lines = [f"digraph {quote('option ' + option.name)} {{", "  " + _GRAPH_STYLE]
     lines.append('  "__initial" [id="initial", shape=point, width=0.12, label=""];')
+    lines.append("  node [fontsize=14];")  # state names: legible at a smaller zoom than the labels
     for state in option.states:
         calls = [
             a.option if isinstance(a, ir.OptionCall) else a.behavior
@@ -116,29 +118,53 @@ def state_machine(option: ir.Option) -> str:
             f'  {quote("s:" + state.name)} [id={quote(f"state_{state.index}")}, label="{_escape_label(label)}", '
             f'shape={shape}, style={style}, fillcolor="#ffffff"{extra}, tooltip={quote(state.doc or state.name)}];'
         )
-    initial = option.state(option.initial_state) if option.initial_state in option._by_name else None
+    initial = option.state(option.initial_state) if option.initial_state in {s.name for s in option.states} else None
     if initial is not None:
         lines.append(f'  "__initial" -> {quote("s:" + initial.name)} [id="initial_edge"];')
     for state in option.states:
         for leaf in ir.leaves(state.decision):
-            if leaf.target is None or leaf.target == state.name or leaf.target not in option._by_name:
+            if leaf.target is None or leaf.target == state.name or leaf.target not in {s.name for s in option.states}:
                 continue
             path = ir.leaf_path(state.decision, leaf.leaf)
             condition = " && ".join(node.text if taken else f"!({node.text})" for node, taken in path)
             lines.append(
                 f"  {quote('s:' + state.name)} -> {quote('s:' + leaf.target)} "
-                f"[id={quote(f'leaf_{state.index}_{leaf.leaf}')}, label={quote(_shorten(condition))}, "
+                f"[id={quote(f'leaf_{state.index}_{leaf.leaf}')}, label={quote(_transition_label(path))}, "
                 f"tooltip={quote(condition or 'always')}];"
             )
     lines.append("}")
     return "\n".join(lines) + "\n"
 
 
+def _transition_label(path: list[tuple[ir.If, bool]]) -> str:
+    """An edge's label: the conditions that must hold, wrapped; the tooltip has the whole path.
+
+    Not the negations of the ifs before the leaf: they made every label of a state start alike.
+    """
+    taken = [node.text for node, went in path if went]
+    text = " && ".join(taken) if taken else ("else" if path else "always")
+    lines: list[str] = []
+    for word in text.split(" "):
+        if lines and len(lines[-1]) + 1 + len(word) <= _LABEL_LINE:
+            lines[-1] += " " + word
+        else:
+            lines.append(word)
+    if len(lines) > _LABEL_LINES:
+        lines = lines[:_LABEL_LINES]
+        lines[-1] = _shorten(lines[-1] + " …", _LABEL_LINE)
+    return "\n".join(lines)
+
+
+#: Characters per line and lines of a transition label in a state machine.
+_LABEL_LINE = 30
+_LABEL_LINES = 4
+
+
 def _escape_label(text: str) -> str:
     return text.replace('"', '\\"')
 
 
-class GraphvizMissing(RuntimeError):
+class GraphvizMissing(EmitError, RuntimeError):
     """The Graphviz ``dot`` program is not installed."""
 
 

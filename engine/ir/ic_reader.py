@@ -31,6 +31,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from engine.errors import ReadError
 from engine.ir.model import (
     Action,
     ActionDone,
@@ -76,7 +77,7 @@ _COMPARISONS = {"=": "==", "n": "!=", "<": "<", "l": "<=", ">": ">", "g": ">="}
 _TITLE = re.compile(r"//\s*Intermediate code for the agents of ?(.*)")
 
 
-class ICError(Exception):
+class ICError(ReadError):
     """Malformed intermediate code, with the position of the offending token."""
 
     def __init__(self, message: str, line: int, col: int, token: str | None) -> None:

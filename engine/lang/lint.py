@@ -76,7 +76,11 @@ def check_reachability(program: ir.Program, diagnostics: Diagnostics) -> None:
         while stack:
             state = option.state(stack.pop())
             for leaf in ir.leaves(state.decision):
-                if leaf.target is not None and leaf.target not in seen and leaf.target in option._by_name:
+                if (
+                    leaf.target is not None
+                    and leaf.target not in seen
+                    and leaf.target in {s.name for s in option.states}
+                ):
                     seen.add(leaf.target)
                     stack.append(leaf.target)
         for state in option.states:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 
+from engine.errors import CompileError
 from engine.lang import ast
 from engine.lang.diagnostics import Diagnostics
 from engine.lang.tokens import Token, TokenType, doc_text, tokenize
@@ -40,7 +41,7 @@ IO_KEYWORDS = frozenset({"input", "output", "internal"})
 STATE_START = frozenset({"initial", "target", "state"})
 
 
-class _SyntaxError(Exception):
+class _SyntaxError(CompileError):
     def __init__(self, token: Token, message: str, code: str = "syntax-error") -> None:
         super().__init__(message)
         self.token = token

@@ -4,7 +4,7 @@ See dual-dynamics.md §1.6 (facts from histories), §2 (GRAPHPLAN) and §4.1 (Pl
 
 * :mod:`engine.planning.strips`     PDDL (via the MIT ``pddl`` package) -> grounded STRIPS task
 * :mod:`engine.planning.graphplan`  planning graph, mutexes, extraction, layered plan + statistics
-* :mod:`engine.planning.monitor`    operator queue over a layered plan: current/done/timeout/replan
+* :mod:`engine.planning.monitor`    the plan board an XABSL plan monitor reads: queue, done marks, replanning
 * :mod:`engine.planning.facts`      table-driven history predicates -> derived facts + FactEvents
 
 Nothing here knows about XABSL, pymunk or the Dual Dynamics behavior system; the errands world and

@@ -34,15 +34,13 @@ from pddl.parser.domain import DomainParser
 from pddl.parser.problem import ProblemParser
 from pddl.requirements import Requirements
 
+from engine.errors import PlanningError
+
 #: A ground fact, e.g. ``"at-robot a"``.
 Fact = str
 
 #: The PDDL requirements the grounder understands; everything else is rejected by name.
 SUPPORTED_REQUIREMENTS = frozenset({Requirements.STRIPS, Requirements.TYPING})
-
-
-class PlanningError(Exception):
-    """Root of the planning package's errors."""
 
 
 class UnsupportedPDDLError(PlanningError):

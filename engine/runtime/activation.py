@@ -22,10 +22,24 @@ from typing import Any, NamedTuple
 
 from engine.codegen.layout import Layout
 from engine.codegen.support import MS_MASK
-from engine.ir.model import Assignment, BehaviorCall, OptionCall, Program
+from engine.ir.model import Assignment, BehaviorCall, OptionCall, Parameter, Program
 from engine.types import Kind, Ms, Value
 
-__all__ = ["AssignmentNode", "BehaviorNode", "Node", "OptionNode", "Root", "Snapshot", "build_tree"]
+__all__ = [
+    "BEHAVIOR_NODE",
+    "OPTION_NODE",
+    "PATH_FIELDS",
+    "AssignmentNode",
+    "BehaviorNode",
+    "Node",
+    "OptionNode",
+    "PathPlan",
+    "Root",
+    "Snapshot",
+    "build_tree",
+    "compact_path",
+    "node_to_dict",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,6 +52,10 @@ class Root:
 
 class Snapshot(NamedTuple):
     """The engine's storage after one tick, copied into tuples (cheap; see module docstring).
+
+    After ``now``, ``tick`` and ``roots`` come the storage lists of
+    :data:`engine.codegen.layout.STORAGE` that are snapshotted, in that table's order and with its
+    field names (``engine.runtime.storage`` checks this on import).
 
     A NamedTuple rather than a frozen dataclass: it is built on every recorded tick, and a
     frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field) costs several times more.
@@ -109,7 +127,7 @@ def build_tree(
     snapshot: Snapshot,
     program: Program,
     layout: Layout,
-    behavior_params: dict[str, tuple[tuple[str, Kind, str | None], ...]],
+    behavior_params: dict[str, tuple[Parameter, ...]],
 ) -> list[Node]:
     """The activation tree of ``snapshot`` (see the module docstring)."""
     tick = snapshot.tick
@@ -156,8 +174,8 @@ def build_tree(
         if snapshot.behavior_last_tick[slot.index] != tick:
             return None
         declared = behavior_params[name]
-        params = {p[0]: snapshot.behavior_params[slot.offset + k] for k, p in enumerate(declared)}
-        enums = {p[0]: p[2] for p in declared if p[2] is not None}
+        params = {p.name: snapshot.behavior_params[slot.offset + k] for k, p in enumerate(declared)}
+        enums = {p.name: p.enum for p in declared if p.enum is not None}
         time = (snapshot.now - snapshot.behavior_activated[slot.index]) & MS_MASK
         return BehaviorNode(name, params, time, enums)
 
@@ -207,6 +225,22 @@ def node_to_dict(node: Node, enum_name: Callable[[str | None, Value], Any]) -> d
 OPTION_NODE = 0
 BEHAVIOR_NODE = 1
 
+#: The storage lists (:data:`engine.codegen.layout.STORAGE` fields) :func:`compact_path` reads, in order.
+PATH_FIELDS = (
+    "last_tick",
+    "states",
+    "activated",
+    "state_entered",
+    "decisions",
+    "option_params",
+    "behavior_params",
+    "behavior_last_tick",
+    "behavior_activated",
+)
+
+#: The lists of :data:`PATH_FIELDS`, in that order.
+PathStorage = tuple[list[int], list[int], list[Ms], list[Ms], list[Any], list[Value], list[Value], list[int], list[Ms]]
+
 
 @dataclass(frozen=True, slots=True)
 class PathPlan:
@@ -222,6 +256,7 @@ class PathPlan:
 
     @classmethod
     def of(cls, program: Program, layout: Layout) -> PathPlan:
+        """The plan of ``program`` loaded with ``layout``."""
         options: list[tuple[int, int, int, tuple[tuple[tuple[bool, int], ...], ...]]] = [None] * len(layout.options)  # type: ignore[list-item]
         for name, slot in layout.options.items():
             option = program.options[name]
@@ -249,7 +284,7 @@ def compact_path(
     roots: tuple[Root, ...],
     tick: int,
     now: Ms,
-    storage: tuple[list[int], list[int], list[Ms], list[Ms], list[Any], list[Value], list[Value], list[int], list[Ms]],
+    storage: PathStorage,
 ) -> list[list[Any]]:
     """The activation path of the last tick as flat lists, read straight from engine storage.
 

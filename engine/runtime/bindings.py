@@ -119,33 +119,26 @@ class BasicBehavior:
         """The parameters with qualified names."""
         return _parameters(cls.name, cls.parameters)
 
-    def _attach(self, store: list[Any], offset: int, names: Sequence[str]) -> None:
+    def bind_parameters(self, store: list[Any], offset: int, params: Sequence[Parameter]) -> None:
+        """Called by the engine on (re)load: the parameters live at ``store[offset:]`` in ``params`` order."""
         self.parameter_values = store
         self.parameter_offset = offset
         self._index = {}
-        self._names = tuple(names)
-        for i, name in enumerate(names):
-            self._index[name] = i
-            self._index.setdefault(name.rsplit(".", 1)[-1], i)
+        self._names = tuple(p.name for p in params)
+        for i, p in enumerate(params):
+            self._index[p.name] = i
+            self._index.setdefault(p.short_name, i)
 
     def param(self, name: str) -> Value:
         """The current value of parameter ``name`` (qualified or short)."""
-        return self.parameter_values[self.parameter_offset + self._index[name]]
+        value: Value = self.parameter_values[self.parameter_offset + self._index[name]]
+        return value
 
     @property
     def params(self) -> dict[str, Value]:
         """All parameter values by qualified name."""
         store, offset = self.parameter_values, self.parameter_offset
         return {name: store[offset + i] for i, name in enumerate(self._names)}
-
-    # The names ``_store`` / ``_offset`` predate the public attributes; kept for old hosts.
-    @property
-    def _store(self) -> list[Any]:
-        return self.parameter_values
-
-    @property
-    def _offset(self) -> int:
-        return self.parameter_offset
 
     # -- hooks ------------------------------------------------------------------------------
 

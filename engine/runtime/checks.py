@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import enum
 
+from engine.errors import LoadError
 from engine.ir.model import BehaviorCall, OptionCall, Program
-from engine.runtime.errors import LoadError
 
 __all__ = ["Policy", "check_root"]
 

@@ -7,9 +7,9 @@ and binds that code to this engine's storage. ``execute(now_ms)`` runs one tick 
 actions in every option, outputs written through at once.
 
 Persistent per-option state lives in flat lists indexed by option index (active state, tick
-stamps of the last two executions, activation times, the tick's decision record): a tick stamp
-replaces the original's per-tick ``wasActive``/``isActive`` flag swap, so nothing is reset at
-the end of a tick.
+stamps of the last two executions, activation times, the tick's decision record; the table
+:data:`engine.codegen.layout.STORAGE` names them all): a tick stamp replaces the original's
+per-tick ``wasActive``/``isActive`` flag swap, so nothing is reset at the end of a tick.
 
 Faults (§2.9, architecture "Engine"): a host callable or basic behavior that raises, a ``%`` by
 zero or (policy B2) a double execution marks the engine as errored with a :class:`Fault`
@@ -18,6 +18,10 @@ naming the option, state and XABSL span; ``execute`` then does nothing until ``r
 Hot reload: ``reload(program)`` swaps programs between ticks, keeping the active state and
 times of options and states that still exist by name; a program that fails to link or check
 leaves the running one untouched and raises.
+
+What runs at the root (the selected agent, forced roots, input overrides) belongs to the
+engine's :class:`~engine.runtime.roots.RootActions` (``engine.root_actions``); the storage
+lists to its :class:`~engine.runtime.storage.LoadedProgram` (``engine.loaded``).
 """
 
 from __future__ import annotations
@@ -25,25 +29,26 @@ from __future__ import annotations
 import traceback
 from collections.abc import Callable, Mapping, Sequence
 from operator import attrgetter
-from types import MappingProxyType, SimpleNamespace
-from typing import TYPE_CHECKING, Any
+from types import MappingProxyType
+from typing import Any
 
-from engine.codegen.python import CodegenError, generate
+from engine.codegen.python import generate
 from engine.codegen.support import MS_MASK
+from engine.errors import DebugError, DoubleExecutionError
 from engine.ir.model import Agent, Program
-from engine.runtime.activation import Node, PathPlan, Root, Snapshot, build_tree, compact_path, node_to_dict
+from engine.runtime.activation import Node, PathPlan, Snapshot, build_tree, compact_path, node_to_dict
 from engine.runtime.bindings import Bindings
 from engine.runtime.checks import Policy, check_root
 from engine.runtime.coop import CoopStates
-from engine.runtime.errors import DebugError, DoubleExecutionError, Fault, LoadError
+from engine.runtime.fault import Fault
 from engine.runtime.linker import link
-from engine.runtime.storage import NEVER, LoadedProgram, RootAction
+from engine.runtime.roots import RootActions
+from engine.runtime.storage import LoadedProgram
 from engine.types import Ms, Value
 
-if TYPE_CHECKING:
-    from engine.runtime.debug import Debugger
-
 __all__ = ["Engine"]
+
+_new_tuple = tuple.__new__
 
 
 class Engine:
@@ -55,6 +60,7 @@ class Engine:
         engine.load(program)                # LinkError lists everything missing
         engine.execute(now_ms)              # one tick; never raises
         engine.activation()                 # the tick's activation tree
+        engine.root_actions.force_option("walk", {"speed": 1.0})   # debugging
     """
 
     def __init__(
@@ -68,12 +74,8 @@ class Engine:
         self._tick = 0
         self._now: Ms = 0
         self._fault: Fault | None = None
-        self._agent: Agent | None = None
-        #: root actions the debugger installed instead of the agent's root (None: the agent's)
-        self._forced: list[tuple[Root, dict[str, Value]]] | None = None
-        self._overrides: dict[str, Value] = {}
-        self._roots: list[RootAction] = []
-        self._root_names: tuple[Root, ...] = ()
+        #: the selected agent, forced roots and input overrides (what a tick runs at its root)
+        self.root_actions = RootActions(policy)
         #: the loaded program has cooperative states (only then a tick clears their bookkeeping)
         self._coop_states = False
         if program is not None:
@@ -88,11 +90,8 @@ class Engine:
         linked = link(program, self.bindings, double_execution_is_error=self.policy is Policy.B2, reuse=reuse)
         for agent in program.agents:
             check_root(program, agent.root, self.policy)
-        try:
-            generated = generate(program, linked.layout)
-        except CodegenError as error:
-            raise LoadError(str(error)) from None
-        return LoadedProgram(linked, generated, self)
+        generated = generate(program, linked.layout)  # CodegenError is a LoadError
+        return LoadedProgram(linked, generated, tick=lambda: self._tick, warnings=self.warnings)
 
     def load(self, program: Program) -> None:
         """Load ``program`` from scratch: every option starts fresh, the first agent is selected.
@@ -102,100 +101,38 @@ class Engine:
             LoadError: the option graph of an agent has a loop (or a B2 double execution).
         """
         loaded = self._prepare(program)
+        loaded.coop.agent = self.agent_name
         self._loaded = loaded
-        self._loaded.coop.agent = self.agent_name
         self._fault = None
-        self._forced = None
-        self._overrides = {}
-        self._agent = program.agents[0] if program.agents else None
-        self._install_roots()
+        self._coop_states = bool(loaded.coop.states)
+        self.root_actions.load(loaded)
 
     def reload(self, program: Program) -> None:
         """Swap in a new version of the behavior between ticks (hot reload).
 
         Options and states that still exist (by name) keep their active state, times and
         parameters; everything else starts fresh; bindings are re-linked; input overrides, the
-        selected agent and a forced root are kept when their names still exist.
+        selected agent and forced roots are kept when their names still exist.
 
         Raises:
             LinkError, LoadError: the new program cannot run; the running one stays in place.
         """
         old = self._require()
         new = self._prepare(program)
-        for name in program.options:
-            if name not in old.layout.options:
-                continue
-            oi = old.layout.options[name].index
-            ni = new.layout.options[name].index
-            old_option = old.program.options[name]
-            new_option = program.options[name]
-            state = old_option.states[old.S[oi]].name
-            if state not in {s.name for s in new_option.states}:
-                continue  # its active state is gone: the option restarts when next called
-            new.S[ni] = new_option.state(state).index
-            new.LT[ni], new.PV[ni] = old.LT[oi], old.PV[oi]
-            new.TA[ni], new.TS[ni], new.SD[ni] = old.TA[oi], old.TS[oi], old.SD[oi]
-            old_slot, new_slot = old.layout.options[name], new.layout.options[name]
-            old_params = {p: (k, kind) for k, (p, kind) in enumerate(old_slot.params)}
-            for k, (p, kind) in enumerate(new_slot.params):
-                if p in old_params and old_params[p][1] is kind:
-                    new.PP[new_slot.offset + k] = old.PP[old_slot.offset + old_params[p][0]]
-        for name, slot in new.layout.behaviors.items():
-            if name in old.layout.behaviors:
-                o = old.layout.behaviors[name].index
-                new.BLT[slot.index], new.BPV[slot.index], new.BTA[slot.index] = old.BLT[o], old.BPV[o], old.BTA[o]
-        for name, slot in new.layout.outputs.items():
-            old_slot_out = old.layout.outputs.get(name)
-            if (
-                old_slot_out is not None
-                and slot.stored
-                and old_slot_out.stored
-                and program.outputs[name].kind is old.program.outputs[name].kind
-            ):
-                new.OV[slot.index] = old.OV[old_slot_out.index]
-        new.coop.agent = old.coop.agent
-        new.coop.agent_priority = old.coop.agent_priority
-        new.coop.synchronization_ticks = old.coop.synchronization_ticks
+        new.keep(old)
         self._loaded = new
-        agent_name = self._agent.name if self._agent is not None else None
-        self._agent = next((a for a in program.agents if a.name == agent_name), None) or (
-            program.agents[0] if program.agents else None
-        )
-        if self._forced is not None:
-            kept = [(root, params) for root, params in self._forced if self._root_exists(root)]
-            self._forced = kept or None
-        overrides = self._overrides
-        self._overrides = {}
-        for symbol, value in overrides.items():
-            if symbol in program.inputs and symbol in new.layout.inputs:
-                self._apply_override(symbol, value)
-        self._install_roots()
+        self._coop_states = bool(new.coop.states)
+        self.root_actions.reload(new)
 
     def _require(self) -> LoadedProgram:
         if self._loaded is None:
             raise DebugError("no program is loaded")
         return self._loaded
 
-    def _root_exists(self, root: Root) -> bool:
-        loaded = self._require()
-        if root.kind == "output":
-            return root.name in loaded.layout.outputs
-        table = loaded.layout.options if root.kind == "option" else loaded.layout.behaviors
-        return root.name in table
-
-    def _install_roots(self) -> None:
-        loaded = self._require()
-        self._coop_states = bool(loaded.coop.states)
-        if self._forced is not None:
-            self._root_names = tuple(root for root, _ in self._forced)
-            self._roots = [loaded.root_action(root, params) for root, params in self._forced]
-        elif self._agent is not None:
-            root = Root("option", self._agent.root)
-            self._root_names = (root,)
-            self._roots = [loaded.root_action(root, {})]
-        else:
-            self._root_names = ()
-            self._roots = []
+    @property
+    def loaded(self) -> LoadedProgram:
+        """The program bound to this engine's storage (raises DebugError before a load)."""
+        return self._require()
 
     # -- ticks ----------------------------------------------------------------------------------
 
@@ -212,19 +149,10 @@ class Engine:
         # One handler for the whole tick: a fault is located from its traceback (``_locate``),
         # not from which root was running.
         try:
-            for action in self._roots:
+            for action in self.root_actions.actions:
                 action(now, tick)
         except Exception as error:
             self._fault = self._locate(error)
-
-    def _double_execution(self, option: int, tick: int) -> bool:
-        loaded = self._require()
-        name = loaded.linked.option_names[option]
-        message = f"option {name} is contained in the activation tree more than once"
-        if self.policy is Policy.B2:
-            raise DoubleExecutionError(message)
-        self.warnings.append(message)
-        return loaded.PV[option] == tick - 1
 
     def _locate(self, error: BaseException) -> Fault:
         loaded = self._require()
@@ -249,44 +177,25 @@ class Engine:
 
     @property
     def errored(self) -> bool:
+        """Whether the agent stopped on a fault (until ``reset()``)."""
         return self._fault is not None
 
     def reset(self) -> None:
         """Every option restarts in its initial state on the next tick; clears a fault (§2.9)."""
-        loaded = self._require()
-        for table in (loaded.LT, loaded.PV, loaded.BLT, loaded.BPV):
-            table[:] = [NEVER] * len(table)
+        self._require().reset()
         self._fault = None
 
     # -- agents ----------------------------------------------------------------------------------
 
     @property
     def program(self) -> Program:
+        """The loaded program."""
         return self._require().program
 
     @property
     def agents(self) -> tuple[Agent, ...]:
+        """The agents of the loaded program (select one with ``root_actions.select_agent``)."""
         return self._require().program.agents
-
-    @property
-    def selected_agent(self) -> str | None:
-        return self._agent.name if self._agent is not None else None
-
-    def select_agent(self, name: str) -> None:
-        """Select agent ``name`` (§2.9): a fresh root action, no option state is reset."""
-        loaded = self._require()
-        agent = next((a for a in loaded.program.agents if a.name == name), None)
-        if agent is None:
-            raise DebugError(f"unknown agent {name}")
-        if self._agent is not None and self._agent.name == name:
-            return
-        self._agent = agent
-        self._install_roots()
-
-    @property
-    def roots(self) -> tuple[Root, ...]:
-        """The current root actions (the agent's root option, or a forced root)."""
-        return self._root_names
 
     @property
     def tick(self) -> int:
@@ -307,7 +216,7 @@ class Engine:
         if slot is None:
             raise DebugError(f"unknown output symbol {name}")
         if slot.stored:
-            return loaded.OV[slot.index]
+            return loaded.outputs[slot.index]
         binding = loaded.linked.outputs[slot.index]
         assert binding is not None and binding.getter is not None
         return binding.getter()
@@ -323,7 +232,7 @@ class Engine:
         if slot is None:
             raise DebugError(f"unknown output symbol {name}")
         if slot.stored:
-            loaded.OV[slot.index] = value
+            loaded.outputs[slot.index] = value
         else:
             binding = loaded.linked.outputs[slot.index]
             assert binding is not None and binding.setter is not None
@@ -333,7 +242,7 @@ class Engine:
         """The host value of a qualified enum element."""
         return self._require().linked.enum_values[element]
 
-    def enum_element(self, enum: str | None, value: Value) -> Value:
+    def enum_element(self, enum: str | None, value: Value) -> Value | str:
         """The first element of ``enum`` with ``value`` (the value itself if none has it)."""
         if enum is None:
             return value
@@ -352,7 +261,7 @@ class Engine:
         The cheap per-tick view for statistics and trace hashes: built in C from the engine's
         tick stamps (no walk, no objects), unlike :meth:`snapshot` / :meth:`activation`.
         """
-        return bytes(map(self._tick.__eq__, self._require().LT))
+        return bytes(map(self._tick.__eq__, self._require().last_tick))
 
     def active_states(self) -> tuple[int, ...]:
         """Per option (``option_names`` order): the index of its active state.
@@ -360,30 +269,16 @@ class Engine:
         Options that did not run keep the state they were left in (§2.2); read it together
         with :meth:`ran_options`.
         """
-        return tuple(self._require().S)
+        return tuple(self._require().states)
 
     # -- activation tree ---------------------------------------------------------------------------
 
     def snapshot(self) -> Snapshot:
         """The storage after the last tick, copied (cheap); build the tree later."""
-        loaded = self._require()
-        return Snapshot(
-            self._now,
-            self._tick,
-            self._root_names,
-            tuple(loaded.S),
-            tuple(loaded.LT),
-            tuple(loaded.TA),
-            tuple(loaded.TS),
-            tuple(loaded.LF),
-            tuple(loaded.SD),
-            tuple(loaded.PP),
-            tuple(loaded.BP),
-            tuple(loaded.BLT),
-            tuple(loaded.BTA),
-            tuple(loaded.AV),
-            tuple(loaded.OV),
-        )
+        lists = self._require().snapshot_lists  # the snapshot lists of STORAGE, in Snapshot order
+        # tuple.__new__ directly: the NamedTuple's own __new__ is a Python function that parses
+        # 15 arguments; this is half the cost, and recorders snapshot every tick.
+        return _new_tuple(Snapshot, (self._now, self._tick, self.root_actions.roots, *map(tuple, lists)))
 
     def path(self) -> list[list[Any]]:
         """The activation path of the last tick, compact (see :func:`~engine.runtime.activation.compact_path`).
@@ -395,12 +290,12 @@ class Engine:
         plan = loaded.path_plan
         if plan is None:
             plan = loaded.path_plan = PathPlan.of(loaded.program, loaded.layout)
-        return compact_path(plan, self._root_names, self._tick, self._now, loaded.path_storage)
+        return compact_path(plan, self.root_actions.roots, self._tick, self._now, loaded.path_storage)
 
     def activation(self, snapshot: Snapshot | None = None) -> list[Node]:
         """The activation tree of the last tick (or of ``snapshot``)."""
         loaded = self._require()
-        return build_tree(snapshot or self.snapshot(), loaded.program, loaded.layout, loaded.behavior_params)
+        return build_tree(snapshot or self.snapshot(), loaded.program, loaded.layout, loaded.behavior_declared)
 
     def activation_dict(self) -> list[dict[str, Any]]:
         """The activation tree as JSON-ready dicts, enum values as element names."""
@@ -416,63 +311,6 @@ class Engine:
     def coop(self) -> CoopStates:
         """The cooperative-state team-message interface of this agent (§2.11)."""
         return self._require().coop
-
-    @property
-    def debug(self) -> Debugger:
-        """The debug interface (:class:`engine.runtime.debug.Debugger`)."""
-        from engine.runtime.debug import Debugger
-
-        return Debugger(self)
-
-    # -- used by the debugger ---------------------------------------------------------------------
-
-    def _loaded_program(self) -> LoadedProgram:
-        return self._require()
-
-    def _force(self, root: Root | None, params: dict[str, Value], add: bool = False) -> None:
-        """Replace the root actions by ``root`` (``setRootAction``), or append it (``addRootAction``).
-
-        ``root=None`` releases every forced root: the selected agent's root option runs again.
-        """
-        if root is not None and root.kind == "option":
-            check_root(self._require().program, root.name, self.policy)
-        if root is None:
-            self._forced = None
-        elif add and self._forced is not None:
-            self._forced = [*self._forced, (root, params)]
-        elif add and self._agent is not None:
-            self._forced = [(Root("option", self._agent.root), {}), (root, params)]
-        else:
-            self._forced = [(root, params)]
-        self._install_roots()
-
-    def _apply_override(self, symbol: str, value: Value | None) -> None:
-        loaded = self._require()
-        slot = loaded.layout.inputs[symbol]
-        key = f"I{slot.index}"
-        binding = loaded.linked.inputs[slot.index]
-        if value is None:
-            self._overrides.pop(symbol, None)
-            loaded.globals[key] = binding.read
-            if slot.attribute is not None:
-                loaded.globals[f"IA{slot.index}"] = binding.source
-        else:
-            self._overrides[symbol] = value
-            loaded.globals[key] = lambda *_args, _value=value: _value
-            if slot.attribute is not None:
-                # Generated code reads ``IA{k}.<attribute>``: give it an object that has the value.
-                loaded.globals[f"IA{slot.index}"] = SimpleNamespace(**{slot.attribute: value})
-        loaded.input_reads[symbol] = loaded.globals[key]
-
-    @property
-    def forced(self) -> Root | None:
-        """The root the debugger forced in place of the agent's root option, if any."""
-        return self._forced[0][0] if self._forced is not None else None
-
-    @property
-    def forced_roots(self) -> tuple[Root, ...]:
-        """Every root action the debugger installed, in execution order (empty: the agent's root)."""
-        return tuple(root for root, _ in self._forced) if self._forced is not None else ()
 
     @property
     def input_reads(self) -> Mapping[str, Callable[..., Value]]:
@@ -516,11 +354,12 @@ class Engine:
         for slot, position in enumerate(order):
             where[position] = slot
         reads = loaded.input_reads
+        overrides = loaded.overrides
         plain = [g for g, _ in getters]
         names = tuple(names)
 
         def sample() -> tuple[Value, ...]:
-            if self._overrides:
+            if overrides:
                 return tuple([reads[name]() for name in names])
             values: list[Value] = []
             for read, source in readers:
@@ -541,13 +380,8 @@ class Engine:
         stored = all(loaded.layout.outputs[name].stored for name in names)
         if stored:
             indices = [loaded.layout.outputs[name].index for name in names]
-            pick = loaded.OV.__getitem__
+            pick = loaded.outputs.__getitem__
             return lambda: tuple(map(pick, indices))
         output = self.output
         names = tuple(names)
         return lambda: tuple([output(name) for name in names])
-
-    @property
-    def overrides(self) -> dict[str, Value]:
-        """Input symbols currently overridden by the debugger, with their values."""
-        return dict(self._overrides)

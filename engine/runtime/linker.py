@@ -3,7 +3,7 @@
 This is the Python counterpart of the name resolution in ``Engine::createOptionGraph`` (§2.10):
 every external input/output symbol, enum element, basic behavior and parameter the program
 names must be registered, with the right kind. All problems are collected and raised together
-as one :class:`~engine.runtime.errors.LinkError`. Internal symbols and enumerations (§2.1) get
+as one :class:`~engine.errors.LinkError`. Internal symbols and enumerations (§2.1) get
 engine storage; internal enum elements get the values 0..n-1 in declaration order.
 """
 
@@ -22,6 +22,7 @@ from engine.codegen.layout import (
     assignment_sites,
     default_value,
 )
+from engine.errors import LinkError
 from engine.ir.model import (
     Action,
     BehaviorCall,
@@ -37,7 +38,6 @@ from engine.ir.model import (
     walk,
 )
 from engine.runtime.bindings import BasicBehavior, Bindings, InputBinding, OutputBinding
-from engine.runtime.errors import LinkError
 from engine.types import Kind, Value
 
 __all__ = ["Linked", "link", "program_expressions"]
@@ -168,32 +168,32 @@ def link(
     output_names: list[str] = []
     output_initial: list[Value] = []
     output_slots: dict[str, OutputSlot] = {}
-    for symbol in program.outputs.values():
+    for output in program.outputs.values():
         out_binding: OutputBinding | None
-        if symbol.internal:
-            if symbol.name in bindings.outputs:
-                problems.append(f"internal symbol {symbol.name} must not be registered by the host")
+        if output.internal:
+            if output.name in bindings.outputs:
+                problems.append(f"internal symbol {output.name} must not be registered by the host")
             out_binding = None
-            initial = _first_value(symbol.kind, symbol.enum, program, enum_values)
+            initial = _first_value(output.kind, output.enum, program, enum_values)
         else:
-            out_binding = bindings.outputs.get(symbol.name)
+            out_binding = bindings.outputs.get(output.name)
             if out_binding is None:
-                problems.append(f"output symbol {symbol.name} ({symbol.kind.value}) is not registered")
+                problems.append(f"output symbol {output.name} ({output.kind.value}) is not registered")
                 continue
-            if out_binding.kind is not symbol.kind:
+            if out_binding.kind is not output.kind:
                 problems.append(
-                    f"output symbol {symbol.name} is {symbol.kind.value} in the behavior "
+                    f"output symbol {output.name} is {output.kind.value} in the behavior "
                     f"but registered as {out_binding.kind.value}"
                 )
             initial = (
                 out_binding.initial
                 if out_binding.initial is not None
-                else _first_value(symbol.kind, symbol.enum or out_binding.enum, program, enum_values, bindings)
+                else _first_value(output.kind, output.enum or out_binding.enum, program, enum_values, bindings)
             )
         stored = out_binding is None or out_binding.setter is None
-        output_slots[symbol.name] = OutputSlot(len(outputs), stored)
+        output_slots[output.name] = OutputSlot(len(outputs), stored)
         outputs.append(out_binding)
-        output_names.append(symbol.name)
+        output_names.append(output.name)
         output_initial.append(initial)
 
     # -- basic behaviors ------------------------------------------------------------------------

@@ -1,96 +1,93 @@
 """A program bound to one engine: flat storage lists, generated functions, host objects (§2.1).
 
-:class:`LoadedProgram` is what :meth:`engine.runtime.engine.Engine.load` builds: the linker's
-layout turned into lists (active states, tick stamps, activation times, decision records,
-parameters, outputs), the generated option functions bound to them as globals, and the root
-actions that call options and basic behaviors with constant parameters (§2.5, §2.9). The
-Engine owns the lifecycle (load, reload, ticks, faults); this module owns the storage.
+:class:`LoadedProgram` is what :meth:`engine.runtime.engine.Engine.load` builds: the storage
+lists of :data:`engine.codegen.layout.STORAGE` (active states, tick stamps, activation times,
+decision records, parameters, outputs), the generated option functions bound to them as
+globals, the input overrides (the generated code reads an overridden input through a constant)
+and the root actions that call options and basic behaviors with constant parameters (§2.5,
+§2.9). The Engine owns the lifecycle (load, reload, ticks, faults), :mod:`engine.runtime.roots`
+what runs at the root; this module owns the storage, and derives everything that copies it
+(snapshots, ``reset``, hot reload) from the one table.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from types import SimpleNamespace
+from typing import Any, cast
 
-from engine.codegen.layout import default_value, engine_order
+from engine.codegen.layout import NEVER, STORAGE, Per, Start, StorageList, default_value, engine_order
 from engine.codegen.python import GeneratedProgram
 from engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
-from engine.runtime.activation import PathPlan, Root
+from engine.errors import DoubleExecutionError
+from engine.ir.model import Parameter
+from engine.runtime.activation import PATH_FIELDS, PathPlan, PathStorage, Root, Snapshot
 from engine.runtime.coop import CoopStates
 from engine.runtime.linker import Linked
-from engine.types import Kind, Value
+from engine.runtime.values import EnumValues
+from engine.types import Ms, Value
 
-if TYPE_CHECKING:
-    from engine.runtime.engine import Engine
+__all__ = ["LoadedProgram", "RootAction"]
 
-__all__ = ["NEVER", "LoadedProgram", "RootAction"]
-
-#: Tick stamp of "never executed": never equal to ``tick - 1`` for a real tick (ticks start at 1).
-NEVER = -10
-
+#: One root action: called with ``(now, tick)`` once per tick.
 RootAction = Callable[[int, int], None]
+
+#: The storage lists a snapshot copies, in :class:`Snapshot` field order.
+SNAPSHOT_FIELDS = tuple(spec.field for spec in STORAGE if spec.snapshot)
+if Snapshot._fields[3:] != SNAPSHOT_FIELDS:  # pragma: no cover - a schema edit that forgot Snapshot
+    raise AssertionError(f"Snapshot fields {Snapshot._fields[3:]} do not follow STORAGE {SNAPSHOT_FIELDS}")
 
 
 class LoadedProgram:
-    """One program bound to one engine: storage lists, generated functions, host objects."""
+    """One program bound to one engine: storage lists, generated functions, host objects.
 
-    def __init__(self, linked: Linked, generated: GeneratedProgram, engine: Engine) -> None:
+    Args:
+        linked: the program resolved against the host's bindings.
+        generated: its generated code (shared by engines with equal layouts).
+        tick: the engine's tick counter (cooperative states compare tick stamps with it).
+        warnings: where a double execution under policy B1 is reported.
+    """
+
+    # The storage lists, by their field names in STORAGE (set from the table in __init__).
+    states: list[int]
+    last_tick: list[int]
+    previous_tick: list[int]
+    activated: list[Ms]
+    state_entered: list[Ms]
+    decisions: list[tuple[int, int, int] | None]
+    decision_state_time: list[float]
+    option_params: list[Value]
+    behavior_params: list[Value]
+    behavior_last_tick: list[int]
+    behavior_previous_tick: list[int]
+    behavior_activated: list[Ms]
+    assignments: list[Value | None]
+    outputs: list[Value]
+
+    def __init__(
+        self, linked: Linked, generated: GeneratedProgram, *, tick: Callable[[], int], warnings: list[str]
+    ) -> None:
         self.linked = linked
         self.program = linked.program
         self.layout = linked.layout
         self.generated = generated
-        n = len(linked.option_names)
-        self.LT = [NEVER] * n
-        self.PV = [NEVER] * n
-        self.TA = [0] * n
-        self.S = [linked.layout.options[name].initial for name in linked.option_names]
-        self.TS = [0] * n
-        self.LF: list[tuple[int, int, int] | None] = [None] * n
-        self.SD = [0.0] * n
-        self.PP: list[Value] = [0.0] * linked.n_option_params
-        for name, slot in linked.layout.options.items():
-            for k, (_, kind) in enumerate(slot.params):
-                self.PP[slot.offset + k] = default_value(kind)
-            del name
-        self.BP: list[Value] = [0.0] * linked.n_behavior_params
-        self.behavior_params: dict[str, tuple[tuple[str, Kind, str | None], ...]] = {}
+        self.warnings = warnings
+        self.lists: dict[str, list[Any]] = {spec.field: self._start(spec) for spec in STORAGE}
+        for field, values in self.lists.items():
+            setattr(self, field, values)
+        #: per basic behavior: its declared parameters, qualified (``BehaviorNode`` names)
+        self.behavior_declared: dict[str, tuple[Parameter, ...]] = {}
         for name, bslot in linked.layout.behaviors.items():
             instance = linked.behaviors[bslot.index]
             declared = type(instance).declared_parameters()
-            self.behavior_params[name] = tuple((p.name, p.kind, p.enum) for p in declared)
-            for k, (_, kind) in enumerate(bslot.params):
-                self.BP[bslot.offset + k] = default_value(kind)
-            instance._attach(self.BP, bslot.offset, [p[0] for p in bslot.params])
-        nb = len(linked.behaviors)
-        self.BLT = [NEVER] * nb
-        self.BPV = [NEVER] * nb
-        self.BTA = [0] * nb
-        self.OV: list[Value] = list(linked.output_initial)
-        self.AV: list[Value | None] = [None] * len(linked.layout.sites)
+            self.behavior_declared[name] = declared
+            instance.bind_parameters(self.behavior_params, bslot.offset, declared)
         self.coop = CoopStates.of(self.program)
-        self.coop.tick = lambda: engine._tick
+        self.coop.tick = tick
         self.coop.executing = self.executing_coop_states
         g: dict[str, Any] = dict(SUPPORT_GLOBALS)
-        g.update(
-            LT=self.LT,
-            PV=self.PV,
-            TA=self.TA,
-            S=self.S,
-            TS=self.TS,
-            LF=self.LF,
-            SD=self.SD,
-            PP=self.PP,
-            BP=self.BP,
-            BLT=self.BLT,
-            BPV=self.BPV,
-            BTA=self.BTA,
-            OV=self.OV,
-            AV=self.AV,
-            DX=engine._double_execution,
-            RB=self.run_behavior,
-            CC=self.coop.check,
-            CF=self.coop.conflict,
-        )
+        g.update((spec.name, self.lists[spec.field]) for spec in STORAGE)
+        g.update(DX=self.double_execution, CC=self.coop.check, CF=self.coop.conflict)
         for k, behavior in enumerate(linked.behaviors):
             # Generated basic-behavior calls do the bookkeeping of ``run_behavior`` inline.
             g[f"BB{k}"] = behavior
@@ -109,35 +106,183 @@ class LoadedProgram:
                 g[f"OG{k}"] = out.getter
         self.globals = g
         generated.bind(g)
-        self.functions: list[Callable[[int, int], None]] = [g[f"O{i}"] for i in range(n)]
+        self.functions: list[Callable[[int, int], None]] = [g[f"O{i}"] for i in range(len(linked.option_names))]
         self.input_reads = {name: g[f"I{slot.index}"] for name, slot in linked.layout.inputs.items()}
+        #: input symbols the generated code reads as a constant instead of from the host
+        self.overrides: dict[str, Value] = {}
         #: built on the first :meth:`Engine.path` call (hosts that never record pay nothing)
         self.path_plan: PathPlan | None = None
-        self.path_storage = (self.LT, self.S, self.TA, self.TS, self.LF, self.PP, self.BP, self.BLT, self.BTA)
+        self.path_storage = cast(PathStorage, tuple(self.lists[field] for field in PATH_FIELDS))
+        #: what :meth:`Engine.snapshot` copies: the ``snapshot`` lists of STORAGE, in order
+        self.snapshot_lists = tuple(self.lists[field] for field in SNAPSHOT_FIELDS)
+        self.enums = self._enum_values()
+
+    def _start(self, spec: StorageList) -> list[Any]:
+        """The list ``spec`` as a load leaves it."""
+        layout, linked = self.layout, self.linked
+        if spec.start is Start.INITIAL_STATE:
+            return [layout.options[name].initial for name in linked.option_names]
+        if spec.start is Start.INITIAL_VALUE:
+            return list(linked.output_initial)
+        if spec.start is Start.DEFAULT:
+            slots = layout.options.values() if spec.per is Per.OPTION_PARAMETER else layout.behaviors.values()
+            size = linked.n_option_params if spec.per is Per.OPTION_PARAMETER else linked.n_behavior_params
+            values: list[Value] = [0.0] * size
+            for slot in slots:
+                for k, (_, kind) in enumerate(slot.params):
+                    values[slot.offset + k] = default_value(kind)
+            return values
+        size = {
+            Per.OPTION: len(linked.option_names),
+            Per.OPTION_PARAMETER: linked.n_option_params,
+            Per.BEHAVIOR: len(linked.behaviors),
+            Per.BEHAVIOR_PARAMETER: linked.n_behavior_params,
+            Per.SYMBOL: len(linked.outputs),
+            Per.ASSIGNMENT: len(layout.sites),
+        }[spec.per]
+        start: object = {Start.NEVER: NEVER, Start.ZERO_MS: 0, Start.ZERO_TIME: 0.0, Start.NOTHING: None}[spec.start]
+        return [start] * size
+
+    def _enum_values(self) -> dict[str | None, EnumValues]:
+        """Per enumeration its elements and host values (declared elements first, in order)."""
+        values = self.linked.enum_values
+        enums: dict[str | None, EnumValues] = {}
+        for name, enum in self.program.enums.items():
+            elements = {element: values[element] for element in enum.elements if element in values}
+            for value, element in self.linked.enum_names.get(name, {}).items():
+                elements.setdefault(element, value)
+            enums[name] = EnumValues(name, elements)
+        # Parameters read from intermediate code may not know their enumeration: any element.
+        enums[None] = EnumValues("(any enumeration)", dict(values))
+        return enums
+
+    def enum_values(self, enum: str | None) -> EnumValues:
+        """The elements and host values of enumeration ``enum`` (any element when it is unknown)."""
+        found = self.enums.get(enum)
+        return found if found is not None else self.enums[None]
+
+    # -- ticks ------------------------------------------------------------------------------------
+
+    def double_execution(self, option: int, tick: int) -> bool:
+        """Option ``option`` runs a second time in tick ``tick`` (§2.2): a fault under B2, else a warning.
+
+        Returns whether the option counts as active in the previous tick (B1).
+        """
+        message = f"option {self.linked.option_names[option]} is contained in the activation tree more than once"
+        if self.layout.double_execution_is_error:
+            raise DoubleExecutionError(message)
+        self.warnings.append(message)
+        return self.previous_tick[option] == tick - 1
 
     def run_behavior(self, k: int, now: int, tick: int, changed: bool) -> None:
         """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set.
 
         Used for root actions; generated calls inline the same steps (``engine.codegen.python``).
         """
-        lt = self.BLT[k]
+        lt = self.behavior_last_tick[k]
         if lt != tick:
-            self.BPV[k] = lt
-            self.BLT[k] = tick
+            self.behavior_previous_tick[k] = lt
+            self.behavior_last_tick[k] = tick
             was = lt == tick - 1
         else:
-            was = self.BPV[k] == tick - 1
+            was = self.behavior_previous_tick[k] == tick - 1
         behavior = self.linked.behaviors[k]
         if changed:
             behavior.parameters_changed()
         if not was:
-            self.BTA[k] = now
-        behavior.time_of_execution = (now - self.BTA[k]) & MS_MASK
+            self.behavior_activated[k] = now
+        behavior.time_of_execution = (now - self.behavior_activated[k]) & MS_MASK
         behavior.execute()
 
     def executing_coop_states(self) -> list[tuple[int, int]]:
+        """The ``(option, state)`` of every cooperative state that ran in the current tick."""
         tick = self.coop.tick()
-        return [key for key in self.coop.states if self.LT[key[0]] == tick and self.S[key[0]] == key[1]]
+        return [key for key in self.coop.states if self.last_tick[key[0]] == tick and self.states[key[0]] == key[1]]
+
+    # -- copies of the storage ----------------------------------------------------------------------
+
+    def reset(self) -> None:
+        """Every option and basic behavior restarts when next called (the ``reset`` lists of STORAGE)."""
+        for spec in STORAGE:
+            if spec.reset:
+                values = self.lists[spec.field]
+                values[:] = [NEVER] * len(values)
+
+    def keep(self, old: LoadedProgram) -> None:
+        """Take over from ``old`` (hot reload) what still exists by name (the ``reload`` lists of STORAGE).
+
+        An option keeps its lists only while its active state still exists (else it restarts when
+        next called); a parameter while it has the same type; a stored symbol while it is stored
+        with the same type. Cooperative-state settings are kept.
+        """
+        program, layout = self.program, self.layout
+        kept_options: list[tuple[int, int]] = []
+        kept_params: list[tuple[int, int]] = []
+        for name, slot in layout.options.items():
+            old_slot = old.layout.options.get(name)
+            if old_slot is None:
+                continue
+            state = old.program.options[name].states[old.states[old_slot.index]].name
+            if state not in {s.name for s in program.options[name].states}:
+                continue  # its active state is gone: the option restarts when next called
+            kept_options.append((old_slot.index, slot.index))
+            self.states[slot.index] = program.options[name].state(state).index
+            old_params = {p: (k, kind) for k, (p, kind) in enumerate(old_slot.params)}
+            for k, (p, kind) in enumerate(slot.params):
+                if p in old_params and old_params[p][1] is kind:
+                    kept_params.append((old_slot.offset + old_params[p][0], slot.offset + k))
+        kept_behaviors = [
+            (old.layout.behaviors[name].index, slot.index)
+            for name, slot in layout.behaviors.items()
+            if name in old.layout.behaviors
+        ]
+        kept_symbols = []
+        for name, out in layout.outputs.items():
+            old_out = old.layout.outputs.get(name)
+            if (
+                old_out is not None
+                and out.stored
+                and old_out.stored
+                and program.outputs[name].kind is old.program.outputs[name].kind
+            ):
+                kept_symbols.append((old_out.index, out.index))
+        pairs = {
+            Per.OPTION: kept_options,
+            Per.OPTION_PARAMETER: kept_params,
+            Per.BEHAVIOR: kept_behaviors,
+            Per.SYMBOL: kept_symbols,
+        }
+        for spec in STORAGE:
+            if not spec.reload or spec.start is Start.INITIAL_STATE:  # states: mapped by name above
+                continue
+            new_values, old_values = self.lists[spec.field], old.lists[spec.field]
+            for o, n in pairs[spec.per]:
+                new_values[n] = old_values[o]
+        self.coop.agent = old.coop.agent
+        self.coop.agent_priority = old.coop.agent_priority
+        self.coop.synchronization_ticks = old.coop.synchronization_ticks
+
+    # -- input overrides ------------------------------------------------------------------------------
+
+    def override_input(self, symbol: str, value: Value | None) -> None:
+        """Make the generated code read input ``symbol`` as ``value`` (None: from the host again)."""
+        slot = self.layout.inputs[symbol]
+        key = f"I{slot.index}"
+        binding = self.linked.inputs[slot.index]
+        if value is None:
+            self.overrides.pop(symbol, None)
+            self.globals[key] = binding.read
+            if slot.attribute is not None:
+                self.globals[f"IA{slot.index}"] = binding.source
+        else:
+            self.overrides[symbol] = value
+            self.globals[key] = lambda *_args, _value=value: _value
+            if slot.attribute is not None:
+                # Generated code reads ``IA{k}.<attribute>``: give it an object that has the value.
+                self.globals[f"IA{slot.index}"] = SimpleNamespace(**{slot.attribute: value})
+        self.input_reads[symbol] = self.globals[key]
+
+    # -- root actions ---------------------------------------------------------------------------------
 
     def root_action(self, root: Root, params: Mapping[str, Value]) -> RootAction:
         """A root action calling ``root`` with constant ``params`` (others get defaults, §2.5).
@@ -149,7 +294,7 @@ class LoadedProgram:
             oslot = self.layout.outputs[root.name]
             value = params["value"]
             if oslot.stored:
-                outputs, position = self.OV, oslot.index
+                outputs, position = self.outputs, oslot.index
 
                 def assign_stored(now: int, tick: int) -> None:
                     outputs[position] = value
@@ -168,7 +313,7 @@ class LoadedProgram:
             function = self.functions[slot.index]
             if not values:
                 return function  # nothing to set: the generated option is the root action
-            store = self.PP
+            store = self.option_params
 
             def run_option(now: int, tick: int) -> None:
                 for position, value in values:
@@ -181,7 +326,7 @@ class LoadedProgram:
             (bslot.offset + p, params.get(bslot.params[p][0], default_value(bslot.params[p][1])))
             for p in engine_order(bslot.params)
         ]
-        bstore = self.BP
+        bstore = self.behavior_params
         index = bslot.index
         run = self.run_behavior
 

@@ -12,8 +12,10 @@ conventions and records one JSON object per tick. This module is that host:
   one tick and renders the ``expected.out.jsonl`` line: the activation tree without output
   assignments and every output and internal symbol, enum values as qualified element names.
 
-Bad input (an unknown or parameterized symbol in ``set``, a value of the wrong type, an
-unqualified enum element, an unknown agent) raises :class:`TraceInputError` with one line.
+Bad input (an unknown or parameterized symbol in ``set``, a value of the wrong type or not
+finite, an enum value that is not a qualified element name, an unknown agent) raises
+:class:`TraceInputError` with one line; values are converted by
+:func:`engine.runtime.values.coerce`, as the debugger's and the studio's are.
 """
 
 from __future__ import annotations
@@ -22,21 +24,23 @@ import math
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
+from engine.errors import TraceError, ValueConversionError
 from engine.ir.model import Program
 from engine.runtime.activation import AssignmentNode, BehaviorNode, Node, OptionNode
 from engine.runtime.bindings import BasicBehavior, Bindings
 from engine.runtime.checks import Policy
 from engine.runtime.engine import Engine
+from engine.runtime.values import coerce
 from engine.types import Kind, Value
 
 __all__ = ["TraceFaultError", "TraceInputError", "TraceRunner", "conformance_bindings"]
 
 
-class TraceInputError(ValueError):
+class TraceInputError(TraceError, ValueError):
     """A line of the input trace cannot be applied (message is one line, names the tick)."""
 
 
-class TraceFaultError(RuntimeError):
+class TraceFaultError(TraceError, RuntimeError):
     """The behavior faulted during the trace (the engine stopped the agent)."""
 
 
@@ -125,9 +129,10 @@ class TraceRunner:
         self.line = 0
 
     def select_agent(self, name: str) -> None:
+        """Select agent ``name`` (as an ``agent`` key of an input line does)."""
         if name not in {a.name for a in self.program.agents}:
             raise TraceInputError(f"tick {self.line}: unknown agent {name!r}")
-        self.engine.select_agent(name)
+        self.engine.root_actions.select_agent(name)
 
     def apply(self, settings: dict[str, Any]) -> None:
         """Apply a ``set`` object: validate every name and value, then assign."""
@@ -141,22 +146,13 @@ class TraceRunner:
 
     def _value(self, name: str, kind: Kind, enum: str | None, raw: Any) -> Value:
         where = f"tick {self.line}: input symbol {name!r}"
-        if kind is Kind.DECIMAL:
-            if isinstance(raw, bool) or not isinstance(raw, int | float):
-                raise TraceInputError(f"{where} is decimal, got {raw!r}")
-            return float(raw)
-        if kind is Kind.BOOLEAN:
-            if not isinstance(raw, bool):
-                raise TraceInputError(f"{where} is boolean, got {raw!r}")
-            return raw
-        if not isinstance(raw, str):
+        if kind is Kind.ENUM and not isinstance(raw, str):
+            # The kit's traces name enum values; host values are not part of the format.
             raise TraceInputError(f"{where} is an enum, give a qualified element name, got {raw!r}")
-        elements = self.program.enums[enum].elements if enum in self.program.enums else ()
-        if raw not in elements:
-            if "." not in raw:
-                raise TraceInputError(f"{where}: enum element {raw!r} is not qualified (write {enum}.{raw})")
-            raise TraceInputError(f"{where}: {raw!r} is not an element of enumeration {enum}")
-        return self.engine.enum_value(raw)
+        try:
+            return coerce(kind, self.engine.loaded.enum_values(enum), raw, name=where)
+        except ValueConversionError as error:
+            raise TraceInputError(str(error)) from None
 
     def tick(self, line: dict[str, Any]) -> dict[str, Any]:
         """Apply one input line, execute one tick and return the output line."""
@@ -183,6 +179,7 @@ class TraceRunner:
         return self.render(t)
 
     def render(self, t: int) -> dict[str, Any]:
+        """The output line of the tick just run at clock ``t`` (the kit's ``expected.out.jsonl`` format)."""
         engine = self.engine
         outputs: dict[str, Any] = {}
         for out in self.program.outputs.values():

@@ -97,6 +97,7 @@ def main(args: argparse.Namespace) -> int:
     except OSError as error:  # an unreadable model or PDDL file
         raise UsageError(f"{error.filename or ''}: {error.strerror or error}") from None
     perturb(world, args.perturb)
+    assert world.engine is not None  # build_world compiles and attaches the monitor
     if args.render:
         from engine.emit.dot import option_graph, state_machine
 

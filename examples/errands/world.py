@@ -21,9 +21,12 @@ One behavior tick follows doc §4.1 inside the host loop's sense / execute / act
     step     0 pymunk physics (2 × 10 ms per 20 ms tick by default)
 
 ``plan=False`` selects the XABSL agent ``reactive`` (no operator ever), for the no-plan claims.
+``program=None`` builds the world without a controller (the studio attaches the program it
+compiled with :meth:`ErrandsWorld.attach`; until then the robot roams with no operator).
 The monitor's symbols and basic behaviors are bound in :mod:`examples.errands.bindings`; the
-host side of the plan (queue, next executable operator, replanning) is
-:class:`examples.errands.plan.PlanBoard`.
+host side of the plan (queue, next executable operator, replanning) is an
+:class:`engine.planning.monitor.PlanBoard` with the errands' partial-plan rule
+(:func:`examples.errands.plan.errands_board`).
 
 Ground truth (the arena) and what the robot believes (derived facts) are kept apart; the world
 compares them every tick (:class:`examples.errands.facts.Agreement`) and counts what the §4.4
@@ -45,13 +48,13 @@ import numpy as np
 
 from engine.dynamics.model import DDModel, load_model
 from engine.dynamics.system import DDSystem
-from engine.host import RunStats, Scene, run_headless
+from engine.host import AgentController, RunStats, Scene, run_headless
 from engine.ir.model import Program
 from engine.planning.facts import FactDeriver, FactEvent
 from engine.planning.strips import Fact, Task, load_task
 from engine.runtime import Engine
 from engine.types import Ms
-from examples.errands.arena import Arena, ArenaLayout, Box
+from examples.errands.arena import Arena, ArenaLayout, Box, wrap
 from examples.errands.bindings import (
     ITEMS,
     LOCATIONS,
@@ -62,7 +65,7 @@ from examples.errands.bindings import (
     monitor_bindings,
 )
 from examples.errands.facts import Agreement, Truth, evidence_signals, fact_rules, truth_facts
-from examples.errands.plan import PlanBoard
+from examples.errands.plan import errands_board
 
 HERE = Path(__file__).resolve().parent
 MODEL_PATH = HERE / "model" / "errands_dd.json"
@@ -132,12 +135,17 @@ class ErrandsAgent:
 
     __slots__ = ("_world", "controller", "name", "number", "team")
 
-    def __init__(self, world: ErrandsWorld, controller: Engine) -> None:
+    def __init__(self, world: ErrandsWorld, controller: Engine | None) -> None:
         self._world = world
         self.name = "robot"
         self.team = "errands"
         self.number = 1
-        self.controller: Engine | None = controller
+        self.controller: AgentController | None = controller
+
+    @property
+    def world(self) -> ErrandsWorld:
+        """The world this robot lives in."""
+        return self._world
 
     def sense(self, now_ms: Ms) -> None:
         """§4.1 steps 1–2: sensors from the arena, facts from the signal history (host hook)."""
@@ -158,6 +166,8 @@ class ErrandsWorld:
         noise: multiplies every σ of the DD model (0: deterministic dynamics).
         layout: the arena; defaults to the §1.5 sketch arena.
         model_path, domain_path, problem_path, agents_path: the example's files, replaceable.
+        program: the plan monitor's compiled behavior; ``None`` compiles ``agents_path``.
+        controller: False builds the robot without an engine (see :meth:`attach`).
     """
 
     def __init__(
@@ -172,6 +182,8 @@ class ErrandsWorld:
         domain_path: Path = DOMAIN_PATH,
         problem_path: Path = PROBLEM_PATH,
         agents_path: Path = AGENTS_PATH,
+        program: Program | None = None,
+        controller: bool = True,
     ) -> None:
         self.seed = int(seed)
         self.with_plan = plan
@@ -182,7 +194,7 @@ class ErrandsWorld:
         self.behaviors = self.dd.model.behaviors
         self._roam = self.behaviors.index("roam") if "roam" in self.behaviors else -1
         self.task = _task(str(domain_path), str(problem_path))
-        self.board = PlanBoard(self.task)
+        self.board = errands_board(self.task)
         self.deriver = FactDeriver(fact_rules(LOCATIONS, ITEMS))
         self.deriver.reset(self.task.init)
         self.facts: frozenset[Fact] = self.deriver.facts
@@ -216,10 +228,27 @@ class ErrandsWorld:
         self._held_before: set[str] = set()
         self._at_before: set[str] = set()
         self._monitor_seen: tuple[int, str | None, int] = (-1, None, -1)
-        self.engine = Engine(monitor_bindings(self), _program(str(agents_path)), agent_name="robot")
-        self.engine.select_agent("planner" if plan else "reactive")
-        self._agents = (ErrandsAgent(self, self.engine),)
+        self.engine: Engine | None = None
+        self._agents = (ErrandsAgent(self, None),)
         self.sense_hooks: list[Callable[[ErrandsWorld], None]] = []
+        if controller:
+            self.attach(program if program is not None else _program(str(agents_path)))
+
+    def attach(self, program: Program) -> Engine:
+        """Make an engine for ``program`` on the monitor's bindings the robot's controller.
+
+        Selects the XABSL agent ``planner`` (``reactive`` without a plan) when the program has it.
+
+        Raises:
+            engine.runtime.LinkError: the program declares a symbol or behavior the bindings lack.
+        """
+        engine = Engine(monitor_bindings(self), program, agent_name="robot")
+        wanted = "planner" if self.with_plan else "reactive"
+        if any(agent.name == wanted for agent in program.agents):
+            engine.root_actions.select_agent(wanted)
+        self.engine = engine
+        self._agents[0].controller = engine
+        return engine
 
     # -- XABSL bindings -----------------------------------------------------------------------------
 
@@ -276,7 +305,7 @@ class ErrandsWorld:
     @property
     def finished(self) -> bool:
         """With a plan: the monitor reached done or failed. Without: never."""
-        if self.engine.fault is not None:
+        if self.engine is not None and self.engine.fault is not None:
             return True  # a faulted controller does nothing more: stop rather than run on blind
         return self.with_plan and self.out["plan.status"] in (3, 4)
 
@@ -399,19 +428,111 @@ class ErrandsWorld:
     # -- scenes and debugging ----------------------------------------------------------------------
 
     def static_scene(self) -> Scene:
-        scene = self.arena.static_scene()
-        scene["behaviors"] = list(self.behaviors)
-        scene["facts"] = list(self.task.facts)
-        scene["goal"] = sorted(self.task.goal)
-        return scene
+        """The arena in the studio's scene vocabulary (``engine.host``), in mm and degrees.
+
+        Walls, obstacles (``rect`` shapes), beacons (a marker and the dashed circle within which
+        the robot counts as at it), the robot's size and sensor geometry, the DD behaviors, the
+        planning facts and the goal.
+        """
+        arena = self.arena
+        g = arena.geom
+        size = _mm(arena.layout.size)
+        shapes: list[dict[str, Any]] = [_rect(b, "#6b5a4a") for b in arena.boxes]
+        for name, (x, y) in arena.beacons.items():
+            shapes.append(
+                {"shape": "circle", "x": _mm(x), "y": _mm(y), "r": _mm(g.near), "stroke": BEACON, "dash": True}
+            )
+            shapes.append({"shape": "circle", "x": _mm(x), "y": _mm(y), "r": 150, "fill": BEACON, "label": name})
+        return {
+            "kind": "errands",
+            "units": {"length": "mm", "angle": "deg", "time": "ms"},
+            "field": {"x": [0, size], "y": [0, size]},
+            "walls": [[_mm(a[0]), _mm(a[1]), _mm(b[0]), _mm(b[1])] for a, b in arena.walls],
+            "shapes": shapes,
+            "teams": [{"name": "errands", "color": "#1f6fd1"}],
+            "agents": [{"name": a.name, "team": a.team, "number": a.number} for a in self._agents],
+            "robot_radius": _mm(g.radius),
+            "robot": {
+                "radius": _mm(g.radius),
+                "ray_angle": round(math.degrees(g.ray_angle), 3),
+                "ray_range": _mm(g.ray_range),
+                "near": _mm(g.near),
+                "gripper_offset": _mm(g.gripper_offset),
+            },
+            "beacons": {k: [_mm(x), _mm(y)] for k, (x, y) in arena.beacons.items()},
+            "behaviors": list(self.behaviors),
+            "facts": list(self.task.facts),
+            "goal": sorted(self.task.goal),
+        }
 
     def dynamic_scene(self) -> Scene:
-        x, y, h = self.arena.pose()
+        """What moves, in mm and degrees, plus what the robot's two layers are doing.
+
+        ``robots``: the robot's pose; ``shapes``: obstacles added by a perturbation, the book and
+        the mug (outlined while held), the two range-sensor rays up to what they hit and the
+        gripper (filled while closing); ``objects``: name -> [x, y, held, present]; ``alpha``
+        per DD behavior, ``s`` per operator, ``op``, ``plan_status``, derived ``facts`` and the
+        simulator's ``truth``.
+        """
+        arena = self.arena
+        g = arena.geom
+        x, y, h = arena.pose()
+        shapes: list[dict[str, Any]] = [_rect(b, "#8a3b2e") for b in arena.blocks]
+        objects: dict[str, list[object]] = {}
+        for name, item in arena.items.items():
+            objects[name] = [_mm(item.x), _mm(item.y), item.held, item.present]
+            if item.present:
+                shape = {
+                    "shape": "circle",
+                    "x": _mm(item.x),
+                    "y": _mm(item.y),
+                    "r": 90,
+                    "fill": ITEM_COLORS.get(name, "#ccc"),
+                }
+                shape["caption"] = name
+                if item.held:
+                    shape["stroke"] = "#ffffff"
+                shapes.append(shape)
+        sensors = self.sensors
+        for side, sign in (("o_l", 1.0), ("o_r", -1.0)):
+            reading = sensors.get(side, 0.0)
+            angle = h + sign * g.ray_angle
+            start = g.radius
+            end = g.radius + g.ray_range * (1.0 - reading)
+            cos, sin = math.cos(angle), math.sin(angle)
+            shapes.append(
+                {
+                    "shape": "segment",
+                    "x1": _mm(x + start * cos),
+                    "y1": _mm(y + start * sin),
+                    "x2": _mm(x + end * cos),
+                    "y2": _mm(y + end * sin),
+                    "stroke": "#ff5a4a" if reading > 0.0 else "rgba(255,255,255,0.35)",
+                    "dash": reading <= 0.0,
+                }
+            )
+        gx, gy = arena.gripper_point()
+        actuators = self.dd.actuators
+        closing = any(actuators.get("g_" + o, 0.0) > 0.5 for o in ITEMS)
+        shapes.append(
+            {
+                "shape": "segment",
+                "x1": _mm(x + g.radius * math.cos(h)),
+                "y1": _mm(y + g.radius * math.sin(h)),
+                "x2": _mm(gx),
+                "y2": _mm(gy),
+                "stroke": "#f0f0f0",
+            }
+        )
+        shapes.append(
+            {"shape": "circle", "x": _mm(gx), "y": _mm(gy), "r": 35, "stroke": "#f0f0f0"}
+            | ({"fill": "#f0f0f0"} if closing else {})
+        )
         return {
-            "t": round(self.t, 3),
-            "robot": [round(x, 4), round(y, 4), round(h, 4)],
-            "objects": self.arena.object_scene(),
-            "obstacles_added": [[b.x, b.y, b.w, b.h] for b in self.arena.blocks],
+            "t": round(self.t * 1000),
+            "robots": [[_mm(x), _mm(y), round(math.degrees(wrap(h)), 1)]],
+            "shapes": shapes,
+            "objects": objects,
             "alpha": [round(v, 4) for v in self.dd.alpha.tolist()],
             "s": {k: round(v, 4) for k, v in self.dd.s.items()},
             "op": self.operator,
@@ -463,7 +584,7 @@ class ErrandsWorld:
                 "status": self.plan_status,
                 "op": self.operator,
                 "last_failure": REASONS[self.out["plan.last_failure"]],
-                "activation": self.engine.activation_dict(),
+                "activation": self.engine.activation_dict() if self.engine is not None else [],
             },
             "ground_truth": {"robot": list(self.arena.pose()), "objects": self.arena.object_scene()},
         }
@@ -484,6 +605,19 @@ class ErrandsWorld:
                 for j, act in enumerate(m.actuators)
             }
         return frame
+
+
+#: Colours of the scene's shapes (the studio draws them as given).
+BEACON = "#ffd54a"
+ITEM_COLORS = {"book": "#b06ad9", "mug": "#36c3c9"}
+
+
+def _mm(metres: float) -> int:
+    return round(metres * 1000.0)
+
+
+def _rect(box: Box, fill: str) -> dict[str, Any]:
+    return {"shape": "rect", "x": _mm(box.x), "y": _mm(box.y), "w": _mm(box.w), "h": _mm(box.h), "fill": fill}
 
 
 def _round(a: np.ndarray) -> list[float]:

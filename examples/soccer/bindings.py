@@ -466,7 +466,7 @@ class XabslController:
         bindings, self.symbols = make_bindings(perception, motion)
         self.engine = Engine(bindings, program, agent_name=name)
         if agent is not None:
-            self.engine.select_agent(agent)
+            self.engine.root_actions.select_agent(agent)
         self._out = perception.outgoing
         self.recorder = ActivationRecorder(self.engine) if record else None
 

@@ -32,6 +32,7 @@ import orjson
 
 from engine.cli import UsageError
 from engine.emit.dot import option_graph
+from engine.errors import HostError
 from engine.files import write_atomically
 from engine.host import DEFAULT_BEHAVIOR_HZ, run_headless
 from engine.ir.model import Program
@@ -60,7 +61,7 @@ PASS_DISTANCE = (0.6, 5.0)
 TEAM_KEYS = ("home", "away")
 
 
-class TeamError(Exception):
+class TeamError(HostError):
     """A team behavior does not compile; ``diagnostics`` holds the printed diagnostics."""
 
     def __init__(self, folder: Path, diagnostics: list[str]) -> None:

@@ -105,9 +105,11 @@ def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     example.mkdir()
     for name in ("behavior", "chase"):
         shutil.copytree(REPO / "examples" / "soccer" / name, example / name)
-    # load_example recognises the soccer example by its world module next to the behaviors;
-    # the world's code itself comes from the installed package.
-    (example / "world.py").write_text('"""Marker: the soccer world lives in examples.soccer.world."""\n')
+    # The copy says how the studio runs it as any example folder does: a studio.py (here the
+    # soccer plug-in's factory, applied to the copy; the world's code comes from the package).
+    (example / "studio.py").write_text(
+        '"""The soccer world plug-in."""\n\nfrom examples.soccer.studio import example\n'
+    )
     server = StudioServer(example, free_port(), root / "serve.log")
     server.start()
     yield server

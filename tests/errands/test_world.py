@@ -9,10 +9,11 @@ import pytest
 
 from engine.host import Agent, World
 from engine.lang import compile_file
+from engine.planning.monitor import PlanBoard
 from engine.planning.strips import load_task
 from examples.errands.arena import Arena, Box
 from examples.errands.facts import Truth, truth_facts
-from examples.errands.plan import PlanBoard
+from examples.errands.plan import errands_board
 from examples.errands.world import AGENTS_PATH, DOMAIN_PATH, PROBLEM_PATH, build_world, run_world
 
 # -- arena sensors ----------------------------------------------------------------------------------
@@ -91,7 +92,7 @@ def test_robot_slides_along_a_blocking_wall_instead_of_passing_it():
 
 @pytest.fixture
 def board() -> PlanBoard:
-    return PlanBoard(load_task(DOMAIN_PATH, PROBLEM_PATH))
+    return errands_board(load_task(DOMAIN_PATH, PROBLEM_PATH))
 
 
 def test_board_next_executable_follows_the_queue_and_the_facts(board: PlanBoard):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from engine.runtime import DebugError
+from engine.runtime import DebugError, Debugger, ValueConversionError
 from tests.runtime.helpers import Host, ic
 
 PROGRAM = """
@@ -22,11 +22,11 @@ PROGRAM = """
 def test_force_option_with_parameters_then_release() -> None:
     host = Host(ic(PROGRAM))
     host.tick(0, x=0.0)
-    host.engine.debug.force_option("child", {"v": 20})
+    host.engine.root_actions.force_option("child", {"v": 20})
     host.tick(10)
     root = host.engine.activation()[0]
     assert (root.option, root.state, root.params) == ("child", "c2", {"child.v": 20.0})
-    host.engine.debug.release()
+    host.engine.root_actions.release()
     host.tick(20, x=0.0)
     assert host.engine.activation()[0].option == "main"
     assert host.node("main").option_time == 0, "main did not run while forced: it restarts"
@@ -35,52 +35,56 @@ def test_force_option_with_parameters_then_release() -> None:
 
 def test_force_basic_behavior() -> None:
     host = Host(ic(PROGRAM))
-    host.engine.debug.force_behavior("beep", {"beep.loud": 3.5})
+    host.engine.root_actions.force_behavior("beep", {"beep.loud": 3.5})
     host.tick(0)
     node = host.engine.activation()[0]
     assert (node.behavior, node.params) == ("beep", {"beep.loud": 3.5})
 
 
 def test_force_with_unknown_names_or_wrong_values_is_refused() -> None:
-    debug = Host(ic(PROGRAM)).engine.debug
+    roots = Host(ic(PROGRAM)).engine.root_actions
     with pytest.raises(DebugError, match="unknown option"):
-        debug.force_option("nope")
+        roots.force_option("nope")
     with pytest.raises(DebugError, match="no parameter"):
-        debug.force_option("child", {"w": 1})
-    with pytest.raises(DebugError, match="decimal"):
-        debug.force_option("child", {"v": True})
-    assert debug.forced is None
+        roots.force_option("child", {"w": 1})
+    with pytest.raises(ValueConversionError, match="decimal"):
+        roots.force_option("child", {"v": True})
+    with pytest.raises(ValueConversionError, match="not a finite number"):
+        roots.force_option("child", {"v": float("nan")})
+    with pytest.raises(ValueConversionError, match="out of the range"):
+        roots.force_option("child", {"v": 10**400})
+    assert roots.forced == ()
 
 
 def test_override_input_and_release() -> None:
     host = Host(ic(PROGRAM))
-    host.engine.debug.override_input("x", 5.0)
+    host.engine.root_actions.override_input("x", 5.0)
     host.tick(0, x=0.0)
-    assert host.engine.debug.input_values()["x"] == 5.0
+    assert Debugger(host.engine).input_values()["x"] == 5.0
     assert host.state("main") == "b"
-    host.engine.debug.release_input("x")
-    assert host.engine.debug.input_values() == {"x": 0.0, "hold": False}
-    assert host.engine.overrides == {}
+    host.engine.root_actions.release_input("x")
+    assert Debugger(host.engine).input_values() == {"x": 0.0, "hold": False}
+    assert host.engine.root_actions.overrides == {}
 
 
 def test_explain_gives_the_conditions_on_the_path_to_the_leaf() -> None:
     host = Host(ic(PROGRAM))
     host.tick(0, x=3.0, hold=True)
-    explanation = host.engine.debug.explain("main")
+    explanation = Debugger(host.engine).explain("main")
     print(explanation)
     assert (explanation.decided_in, explanation.target, explanation.leaf, explanation.stay) == ("a", "a", 1, True)
     assert [(c.value, c.branch) for c in explanation.conditions] == [(False, False)]
-    child = host.engine.debug.explain("child")
+    child = Debugger(host.engine).explain("child")
     assert child.target == "c1" and child.stay and child.conditions[0].value is False
     host.tick(10, hold=False)
-    explanation = host.engine.debug.explain("main")
+    explanation = Debugger(host.engine).explain("main")
     print(explanation)
     assert (explanation.target, explanation.leaf) == ("b", 0)
     assert [(c.value, c.branch) for c in explanation.conditions] == [(True, True)]
 
 
 def test_explain_unknown_or_idle_option() -> None:
-    debug = Host(ic(PROGRAM)).engine.debug
+    debug = Debugger(Host(ic(PROGRAM)).engine)
     with pytest.raises(DebugError):
         debug.explain("nope")
     with pytest.raises(DebugError, match="not run"):
@@ -92,19 +96,19 @@ def test_explain_unknown_or_idle_option() -> None:
 
 def test_add_root_action_runs_after_the_agents_root() -> None:
     host = Host(ic(PROGRAM))
-    host.engine.debug.force_behavior("beep", {"beep.loud": 1.0}, add=True)
+    host.engine.root_actions.force_behavior("beep", {"beep.loud": 1.0}, add=True)
     host.tick(0, x=0.0)
     tree = host.engine.activation()
     assert [getattr(n, "option", None) or n.behavior for n in tree] == ["main", "beep"]
-    assert [r.kind for r in host.engine.forced_roots] == ["option", "behavior"]
-    host.engine.debug.release()
+    assert [r.kind for r in host.engine.root_actions.forced] == ["option", "behavior"]
+    host.engine.root_actions.release()
     host.tick(10, x=0.0)
     assert [getattr(n, "option", None) or n.behavior for n in host.engine.activation()] == ["main"]
 
 
 def test_added_roots_run_in_order_and_force_replaces_them_all() -> None:
     host = Host(ic(PROGRAM))
-    debug = host.engine.debug
+    debug = host.engine.root_actions
     debug.force_option("child", {"v": 20})
     debug.force_behavior("beep", add=True)
     host.tick(0)
@@ -116,7 +120,7 @@ def test_added_roots_run_in_order_and_force_replaces_them_all() -> None:
 
 def test_output_symbol_root_action_assigns_every_tick() -> None:
     host = Host(ic(PROGRAM))
-    debug = host.engine.debug
+    debug = host.engine.root_actions
     debug.force_option("child", {"v": 20})
     debug.add_output("seen", 7.5)  # after child, which writes seen = 20: the later write wins
     host.tick(0)

@@ -346,12 +346,12 @@ def test_select_agent_resets_nothing() -> None:
     host = Host(ic(AGENTS))
     host.tick(0)
     host.tick(10)
-    host.engine.select_agent("second")
+    host.engine.root_actions.select_agent("second")
     host.tick(20)
     assert host.engine.activation()[0].option == "child"
     assert host.state("child") == "c2", "the child was active in the previous tick: it continues"
     assert host.node("child").option_time == 20
-    host.engine.select_agent("first")
+    host.engine.root_actions.select_agent("first")
     host.tick(30)
     assert host.node("main").option_time == 0, "main was not executed in the previous tick"
 

@@ -44,9 +44,9 @@ def test_input_sampler_reads_in_the_requested_order() -> None:
 def test_input_sampler_sees_debugger_overrides() -> None:
     engine, _world, _ = make_engine()
     sample = engine.input_sampler(["a", "c"])
-    engine.debug.override_input("a", 42.0)
+    engine.root_actions.override_input("a", 42.0)
     assert sample() == (42.0, 3.0)
-    engine.debug.release_input("a")
+    engine.root_actions.release_input("a")
     assert sample() == (1.0, 3.0)
 
 

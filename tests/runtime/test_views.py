@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from engine.ir import model as ir
-from engine.runtime import BasicBehavior, Bindings, Engine
+from engine.runtime import BasicBehavior, Bindings, Debugger, Engine
 from engine.types import Kind
 
 D = Kind.DECIMAL
@@ -76,11 +76,11 @@ def test_attribute_inputs_are_read_directly_and_can_be_overridden() -> None:
     model.x = 1.0
     engine.execute(0)
     assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 1.0)
-    engine.debug.override_input("x", 0.25)
-    assert engine.debug.input_values() == {"x": 0.25}
+    engine.root_actions.override_input("x", 0.25)
+    assert Debugger(engine).input_values() == {"x": 0.25}
     engine.execute(10)
     assert engine.active_states()[0] == 0, "the override is what the decision read"
-    engine.debug.release_input("x")
+    engine.root_actions.release_input("x")
     engine.execute(20)
     assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 1.0)
-    assert engine.debug.input_values() == {"x": 1.0}
+    assert Debugger(engine).input_values() == {"x": 1.0}

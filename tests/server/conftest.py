@@ -23,8 +23,9 @@ import pytest
 import uvicorn
 from websockets.sync.client import ClientConnection, connect
 
+from examples.soccer.studio import SoccerExample
 from server.app import create_app
-from server.examples import DemoExample, SoccerExample
+from server.bench_world import BenchExample
 from server.protocol import MAX_MESSAGE_BYTES
 from server.security import SecurityPolicy
 from server.session import Session
@@ -215,7 +216,7 @@ class WsClient:
 
 @pytest.fixture
 def demo_session(demo_dir: Path) -> Iterator[Session]:
-    session = Session(DemoExample(demo_dir), seed=3, speed=5.0)
+    session = Session(BenchExample(demo_dir), seed=3, speed=5.0)
     yield session
     session.stop()
 

@@ -11,7 +11,7 @@ from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from server.app import create_app
-from server.examples import DemoExample
+from server.bench_world import BenchExample
 from server.protocol import MAX_BODY_BYTES
 from server.security import SecurityPolicy
 from server.session import Session
@@ -21,7 +21,7 @@ BASE = "http://127.0.0.1"
 
 @pytest.fixture
 def api(demo_dir: Path) -> Iterator[TestClient]:
-    session = Session(DemoExample(demo_dir), seed=2, speed=4.0)
+    session = Session(BenchExample(demo_dir), seed=2, speed=4.0)
     with TestClient(create_app(session, web_dist=None), base_url=BASE) as client:
         yield client
 
@@ -153,7 +153,7 @@ def test_command_endpoint_and_the_activation_log(api: TestClient) -> None:
 def test_websocket_hello_frames_and_errors(api: TestClient) -> None:
     with api.websocket_connect("ws://127.0.0.1/ws") as ws:
         hello = orjson.loads(ws.receive_text())
-        assert hello["type"] == "hello" and hello["version"] == 1 and hello["scene"]["kind"] == "demo"
+        assert hello["type"] == "hello" and hello["version"] == 1 and hello["scene"]["kind"] == "bench"
         frame = orjson.loads(ws.receive_text())
         assert frame["type"] == "frame" and frame["full"] is True and len(frame["agents"]) == 2
         ws.send_text("nope")
@@ -172,7 +172,7 @@ def test_websocket_hello_frames_and_errors(api: TestClient) -> None:
 
 
 def test_security_middleware(demo_dir: Path) -> None:
-    session = Session(DemoExample(demo_dir), seed=2)
+    session = Session(BenchExample(demo_dir), seed=2)
     policy = SecurityPolicy(token="s3cret", loopback=True, allowed_origins=frozenset({"http://localhost:5173"}))
     with TestClient(create_app(session, policy, web_dist=None), base_url=BASE) as client:
         assert client.get("/api/status").status_code == 401

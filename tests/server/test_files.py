@@ -165,11 +165,11 @@ def test_the_http_api_answers_4xx_for_bad_text_and_long_names(demo_dir: Path) ->
     from fastapi.testclient import TestClient
 
     from server.app import create_app
-    from server.examples import DemoExample
+    from server.bench_world import BenchExample
     from server.session import Session
 
     os.mkfifo(demo_dir / "options" / "pipe.xabsl")
-    session = Session(DemoExample(demo_dir), seed=2)
+    session = Session(BenchExample(demo_dir), seed=2)
     with TestClient(create_app(session, web_dist=None), base_url="http://127.0.0.1") as api:
         listed = api.get("/api/files")
         assert listed.status_code == 200

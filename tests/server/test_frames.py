@@ -7,7 +7,7 @@ from pathlib import Path
 
 import orjson
 
-from server.examples import DemoExample
+from server.bench_world import BenchExample
 from server.frames import Entry, FrameEncoder, FrameRecorder, Generation, Ring, history
 from server.protocol import FULL_EVERY
 from server.session import Session
@@ -18,7 +18,7 @@ class _Recorded:
     """The simulation's core and the server's recorder joined in one process (no pipe between)."""
 
     def __init__(self, demo_dir: Path, ring_seconds: float) -> None:
-        session = Session(DemoExample(demo_dir), seed=4)  # compiles; its process is never started
+        session = Session(BenchExample(demo_dir), seed=4)  # compiles; its process is never started
         programs = {k: (s.running, s.running_json) for k, s in session.programs.items()}
         self.sim = Simulation(WorkerConfig(session.example, seed=4, programs=programs))  # type: ignore[arg-type]
         self.ring = Ring(ring_seconds, self.sim.behavior_hz)

@@ -13,7 +13,7 @@ from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from server.app import create_app
-from server.examples import DemoExample
+from server.bench_world import BenchExample
 from server.security import MIN_TOKEN_CHARS, SecurityPolicy, TokenError, new_token
 from server.session import Session
 
@@ -82,7 +82,7 @@ def test_serve_refuses_an_empty_token_at_start(demo_dir: Path) -> None:
 
 
 def test_empty_token_header_gets_nothing_over_http_and_ws(demo_dir: Path) -> None:
-    session = Session(DemoExample(demo_dir), seed=2)
+    session = Session(BenchExample(demo_dir), seed=2)
     policy = SecurityPolicy.for_host("0.0.0.0", TOKEN)
     with TestClient(create_app(session, policy, web_dist=None), base_url="http://192.168.1.5:8000") as client:
         empty = {"X-Xabsl-Token": ""}
@@ -107,7 +107,7 @@ def test_origin_scheme_must_match_the_server() -> None:
 
 
 def test_https_origin_is_refused_by_an_http_server(demo_dir: Path) -> None:
-    session = Session(DemoExample(demo_dir), seed=2)
+    session = Session(BenchExample(demo_dir), seed=2)
     with TestClient(create_app(session, SecurityPolicy(token=None), web_dist=None), base_url=BASE) as client:
         https = client.post("/api/command", json={"op": "status"}, headers={"Origin": "https://127.0.0.1"})
         assert https.status_code == 403

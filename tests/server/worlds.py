@@ -5,12 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from engine.host import World
-from server.demo_world import DemoWorld
-from server.examples import DemoExample
+from server.bench_world import BenchExample, BenchWorld
 
 
-class CrashingWorld(DemoWorld):
-    """The demo world, whose physics raises while the file ``trigger`` exists."""
+class CrashingWorld(BenchWorld):
+    """The bench world, whose physics raises while the file ``trigger`` exists."""
 
     def __init__(self, seed: int, n_agents: int, trigger: Path) -> None:
         super().__init__(seed, n_agents)
@@ -22,8 +21,8 @@ class CrashingWorld(DemoWorld):
         super().step(dt)
 
 
-class CrashingDemo(DemoExample):
-    """The demo example in a :class:`CrashingWorld`."""
+class CrashingDemo(BenchExample):
+    """The bench world plug-in in a :class:`CrashingWorld`."""
 
     def __init__(self, root: Path, trigger: Path) -> None:
         super().__init__(root)

@@ -90,7 +90,7 @@ def test_bindings_cover_every_symbol_and_behavior_the_team_declares():
     world = build_world(0, HOME, AWAY, players=1)
     controller = world.agents[0].controller
     assert isinstance(controller, XabslController)
-    assert controller.engine.selected_agent == "soccer"
+    assert controller.engine.root_actions.agent == "soccer"
 
 
 def test_team_message_outputs_are_written_in_place():

@@ -81,8 +81,10 @@ function main(): void {
         ["Space", "pause / resume"],
         [".", "step one tick (pauses first)"],
         ["← →  (in the timeline)", "step back / forward in time"],
-        ["L  or  End", "back to live"],
-        ["G / O / E", "option graph / option view / editor"],
+        ["L  or  End", "back to live (End also from a dropdown)"],
+        ["G / O", "option graph / option view"],
+        ["E", "editor, at the option shown in the option view"],
+        ["Esc then Tab (in the editor)", "move the focus out of the editor"],
         ["A / S / X", "activation tree / symbols / test panel"],
         ["/", "find an option in the graph"],
         ["J", "jump to the active option"],
@@ -211,7 +213,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 
@@ -219,7 +221,16 @@ function main(): void {
   document.addEventListener("keydown", (ev) => {
     if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
     if (isTyping(ev)) {
-      if (ev.key === "Escape") (document.activeElement as HTMLElement | null)?.blur();
+      const target = ev.target as HTMLElement;
+      // A dropdown keeps its arrows and letters, but End is "back to live" there too (natively
+      // it would pick the last choice: 20x in the speed dropdown).
+      if (target.tagName === "SELECT" && (ev.key === "End" || ev.key === "Escape")) {
+        target.blur();
+        if (ev.key === "End") session.setCursor(null);
+        ev.preventDefault();
+      } else if (ev.key === "Escape" && !target.closest(".cm-editor")) target.blur();
+      // In the editor Escape belongs to CodeMirror (closing completion, search, the lint panel);
+      // focus stays, so the next letters are text. Escape then Tab moves focus on.
       return;
     }
     const key = ev.key;
@@ -233,7 +244,14 @@ function main(): void {
     else if (key === "l" || key === "L" || key === "End") session.setCursor(null);
     else if (key === "g") center.activate("graph");
     else if (key === "o") center.activate("option");
-    else if (key === "e") center.activate("editor");
+    else if (key === "e") {
+      // E opens the file of the option shown in the option view, at its declaration; in the
+      // editor already it only gives the focus back to the text.
+      const option = center.isActive("editor") ? null : optionView.current();
+      center.activate("editor");
+      if (option?.span) editor.openSpan(option.span);
+      else editor.editorView.focus();
+    }
     else if (key === "a") right.activate("activation");
     else if (key === "s") {
       right.activate("symbols");

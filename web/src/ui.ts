@@ -65,6 +65,24 @@ export function formatMs(ms: number): string {
   return `${m}:${String(s).padStart(2, "0")}`;
 }
 
+/// The match clock to the millisecond, so that one tick (25 ms at 40 Hz) shows: "12.325 s",
+/// "3:07.050" from ten minutes on.
+export function formatClock(ms: number): string {
+  const whole = Math.max(0, Math.round(ms));
+  if (whole < 600_000) return `${(whole / 1000).toFixed(3)} s`;
+  const m = Math.floor(whole / 60000);
+  const s = ((whole % 60000) / 1000).toFixed(3).padStart(6, "0");
+  return `${m}:${s}`;
+}
+
+/// The speeds the top bar offers (the server accepts any in 0.1..20).
+export const SPEEDS: readonly number[] = [0.1, 0.25, 0.5, 1, 2, 4, 10, 20];
+
+/// A speed for display: "0.25×", "20×".
+export function formatSpeed(speed: number): string {
+  return `${Math.round(speed * 1000) / 1000}×`;
+}
+
 /// A transient message in the corner ("saved", "forced striker on blue3", errors).
 export function toast(message: string, kind: "ok" | "error" | "info" = "info", ms = 3500): void {
   let host = document.getElementById("toasts");

@@ -5,7 +5,7 @@
 import type { DescriptionIndex } from "../description";
 import type { AgentState, PathNode } from "../protocol";
 import type { Session, SessionEvent } from "../session";
-import { formatMs, formatValue, h, setText } from "../ui";
+import { formatClock, formatMs, formatValue, h, setText } from "../ui";
 
 interface Row {
   node: PathNode;
@@ -36,7 +36,7 @@ export class ActivationPanel {
     const index = session.indexOf(session.selectedAgent);
     const info = session.agentInfo(session.selectedAgent);
     const tick = session.view;
-    setText(this.head, info ? `${info.name}${tick ? ` · t = ${formatMs(tick.t)}` : ""}${session.isLive ? "" : " · scrubbed"}${agent?.forced ? " · forced root" : ""}` : "");
+    setText(this.head, info ? `${info.name}${tick ? ` · t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " · scrubbed"}${agent?.forced ? " · forced root" : ""}` : "");
     const shape = `${agent?.shape ?? ""}|${agent?.fault ? "F" : ""}|${session.selectedAgent}`;
     if (shape !== this.shape || changes.has("hello")) {
       this.shape = shape;

@@ -18,6 +18,7 @@ import { Compartment, EditorSelection, EditorState } from "@codemirror/state";
 import { drawSelection, EditorView, highlightActiveLine, highlightActiveLineGutter, keymap, lineNumbers } from "@codemirror/view";
 import { tags as t } from "@lezer/highlight";
 import { ApiError, compile, createFile, type FileEntry, listFiles, readFile, writeFile } from "../api";
+import { diagnosticsFor, homeProgram, type SetDiagnostic } from "../behaviorsets";
 import type { DescriptionIndex, Span } from "../description";
 import type { CompileEvent, FileEvent } from "../protocol";
 import type { Session, SessionEvent } from "../session";
@@ -117,7 +118,8 @@ export class EditorPanel {
     const path = this.current?.path;
     if (path) {
       const entry = this.files.find((f) => f.path === path);
-      for (const program of entry?.programs ?? []) {
+      const home = homeProgram(path, entry?.programs ?? []);
+      for (const program of home ? [home, ...(entry?.programs ?? [])] : (entry?.programs ?? [])) {
         const index = session.programs.get(program);
         if (index) return index;
       }
@@ -146,7 +148,7 @@ export class EditorPanel {
         lintGutter(),
         xabslLinter(
           () => (path ? path : null),
-          async (p, text) => (await compile(p, text)).diagnostics,
+          async (p, text) => this.own(p, (await compile(p, text)).diagnostics),
           (result) => this.showCompile(result),
         ),
         keymap.of([
@@ -268,8 +270,17 @@ export class EditorPanel {
 
   /// Open the file of a span from the description (server paths may differ in prefix).
   openSpan(span: Span): void {
-    const file = this.files.find((f) => samePath(span.file, f.path))?.path ?? span.file;
-    void this.open(file, { line: span.line, col: span.col });
+    void (async () => {
+      if (!this.files.length) await this.refreshFiles();
+      const file = this.files.find((f) => samePath(span.file, f.path))?.path ?? span.file;
+      await this.open(file, { line: span.line, col: span.col });
+    })();
+  }
+
+  /// The diagnostics of `path` worth showing: its own behavior set's (see behaviorsets.ts).
+  private own(path: string, diagnostics: readonly ServerDiagnostic[]): ServerDiagnostic[] {
+    const programs = this.files.find((f) => f.path === path)?.programs ?? [...this.session.programs.keys()];
+    return diagnosticsFor(path, diagnostics as readonly SetDiagnostic[], programs);
   }
 
   private syncCompletion(): void {
@@ -374,7 +385,7 @@ export class EditorPanel {
       b.conflict = null;
       this.showBanner();
       this.markDirty();
-      this.lastDiagnostics = result.diagnostics ?? [];
+      this.lastDiagnostics = this.own(b.path, result.diagnostics ?? []);
       if (status === 422 || !result.ok) {
         this.renderStatus("saved, but it does not compile: the running behavior keeps running");
         toast(`Saved ${b.path}, but it has errors — the old behavior keeps running.`, "error");
@@ -481,7 +492,7 @@ export class EditorPanel {
   }
 
   compileEvent(event: CompileEvent): void {
-    if (!event.ok) this.lastDiagnostics = event.diagnostics as ServerDiagnostic[];
+    if (!event.ok && this.current) this.lastDiagnostics = this.own(this.current.path, (event.diagnostics as ServerDiagnostic[]).map((d) => ({ ...d, program: event.program })));
   }
 
   render(changes: Set<SessionEvent>): void {

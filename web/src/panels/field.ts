@@ -1,18 +1,55 @@
 /// The field: the world's static scene drawn once per size, robots and ball drawn per tick on a
 /// canvas (team colour, number, heading, role; the selected robot ringed). Click a robot to
 /// select it. Millimetres in the world frame, x along the field, y to the left.
+///
+/// Any world can be drawn without code of its own here: besides soccer's lines, circles, marks
+/// and goals, the static and the dynamic scene may carry `walls` (`[x1, y1, x2, y2]`) and
+/// `shapes` (engine/host.py): `{shape: "circle", x, y, r}`, `{shape: "rect", x, y, w, h}` (centre
+/// and size) or `{shape: "segment", x1, y1, x2, y2}`, each with optional `fill`, `stroke`,
+/// `dash`, `label` (text centred on the shape) and `caption` (text below it).
 import type { AgentInfo, StaticScene, Tick } from "../protocol";
 import type { Session, SessionEvent } from "../session";
+import { type LabelBox, type LabelRequest, placeLabels } from "../labels";
 import { h } from "../ui";
 import { roleOf } from "./roles";
 
 const FALLBACK_COLORS = ["#1f6fd1", "#d1341f", "#2a9d4b", "#b8860b"];
+
+/// One generic shape of a scene (see the header comment).
+export interface Shape {
+  shape: "circle" | "rect" | "segment";
+  x?: number;
+  y?: number;
+  r?: number;
+  w?: number;
+  h?: number;
+  x1?: number;
+  y1?: number;
+  x2?: number;
+  y2?: number;
+  fill?: string;
+  stroke?: string;
+  dash?: boolean;
+  label?: string;
+  caption?: string;
+}
+
+/// The well-formed shapes of a scene's `shapes` value (anything else is ignored).
+export function shapesOf(value: unknown): Shape[] {
+  if (!Array.isArray(value)) return [];
+  return value.filter(
+    (s): s is Shape =>
+      typeof s === "object" && s !== null && ["circle", "rect", "segment"].includes((s as Shape).shape),
+  );
+}
 
 export class FieldPanel {
   readonly element: HTMLElement;
   private readonly canvas: HTMLCanvasElement;
   private readonly ctx: CanvasRenderingContext2D;
   private background: HTMLCanvasElement | null = null;
+  /// The robot labels drawn last, in canvas pixels (tests check that they never overlap).
+  labelBoxes: LabelBox[] = [];
   private scale = 1;
   private cx = 0;
   private cy = 0;
@@ -119,6 +156,7 @@ export class FieldPanel {
         g.fill();
       }
     }
+    this.drawShapes(g, shapesOf(scene?.shapes));
     g.strokeStyle = "rgba(0,0,0,0.35)";
     g.lineWidth = 2;
     for (const [x1, y1, x2, y2] of (scene?.walls ?? []) as number[][]) {
@@ -130,6 +168,51 @@ export class FieldPanel {
       g.stroke();
     }
     return bg;
+  }
+
+  /// Draw generic shapes in world coordinates (see the header comment).
+  private drawShapes(g: CanvasRenderingContext2D, shapes: Shape[]): void {
+    for (const s of shapes) {
+      g.beginPath();
+      if (s.shape === "circle") {
+        const [a, b] = this.toScreen(s.x ?? 0, s.y ?? 0);
+        g.arc(a, b, Math.max(1.5, (s.r ?? 0) * this.scale), 0, 2 * Math.PI);
+      } else if (s.shape === "rect") {
+        const w = s.w ?? 0;
+        const hh = s.h ?? 0;
+        const [a, b] = this.toScreen((s.x ?? 0) - w / 2, (s.y ?? 0) + hh / 2);
+        g.rect(a, b, w * this.scale, hh * this.scale);
+      } else {
+        const [a, b] = this.toScreen(s.x1 ?? 0, s.y1 ?? 0);
+        const [c, d] = this.toScreen(s.x2 ?? 0, s.y2 ?? 0);
+        g.moveTo(a, b);
+        g.lineTo(c, d);
+      }
+      if (s.fill && s.shape !== "segment") {
+        g.fillStyle = s.fill;
+        g.fill();
+      }
+      if (s.stroke || s.shape === "segment") {
+        g.setLineDash(s.dash ? [6, 4] : []);
+        g.strokeStyle = s.stroke ?? "rgba(255,255,255,0.9)";
+        g.lineWidth = 1.5;
+        g.stroke();
+        g.setLineDash([]);
+      }
+      const text = s.label ?? s.caption;
+      if (text) {
+        let [a, b] = this.toScreen(s.x ?? s.x1 ?? 0, s.y ?? s.y1 ?? 0);
+        if (!s.label) b += Math.max(1.5, (s.r ?? (s.h ?? 0) / 2) * this.scale) + 9;
+        g.font = "600 12px system-ui, sans-serif";
+        g.textAlign = "center";
+        g.textBaseline = "middle";
+        g.lineWidth = 3;
+        g.strokeStyle = "rgba(0,0,0,0.7)";
+        g.strokeText(text, a, b + 0.5);
+        g.fillStyle = "#fff";
+        g.fillText(text, a, b + 0.5);
+      }
+    }
   }
 
   private teamColor(agent: AgentInfo | undefined): string {
@@ -164,11 +247,14 @@ export class FieldPanel {
     const ctx = this.ctx;
     const scene = tick.scene;
     const session = this.session;
+    this.drawShapes(ctx, shapesOf(scene?.shapes));
     const radius = Math.max(6, (session.scene?.robot_radius ?? 150) * this.scale);
     const robots = scene?.robots ?? [];
     ctx.font = `600 ${Math.max(9, Math.round(radius * 1.05))}px system-ui, sans-serif`;
     ctx.textAlign = "center";
     ctx.textBaseline = "middle";
+    const labels: Array<LabelRequest & { fault: boolean }> = [];
+    const labelSize = Math.max(9, Math.round(radius * 0.8));
     robots.forEach(([x, y, heading], i) => {
       const agent = session.agents[i];
       const state = tick.agents.find((a) => a.id === (agent?.id ?? i));
@@ -200,11 +286,22 @@ export class FieldPanel {
       const role = agent ? roleOf(session, agent.id, state ?? null) : null;
       const tag = [role, state?.forced ? "forced" : null, state?.fault ? "FAULT" : null].filter((s) => s).join(" · ");
       if (tag) {
-        ctx.font = `500 ${Math.max(9, Math.round(radius * 0.8))}px system-ui, sans-serif`;
-        ctx.fillStyle = state?.fault ? "#ffb3b3" : "rgba(255,255,255,0.92)";
-        ctx.fillText(tag, sx, sy + radius + Math.max(8, radius * 0.9));
+        ctx.font = `500 ${labelSize}px system-ui, sans-serif`;
+        labels.push({ cx: sx, cy: sy, radius: radius + 2, w: ctx.measureText(tag).width, h: labelSize, text: tag, fault: !!state?.fault });
         ctx.font = `600 ${Math.max(9, Math.round(radius * 1.05))}px system-ui, sans-serif`;
       }
+    });
+    // Labels last, where they overlap neither another label nor a robot (labels.ts).
+    ctx.font = `500 ${labelSize}px system-ui, sans-serif`;
+    ctx.textAlign = "left";
+    ctx.textBaseline = "top";
+    const boxes = placeLabels(labels);
+    this.labelBoxes = [];
+    boxes.forEach((box, i) => {
+      if (!box) return;
+      ctx.fillStyle = labels[i]?.fault ? "#ffb3b3" : "rgba(255,255,255,0.92)";
+      ctx.fillText(box.text, box.x, box.y);
+      this.labelBoxes.push(box);
     });
     if (scene?.ball) {
       const [bx, by] = this.toScreen(scene.ball[0], scene.ball[1]);

@@ -6,7 +6,8 @@ import type { Connection } from "../connection";
 import { type DescriptionIndex, leafPath, type Option, rangeText } from "../description";
 import type { Explanation, OptionNode } from "../protocol";
 import type { Session, SessionEvent } from "../session";
-import { formatMs, formatValue, h, setText } from "../ui";
+import { lastTransitionBefore, transitionsOf } from "../transitions";
+import { formatMs, formatValue, h, setText, toggleClass } from "../ui";
 import { SvgView } from "./svgview";
 
 export class OptionView {
@@ -24,6 +25,14 @@ export class OptionView {
   private explanation: Explanation | null = null;
   private explaining = false;
   private lastWhy = "";
+  private readonly transitions: HTMLElement;
+  /// The active state last brought into view.
+  private followed = "";
+  private transitionsKey = "";
+  private transitionItems = new Map<string, HTMLElement>();
+  /// The last transition at the scrubbed moment: [cursor|agent|option] -> result.
+  private pastKey = "";
+  private past: { from: number; to: number; leaf: number; t: number } | null = null;
 
   constructor(
     private readonly session: Session,
@@ -39,6 +48,7 @@ export class OptionView {
     this.doc = h("div.option-doc.muted");
     this.info = h("div.option-info");
     this.why = h("div.why", { "aria-live": "polite" });
+    this.transitions = h("div.transitions");
     const toolbar = h(
       "div.toolbar",
       {},
@@ -47,9 +57,21 @@ export class OptionView {
       h("button", { title: "Show the source of this option (E)", onclick: () => this.current() && this.actions.edit(this.current() as Option) }, "Edit source"),
       h("button", { title: "Run this option on the selected agent", onclick: () => this.current() && this.actions.test(this.current() as Option) }, "Test…"),
       h("button", { title: "Ask the engine again why (W)", onclick: () => this.explain(true) }, "Why?"),
-      h("button", { title: "Fit", onclick: () => this.view.fit() }, "Fit"),
+      h("button", { title: "Fit: the whole machine, or at a legible size around the active state", onclick: () => this.view.fit() }, "Fit"),
+      h("button", { title: "The whole machine, however small", onclick: () => this.view.fit(true) }, "Overview"),
     );
-    const side = h("div.option-side", {}, this.doc, this.info, this.why);
+    const side = h("div.option-side", {}, this.doc, this.info, this.why, this.transitions);
+    // At Fit state names stay legible (12 px on screen); a large machine is then centred on the
+    // active state (or the initial one) and panned by hand, Overview shows all of it.
+    this.view.minTextPx = 12;
+    this.view.legibleText = 'g.node[id^="state_"] text';
+    this.view.focus = () => {
+      const option = this.current();
+      if (!option) return null;
+      const node = this.node(option);
+      const initial = option.states.find((st) => st.name === option.initial_state);
+      return node ? `state_${node.state}` : initial ? `state_${initial.id}` : null;
+    };
     this.element = h("div.panel.option-panel", {}, toolbar, h("div.option-body", {}, this.view.element, side));
     this.view.onClick = (id) => {
       const m = /^state_(\d+)$/.exec(id);
@@ -99,8 +121,6 @@ export class OptionView {
             this.key = k;
             if (!this.view.show(svg)) this.view.clear("The server sent an unreadable state machine.");
             this.highlight(option);
-            const node = this.node(option);
-            this.view.focusIfTiny(node ? `state_${node.state}` : null);
           })
           .catch((error: Error) => {
             if (this.loading !== k) return;
@@ -113,6 +133,7 @@ export class OptionView {
     setText(this.title, option ? option.name : "Option");
     setText(this.doc, option?.doc ?? "");
     if (option) {
+      this.renderTransitions(option, k);
       this.highlight(option);
       this.renderInfo(option, index);
       this.renderWhy(option, index);
@@ -125,13 +146,53 @@ export class OptionView {
     this.picker.replaceChildren(h("option", { value: "" }, "(follow the root option)"), ...options.map((o) => h("option", { value: o.id }, o.name)));
   }
 
+  /// The last transition of `option` at the moment in view: seen live, or found in the history.
+  private lastTransition(option: Option): { from: number; to: number; leaf: number; t: number } | null {
+    const session = this.session;
+    if (session.isLive) return session.transitions.get(session.selectedAgent)?.get(option.id) ?? null;
+    const key = `${session.cursor}|${session.selectedAgent}|${option.id}|${session.buffer.length}`;
+    if (key !== this.pastKey) {
+      this.pastKey = key;
+      const ticks = session.buffer.all;
+      this.past = lastTransitionBefore(ticks, session.buffer.indexAt(session.cursor ?? 0), session.selectedAgent, option.id);
+    }
+    return this.past;
+  }
+
   private highlight(option: Option): void {
     const node = this.node(option);
     this.view.setClasses("active", node ? [`state_${node.state}`] : []);
-    const last = this.session.transitions.get(this.session.selectedAgent)?.get(option.id);
-    const fresh = last && this.session.isLive;
-    this.view.setClasses("fired", fresh ? [`leaf_${last.from}_${last.leaf}`] : node && node.decidedIn !== node.state ? [`leaf_${node.decidedIn}_${node.leaf}`] : []);
-    this.view.setClasses("previous", fresh ? [`state_${last.from}`] : []);
+    const active = node ? `state_${node.state}` : "";
+    if (active && active !== this.followed) this.view.keepInView(active);
+    this.followed = active;
+    const last = this.lastTransition(option);
+    const fired = last ? `leaf_${last.from}_${last.leaf}` : null;
+    this.view.setClasses("fired", fired ? [fired] : []);
+    this.view.setClasses("previous", last ? [`state_${last.from}`] : []);
+    for (const [id, item] of this.transitionItems) toggleClass(item, "fired", id === fired);
+  }
+
+  /// Every transition of the option with its whole condition (the edges' labels are short).
+  private renderTransitions(option: Option, key: string): void {
+    if (key === this.transitionsKey) return;
+    this.transitionsKey = key;
+    this.transitionItems = new Map();
+    const name = (id: number): string => option.states.find((st) => st.id === id)?.name ?? String(id);
+    const items = transitionsOf(option).map((t) => {
+      const id = `leaf_${t.from}_${t.leaf}`;
+      const item = h(
+        "li",
+        { "data-edge": id, onmouseenter: () => this.view.setClasses("hovered", [id]), onmouseleave: () => this.view.setClasses("hovered", []) },
+        h("span.edge-states", {}, `${name(t.from)} → ${name(t.to)}`),
+        h("code", {}, t.condition),
+      );
+      this.transitionItems.set(id, item);
+      return item;
+    });
+    this.transitions.replaceChildren(
+      h("div.section-title", {}, `Transitions (${items.length})`),
+      items.length ? h("ol.transition-list", {}, ...items) : h("div.muted", {}, "No transitions: the option stays in its state."),
+    );
   }
 
   private renderInfo(option: Option, index: DescriptionIndex | null): void {
@@ -143,8 +204,8 @@ export class OptionView {
       lines.push(`state ${state?.name ?? node.state} for ${formatMs(node.stateTime)} · option active ${formatMs(node.optionTime)}`);
       option.params.forEach((p, i) => lines.push(`@${p.short_name} = ${formatValue(node.params[i], p.type, p.enum, index)} ${rangeText(null, p.unit)}`.trim()));
     }
-    const last = this.session.transitions.get(this.session.selectedAgent)?.get(option.id);
-    if (last && this.session.isLive) {
+    const last = this.lastTransition(option);
+    if (last) {
       const t = this.session.view?.t ?? last.t;
       lines.push(`last transition ${option.states[last.from]?.name} → ${option.states[last.to]?.name}, ${formatMs(Math.max(0, t - last.t))} ago`);
     }

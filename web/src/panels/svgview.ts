@@ -15,7 +15,19 @@ export class SvgView {
   private readonly ids = new Map<string, Element>();
   /// class name -> ids currently carrying it.
   private readonly marked = new Map<string, Set<string>>();
+  /// Whether the picture is at Fit (then a resize fits it again; else it keeps its centre).
+  private fitted = true;
+  /// The automatic placement to redo after a resize while `fitted` (Fit, or Fit then the
+  /// readable zoom around the active option of `focusIfTiny`).
+  private refit: () => void = () => this.fit();
+  private viewW = 0;
+  private viewH = 0;
   onClick: ((id: string, ev: MouseEvent) => void) | null = null;
+  /// Smallest on-screen size (px) of the text matching `legibleText` that Fit allows (0: none):
+  /// a picture too large to be read whole is shown at that size, centred on `focus()`.
+  minTextPx = 0;
+  legibleText = "g.node text";
+  focus: (() => string | null) | null = null;
 
   constructor(label: string) {
     this.stage = h("div.svg-stage");
@@ -34,11 +46,31 @@ export class SvgView {
         ev.preventDefault();
         this.x += m[0];
         this.y += m[1];
+        this.fitted = false;
         this.apply();
       } else if (ev.key === "+" || ev.key === "=") this.zoomBy(1.25);
       else if (ev.key === "-") this.zoomBy(0.8);
       else if (ev.key === "f") this.fit();
     });
+    new ResizeObserver(() => this.resized()).observe(this.element);
+  }
+
+  /// The viewport changed size (window, splitter, a tab shown again).
+  private resized(): void {
+    const rect = this.element.getBoundingClientRect();
+    if (!rect.width || !rect.height) return; // hidden: handled when shown again
+    const dw = rect.width - this.viewW;
+    const dh = rect.height - this.viewH;
+    const first = !this.viewW;
+    this.viewW = rect.width;
+    this.viewH = rect.height;
+    if (!this.svg || (!dw && !dh)) return;
+    if (this.fitted || first) this.refit();
+    else {
+      this.x += dw / 2;
+      this.y += dh / 2;
+      this.apply();
+    }
   }
 
   /// Show a new SVG (text from the server); returns false when it cannot be read.
@@ -98,16 +130,72 @@ export class SvgView {
     this.stage.style.transform = `translate(${this.x}px, ${this.y}px) scale(${this.zoom})`;
   }
 
-  fit(): void {
+  /// Fit the picture into the view; `overview`: the whole of it, however small its text gets.
+  fit(overview = false): void {
     const rect = this.element.getBoundingClientRect();
     if (!this.width || !rect.width) {
-      requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit());
+      requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit(overview));
       return;
     }
+    this.fitted = true;
+    this.refit = () => this.fit(overview);
+    const applied = this.zoom; // the stage is still drawn at this zoom
     this.zoom = Math.min(2, Math.min(rect.width / this.width, rect.height / this.height) * 0.95);
     this.x = (rect.width - this.width * this.zoom) / 2;
     this.y = (rect.height - this.height * this.zoom) / 2;
+    const legible = overview ? 0 : this.legibleZoom();
+    if (this.zoom < legible) {
+      this.zoom = legible;
+      const id = this.focus?.() ?? null;
+      const target = id ? this.unscaledCentre(id, applied) : null;
+      const [ux, uy] = target ?? [this.width / 2, this.height / 2];
+      this.x = place(this.width * this.zoom, rect.width, ux * this.zoom);
+      this.y = place(this.height * this.zoom, rect.height, uy * this.zoom);
+    }
     this.apply();
+  }
+
+  /// The zoom at which the smallest legible-class text is `minTextPx` on screen (0: no floor).
+  private legibleZoom(): number {
+    if (!this.minTextPx || !this.svg) return 0;
+    let size = Infinity;
+    for (const t of this.svg.querySelectorAll(this.legibleText)) {
+      const px = parseFloat(t.getAttribute("font-size") ?? "");
+      if (px > 0) size = Math.min(size, px);
+    }
+    return Number.isFinite(size) ? this.minTextPx / size : 0;
+  }
+
+  /// The centre of element `id` in unscaled picture pixels.
+  private unscaledCentre(id: string, zoom: number): [number, number] | null {
+    const el = this.ids.get(id);
+    if (!el) return null;
+    const box = el.getBoundingClientRect();
+    const stageBox = this.stage.getBoundingClientRect();
+    if (!box.width && !box.height) return null;
+    return [(box.left + box.width / 2 - stageBox.left) / zoom, (box.top + box.height / 2 - stageBox.top) / zoom];
+  }
+
+  /// While at Fit, bring element `id` into view when it is outside (same zoom): a machine shown
+  /// at a legible size around its active state follows that state. Once panned, it stays put.
+  keepInView(id: string): void {
+    if (!this.fitted || !this.svg) return;
+    const el = this.ids.get(id);
+    if (!el) return;
+    const view = this.element.getBoundingClientRect();
+    const box = el.getBoundingClientRect();
+    if (!view.width || (box.left >= view.left && box.right <= view.right && box.top >= view.top && box.bottom <= view.bottom)) return;
+    const target = this.unscaledCentre(id, this.zoom);
+    if (!target) return;
+    const [ux, uy] = target;
+    this.x = place(this.width * this.zoom, view.width, ux * this.zoom);
+    this.y = place(this.height * this.zoom, view.height, uy * this.zoom);
+    this.apply();
+  }
+
+  /// The current zoom (tests and the option view read it).
+  get scale(): number {
+    return this.zoom;
   }
 
   zoomBy(factor: number, cx?: number, cy?: number): void {
@@ -115,6 +203,7 @@ export class SvgView {
     const px = cx ?? rect.width / 2;
     const py = cy ?? rect.height / 2;
     const zoom = Math.max(0.05, Math.min(8, this.zoom * factor));
+    this.fitted = false;
     this.x = px - ((px - this.x) * zoom) / this.zoom;
     this.y = py - ((py - this.y) * zoom) / this.zoom;
     this.zoom = zoom;
@@ -123,7 +212,16 @@ export class SvgView {
 
   /// After `fit`: when the whole graph is too small to read, centre `id` at a readable zoom.
   focusIfTiny(id: string | null): void {
-    if (id && this.zoom < 0.55) requestAnimationFrame(() => this.centerOn(id));
+    if (!id || this.zoom >= 0.55) return;
+    requestAnimationFrame(() => {
+      this.centerOn(id);
+      // still an automatic placement: a resize does it again
+      this.fitted = true;
+      this.refit = () => {
+        this.fit();
+        this.focusIfTiny(id);
+      };
+    });
   }
 
   /// Centre the element `id` in the view (zooming in to a readable size if needed).
@@ -137,6 +235,7 @@ export class SvgView {
     const ux = (box.left + box.width / 2 - stageBox.left) / this.zoom;
     const uy = (box.top + box.height / 2 - stageBox.top) / this.zoom;
     if (this.zoom < 0.8) this.zoom = 1;
+    this.fitted = false;
     this.x = rect.width / 2 - ux * this.zoom;
     this.y = rect.height / 2 - uy * this.zoom;
     this.apply();
@@ -167,6 +266,7 @@ export class SvgView {
       if (moved) {
         this.x = x0 + dx;
         this.y = y0 + dy;
+        this.fitted = false;
         this.apply();
       }
     };
@@ -180,4 +280,11 @@ export class SvgView {
     this.element.addEventListener("pointermove", move);
     this.element.addEventListener("pointerup", up);
   }
+}
+
+/// The offset that shows a picture `size` long in a view `view` long with point `at` of it in the
+/// middle: centred when it fits, else as close to `at` as its edges allow (no empty margin).
+export function place(size: number, view: number, at: number): number {
+  if (size <= view) return (view - size) / 2;
+  return Math.min(0, Math.max(view - size, view / 2 - at));
 }

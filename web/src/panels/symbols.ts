@@ -4,6 +4,7 @@
 import type { Connection } from "../connection";
 import type { DescriptionIndex, InputSymbol, OutputSymbol } from "../description";
 import { rangeText } from "../description";
+import { checkNumber } from "../params";
 import type { Session, SessionEvent } from "../session";
 import { formatValue, h, setText, shortElement, toast, toggleClass } from "../ui";
 import type { PlotPanel } from "./plot";
@@ -14,6 +15,8 @@ interface SymbolRow {
   el: HTMLElement;
   value: HTMLElement;
   pin: HTMLButtonElement;
+  /// releases an override with one click (shown while the input is overridden)
+  release: HTMLButtonElement | null;
   text: string;
 }
 
@@ -51,15 +54,19 @@ export class SymbolsPanel {
           kind === "input"
             ? h("button.icon", { title: "Override this input", "aria-label": `override ${symbol.name}`, onclick: () => this.editOverride(row) }, "set…")
             : null;
+        const release =
+          kind === "input"
+            ? h("button.icon.release", { title: "Release the override: read the world's value again", "aria-label": `release ${symbol.name}`, hidden: true, onclick: () => this.releaseInput(symbol) }, "release")
+            : null;
         const el = h(
           "div.symbol-row",
           { role: "row", "data-symbol": symbol.name, "data-kind": kind, title: symbol.doc ?? "" },
           h("span.name", {}, symbol.name, h("span.facts", {}, facts)),
           value,
-          h("span.actions", {}, pin, override),
+          h("span.actions", {}, pin, override, release),
           symbol.doc ? h("div.sdoc", {}, symbol.doc) : null,
         );
-        const row: SymbolRow = { kind, symbol, el, value, pin, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
+        const row: SymbolRow = { kind, symbol, el, value, pin, release, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
         this.rows.push(row);
         sections.push(el);
       }
@@ -91,9 +98,19 @@ export class SymbolsPanel {
       if (row.el.hidden) continue;
       const values = row.kind === "input" ? agent?.inputs : agent?.outputs;
       setText(row.value, formatValue(values?.[row.symbol.id], row.symbol.type, row.symbol.enum, index));
-      toggleClass(row.el, "overridden", row.kind === "input" && String(row.symbol.id) in overrides);
+      const overridden = row.kind === "input" && String(row.symbol.id) in overrides;
+      toggleClass(row.el, "overridden", overridden);
+      if (row.release && row.release.hidden === overridden) row.release.hidden = !overridden;
       toggleClass(row.pin, "on", this.plot.has(session.selectedAgent, row.kind, row.symbol.id));
     }
+  }
+
+  /// Release the override of `symbol` on agent `agentId` (the selected one by default).
+  private releaseInput(symbol: InputSymbol | OutputSymbol, agentId = this.session.selectedAgent): void {
+    this.connection
+      .command("release_input", { agent: agentId, symbol: symbol.id })
+      .then(() => toast(`${symbol.name} reads the world again`, "ok"))
+      .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
   }
 
   /// The inline override editor of an input row: a typed control, Enter applies, Escape cancels.
@@ -114,19 +131,32 @@ export class SymbolsPanel {
     } else {
       control = h("input", { type: "number", step: "any", value: typeof current === "number" ? current : 0 });
     }
-    const value = (): number | boolean => (symbol.type === "boolean" ? control.value === "true" : Number(control.value));
+    const problem = h("div.param-error", { role: "alert", hidden: true });
     const apply = (): void => {
+      let value: number | boolean;
+      if (symbol.type === "boolean") value = control.value === "true";
+      else if (symbol.type === "enum") value = Number(control.value);
+      else {
+        // an empty or out-of-range number is said, not sent (it used to become 0)
+        const input = control as HTMLInputElement;
+        const checked = input.validity.badInput ? ({ ok: false, error: "not a number" } as const) : checkNumber(input.value, symbol.range);
+        problem.hidden = checked.ok;
+        problem.textContent = checked.ok ? "" : `${symbol.name}: ${checked.error}${symbol.unit ? ` (${symbol.unit})` : ""}`;
+        if (!checked.ok) {
+          control.setAttribute("aria-invalid", "true");
+          control.focus();
+          return;
+        }
+        value = checked.value;
+      }
       this.connection
-        .command("override_input", { agent: agentId, symbol: symbol.id, value: value() })
+        .command("override_input", { agent: agentId, symbol: symbol.id, value })
         .then(() => toast(`${symbol.name} overridden on ${session.agentInfo(agentId)?.name}`, "ok"))
         .catch((e: Error) => toast(`Override failed: ${e.message}`, "error"));
       editor.remove();
     };
     const release = (): void => {
-      this.connection
-        .command("release_input", { agent: agentId, symbol: symbol.id })
-        .then(() => toast(`${symbol.name} reads the world again`, "ok"))
-        .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
+      this.releaseInput(symbol, agentId);
       editor.remove();
     };
     const editor = h(
@@ -136,6 +166,7 @@ export class SymbolsPanel {
       h("button.primary", { onclick: apply }, "Override"),
       h("button", { onclick: release, title: "Back to the world's value" }, "Release"),
       h("button", { onclick: () => editor.remove() }, "Cancel"),
+      problem,
     );
     control.addEventListener("keydown", (ev) => {
       const key = (ev as KeyboardEvent).key;

@@ -24,6 +24,8 @@ export class TeamStrip {
     const session = this.session;
     const teams = session.scene?.teams ?? [];
     this.element.replaceChildren();
+    // the left region gives the strip room for every chip (style.css, .team-strip)
+    this.element.style.setProperty("--chips", String(session.agents.length));
     this.chips = session.agents.map((agent, i) => {
       const color = teams.find((t) => t.name === agent.team)?.color ?? "#888";
       const root = h("span.chip-root");

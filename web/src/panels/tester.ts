@@ -4,6 +4,7 @@
 /// speed, reset) sit in the top bar and work from here too.
 import type { Connection } from "../connection";
 import { type Parameter, parseRange, rangeText } from "../description";
+import { checkNumber } from "../params";
 import type { Session, SessionEvent } from "../session";
 import { h, setText, shortElement, toast } from "../ui";
 
@@ -16,7 +17,7 @@ export class TesterPanel {
   private readonly state: HTMLElement;
   private readonly doc: HTMLElement;
   private key = "";
-  private controls: Array<{ param: Parameter; control: HTMLInputElement | HTMLSelectElement }> = [];
+  private controls: Array<{ param: Parameter; control: HTMLInputElement | HTMLSelectElement; error: HTMLElement }> = [];
 
   constructor(
     private readonly session: Session,
@@ -108,7 +109,10 @@ export class TesterPanel {
           max: range.max,
         });
       }
-      this.controls.push({ param, control });
+      const error = h("div.param-error", { id: `${id}-error`, role: "alert", hidden: true });
+      control.setAttribute("aria-describedby", error.id);
+      control.addEventListener("input", () => this.showError(control, error, null));
+      this.controls.push({ param, control, error });
       rows.push(
         h(
           "div.param-row",
@@ -116,6 +120,7 @@ export class TesterPanel {
           h("label", { for: id }, param.type === "boolean" ? param.short_name : `${param.short_name}`),
           control,
           h("span.unit", {}, rangeText(param.range, param.unit)),
+          error,
           param.doc ? h("div.muted.small", {}, param.doc) : null,
         ),
       );
@@ -124,11 +129,33 @@ export class TesterPanel {
     this.form.replaceChildren(...rows);
   }
 
-  private params(): Record<string, number | boolean> {
+  private showError(control: HTMLElement, error: HTMLElement, message: string | null): void {
+    error.hidden = message === null;
+    error.textContent = message ?? "";
+    if (message === null) control.removeAttribute("aria-invalid");
+    else control.setAttribute("aria-invalid", "true");
+  }
+
+  /// The parameter values, or null when a field is empty or out of its declared range (each
+  /// such field then says what is wrong, and the first one gets the focus).
+  private params(): Record<string, number | boolean> | null {
     const out: Record<string, number | boolean> = {};
-    for (const { param, control } of this.controls) {
+    let first: HTMLElement | null = null;
+    for (const { param, control, error } of this.controls) {
       if (param.type === "boolean") out[param.short_name] = (control as HTMLInputElement).checked;
-      else out[param.short_name] = Number(control.value);
+      else if (param.type === "enum") out[param.short_name] = Number(control.value);
+      else {
+        // a number input reports "" for text it cannot read ("1e", "--3"): that is not a number
+        const input = control as HTMLInputElement;
+        const checked = input.validity.badInput ? ({ ok: false, error: "not a number" } as const) : checkNumber(input.value, param.range);
+        this.showError(control, error, checked.ok ? null : `${param.short_name}: ${checked.error}${param.unit ? ` (${param.unit})` : ""}`);
+        if (checked.ok) out[param.short_name] = checked.value;
+        else first ??= control;
+      }
+    }
+    if (first) {
+      first.focus();
+      return null;
     }
     return out;
   }
@@ -137,9 +164,11 @@ export class TesterPanel {
     const target = this.target();
     const agent = this.session.selectedAgent;
     if (!target) return;
+    const params = this.params();
+    if (!params) return;
     const op = target.kind === "option" ? "force_option" : "force_behavior";
     this.connection
-      .command(op, { agent, [target.kind]: target.name, params: this.params() })
+      .command(op, { agent, [target.kind]: target.name, params })
       .then(() => toast(`${target.name} runs as the root of ${this.session.agentInfo(agent)?.name}`, "ok"))
       .catch((e: Error) => toast(`Could not run ${target.name}: ${e.message}`, "error"));
   }

@@ -4,7 +4,7 @@
 /// (Shift: ten), Home goes to the oldest, End or L back to live.
 import { buildAgentTimeline, buildTeamTimeline, segmentHue, type TimelineRow } from "../timeline";
 import type { Session, SessionEvent } from "../session";
-import { formatMs, h } from "../ui";
+import { formatClock, formatMs, h } from "../ui";
 
 const LABEL_W = 150;
 const AXIS_H = 18;
@@ -204,6 +204,6 @@ export class TimelinePanel {
       ctx.lineWidth = 1;
     }
     const tick = session.view;
-    this.info.textContent = `${formatMs(this.t1 - this.t0)} buffered${tick ? ` · showing t = ${formatMs(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
+    this.info.textContent = `${formatMs(this.t1 - this.t0)} buffered${tick ? ` · showing t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
   }
 }

@@ -1,8 +1,12 @@
 /// The top bar: agent picker, simulation controls (pause/resume, step, speed, reset), the game
 /// clock and score, the link-health indicator, the theme switch and the keyboard help.
 import type { Connection, LinkState } from "../connection";
+import type { Hello } from "../protocol";
 import type { Session, SessionEvent } from "../session";
-import { formatMs, h, setText, toast } from "../ui";
+import { formatClock, formatSpeed, h, SPEEDS, setText, toast } from "../ui";
+
+/// Milliseconds without frames after which the top bar asks the server whether it is paused.
+const QUIET_MS = 1500;
 
 export class TopBar {
   readonly element: HTMLElement;
@@ -15,6 +19,13 @@ export class TopBar {
   private linkState: LinkState = "connecting";
   private retryAt = 0;
   private paused = false;
+  private finished = false;
+  /// The hello whose paused state and speed were applied: panels are redrawn with "hello" on
+  /// a tab switch or a resize too, and then the hello's (older) state must not win.
+  private helloApplied: Hello | null = null;
+  private asking = false;
+  private askedAt = 0;
+  private askedFrameAt = 0;
 
   constructor(
     private readonly session: Session,
@@ -24,10 +35,12 @@ export class TopBar {
     this.agentPicker = h("select#agent-picker", { "aria-label": "Agent", title: "Selected agent (1..9, 0)" });
     this.agentPicker.addEventListener("change", () => session.selectAgent(Number(this.agentPicker.value)));
     this.pauseButton = h("button#pause", { title: "Pause / resume the simulation (Space)", onclick: () => this.togglePause() }, "❚❚ Pause");
-    this.speed = h("select#speed", { "aria-label": "Speed", title: "Simulation speed" }, ...[0.25, 0.5, 1, 2, 4].map((s) => h("option", { value: s }, `${s}×`)));
+    this.speed = h("select#speed", { "aria-label": "Speed", title: "Simulation speed" }, ...SPEEDS.map((s) => h("option", { value: s }, formatSpeed(s))));
     this.speed.value = "1";
     this.speed.addEventListener("change", () => {
       connection.command("speed", { speed: Number(this.speed.value) }).catch((e: Error) => toast(`Speed: ${e.message}`, "error"));
+      // hand the keys back: Space, End, arrows are the studio's again, not the dropdown's
+      this.speed.blur();
     });
     this.clock = h("span.clock");
     this.linkText = h("span.link-text", {}, "connecting…");
@@ -67,6 +80,7 @@ export class TopBar {
   }
 
   private setPaused(paused: boolean): void {
+    if (paused !== this.paused) this.askedFrameAt = this.connection.lastFrameAt;
     this.paused = paused;
     this.pauseButton.textContent = paused ? "▶ Resume" : "❚❚ Pause";
     this.pauseButton.classList.toggle("on", paused);
@@ -98,13 +112,10 @@ export class TopBar {
     const session = this.session;
     if (changes.has("hello")) {
       const info = session.hello?.session;
-      if (info) {
+      if (info && session.hello !== this.helloApplied) {
+        this.helloApplied = session.hello;
         this.setPaused(!!info.paused);
-        this.speed.value = String(info.speed);
-        if (this.speed.value !== String(info.speed)) {
-          this.speed.append(h("option", { value: info.speed }, `${info.speed}×`));
-          this.speed.value = String(info.speed);
-        }
+        this.setSpeed(info.speed);
       }
       this.agentPicker.replaceChildren(
         ...session.agents.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${a.program ? "" : " (no engine)"}`)),
@@ -116,9 +127,38 @@ export class TopBar {
     const parts: string[] = [];
     if (status?.score && status.teams) parts.push(`${status.teams[0]} ${status.score[0]} : ${status.score[1]} ${status.teams[1]}`);
     if (status?.game_state) parts.push(status.game_state);
-    if (tick) parts.push(formatMs(tick.t));
+    if (tick) parts.push(formatClock(tick.t));
     setText(this.clock, parts.join(" · "));
     this.renderLink();
+  }
+
+  private setSpeed(speed: number): void {
+    if (![...this.speed.options].some((o) => o.value === String(speed))) this.speed.append(h("option", { value: speed }, formatSpeed(speed)));
+    this.speed.value = String(speed);
+  }
+
+  /// Frames say nothing about pausing: when they stop although we think the match runs, or
+  /// come although we think it is paused (another client paused or resumed), ask the server.
+  private checkPaused(): void {
+    const c = this.connection;
+    const now = performance.now();
+    if (this.asking || this.linkState !== "live" || !c.lastFrameAt || now - this.askedAt < QUIET_MS) return;
+    const quiet = !this.paused && now - c.lastFrameAt > QUIET_MS;
+    const moving = this.paused && c.lastFrameAt > this.askedFrameAt;
+    if (!quiet && !moving) return;
+    this.asking = true;
+    this.askedAt = now;
+    this.askedFrameAt = c.lastFrameAt;
+    c.command<{ paused: boolean; speed: number; finished?: boolean }>("status")
+      .then((status) => {
+        this.finished = !!status.finished;
+        this.setPaused(!!status.paused);
+        this.setSpeed(status.speed);
+      })
+      .catch(() => undefined)
+      .finally(() => {
+        this.asking = false;
+      });
   }
 
   /// The link indicator: live with frame rate and latency, stale, or reconnecting in N s.
@@ -126,9 +166,11 @@ export class TopBar {
     const c = this.connection;
     let text: string;
     let state: string = this.linkState;
+    this.checkPaused();
     if (this.linkState === "live") {
       const age = performance.now() - c.lastFrameAt;
       if (this.paused) text = "live · paused";
+      else if (this.finished && age > 2000) text = "live · match over";
       else if (c.lastFrameAt && age > 2000) {
         text = `no frames for ${Math.round(age / 1000)} s`;
         state = "stale";

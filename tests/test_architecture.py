@@ -1,0 +1,238 @@
+"""Structural rules of the code base, checked with ``ast`` (no code is imported or run).
+
+* No module reaches into another module's underscore names: no ``from m import _x``, no
+  ``m._x`` on an imported project module, no ``obj._x`` for an attribute the module does not
+  define itself (a module's own names, ``self._x`` and ``cls._x`` are fine; dunders are public).
+  The rule is about the project's owners: the private names of the standard library and of
+  third-party packages are outside it (``argparse._SubParsersAction`` is what argparse's typing
+  offers); uses of a third party's private attribute are listed in :data:`THIRD_PARTY`.
+* No import cycles among the modules of ``engine/`` (module-level imports, ``TYPE_CHECKING``
+  blocks included: a cycle for the type checker is still a cycle between owners).
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+CHECKED = ("engine", "server", "examples")
+
+
+PROJECT = ("engine", "server", "examples")
+
+#: Underscore attributes that are public API of the standard library (namedtuple's methods).
+PUBLIC_UNDERSCORE = frozenset({"_replace", "_asdict", "_fields", "_make", "_field_defaults"})
+
+#: (file, attribute) -> why a module reads a private attribute of a third-party object.
+THIRD_PARTY = {
+    (
+        "examples/soccer/physics.py",
+        "_body",
+    ): "pymunk's cffi body pointer (pinned 7.x, checked by tests/soccer/test_physics.py)",
+}
+
+
+def module_name(path: Path, root: Path = ROOT) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def python_files(*packages: str) -> Iterator[Path]:
+    for package in packages:
+        yield from sorted((ROOT / package).rglob("*.py"))
+
+
+def private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def own_names(tree: ast.Module) -> set[str]:
+    """Every name the module defines: functions, classes, assigned names and attributes."""
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            names.add(node.attr)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+        elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            names.add(node.target.id)
+    return names
+
+
+def resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute module an ``ImportFrom`` names (relative imports resolved)."""
+    if not node.level:
+        return node.module or ""
+    base = module.split(".")
+    if not is_package:
+        base = base[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join([*base, node.module] if node.module else base)
+
+
+def underscore_violations(path: Path, root: Path = ROOT) -> list[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    module = module_name(path, root)
+    is_package = path.name == "__init__.py"
+    own = own_names(tree)
+    imported_modules: set[str] = set()  # project modules bound to a name in this module
+    foreign_modules: set[str] = set()  # other modules bound to a name (their privates are theirs)
+    found: list[str] = []
+    where = path.relative_to(root)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            source = resolve(module, is_package, node)
+            ours = source.split(".")[0] in PROJECT
+            for alias in node.names:
+                if ours and private(alias.name) and source != module:
+                    found.append(f"{where}:{node.lineno}: imports {alias.name} from {source}")
+                (imported_modules if ours else foreign_modules).add(alias.asname or alias.name)
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                ours = alias.name.split(".")[0] in PROJECT
+                if ours and any(private(part) for part in alias.name.split(".")):
+                    found.append(f"{where}:{node.lineno}: imports private module {alias.name}")
+                (imported_modules if ours else foreign_modules).add(alias.asname or alias.name.split(".")[0])
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Attribute) or not private(node.attr) or node.attr in PUBLIC_UNDERSCORE:
+            continue
+        owner = node.value
+        if isinstance(owner, ast.Name) and owner.id in ("self", "cls"):
+            continue
+        if isinstance(owner, ast.Name) and owner.id in imported_modules:
+            found.append(f"{where}:{node.lineno}: {owner.id}.{node.attr}")
+        elif isinstance(owner, ast.Name) and owner.id in foreign_modules:
+            continue
+        elif node.attr not in own and (str(where), node.attr) not in THIRD_PARTY:
+            found.append(f"{where}:{node.lineno}: {ast.unparse(node)} (not a name of this module)")
+    return found
+
+
+def test_no_cross_module_underscore_names() -> None:
+    found = [v for path in python_files(*CHECKED) for v in underscore_violations(path)]
+    assert not found, "cross-module underscore access:\n" + "\n".join(found)
+
+
+def import_graph(package: str) -> dict[str, set[str]]:
+    """Module -> the modules of ``package`` it imports at module level (``TYPE_CHECKING`` too)."""
+    modules = {module_name(path): path for path in python_files(package)}
+    graph: dict[str, set[str]] = {}
+    for module, path in modules.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        is_package = path.name == "__init__.py"
+        edges: set[str] = set()
+        for node in module_level(tree.body):
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                source = resolve(module, is_package, node)
+                # ``from pkg import mod`` imports the submodule; ``from mod import name`` the module.
+                targets = [f"{source}.{a.name}" if f"{source}.{a.name}" in modules else source for a in node.names]
+            else:
+                continue
+            edges.update(t for t in targets if t in modules and t != module)
+        graph[module] = edges
+    return graph
+
+
+def module_level(body: list[ast.stmt]) -> Iterator[ast.stmt]:
+    """The statements run at import time (into ``if``/``try`` blocks, not into functions or classes)."""
+    for node in body:
+        yield node
+        if isinstance(node, ast.If | ast.Try):
+            yield from module_level(node.body)
+            yield from module_level(node.orelse)
+            if isinstance(node, ast.Try):
+                for handler in node.handlers:
+                    yield from module_level(handler.body)
+                yield from module_level(node.finalbody)
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Every strongly connected component with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycles_in_engine() -> None:
+    found = cycles(import_graph("engine"))
+    assert not found, "import cycles among engine modules:\n" + "\n".join(" <-> ".join(c) for c in found)
+
+
+# -- the checks themselves can fail ------------------------------------------------------------------
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "from engine.runtime.engine import _helper\n",
+        "import engine.runtime.engine as e\ne._tick\n",
+        "def f(engine):\n    return engine._tick\n",
+        "from engine.runtime import engine\nengine._tick\n",
+        "from engine import _private\n",
+    ],
+)
+def test_underscore_rule_catches(source: str, tmp_path: Path) -> None:
+    assert underscore_violations(write(tmp_path, "m.py", source), tmp_path)
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "class A:\n    def __init__(self):\n        self._x = 1\n    def f(self, other):\n        return other._x\n",
+        "def _g():\n    pass\nclass B:\n    h = staticmethod(_g)\nB()._g\n",
+        "import collections\np = collections.namedtuple('P', 'a')(1)._replace(a=2)\n",
+    ],
+)
+def test_underscore_rule_allows(source: str, tmp_path: Path) -> None:
+    assert not underscore_violations(write(tmp_path, "m.py", source), tmp_path)
+
+
+def test_cycle_finder() -> None:
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert cycles({"a": {"b"}, "b": set()}) == []
