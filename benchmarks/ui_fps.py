@@ -123,7 +123,7 @@ def main() -> None:
             page.keyboard.press("g")
             page.keyboard.press("a")
             page.wait_for_timeout(2000)
-            depth = page.evaluate("window.xabslStudio.session.agentInView().path.length")
+            depth = page.evaluate("window.xabslStudio.session.robotInView().path.length")
             samples = []
             end = time.monotonic() + args.seconds
             while time.monotonic() < end:

@@ -150,6 +150,36 @@ class World(Protocol):
         ...
 
 
+class WorldCommandError(ValueError):
+    """A world command that cannot be carried out (unknown name, bad arguments); the world is unchanged."""
+
+
+@runtime_checkable
+class CommandableWorld(Protocol):
+    """Optional part of :class:`World`: commands of the world itself (studio op ``world_command``).
+
+    Perturbations, forcing world-side state, queries of world data: whatever the world offers,
+    named and described so that a client can render them without knowing the world. The
+    simulation process calls :meth:`command` between two ticks.
+    """
+
+    def commands(self) -> list[dict[str, Any]]:
+        """Describe the commands, each one ``{"name", "label", "doc", "group", "args"}``.
+
+        ``args`` lists ``{"name", "type", "choices", "default"}``, ``type`` one of ``enum``,
+        ``number``, ``bool``, ``string`` (docs/protocol.md, ``world_command``).
+        """
+        ...
+
+    def command(self, name: str, args: dict[str, Any]) -> Any:
+        """Carry out command ``name`` with ``args``; return JSON-able plain data (or None).
+
+        Raises:
+            WorldCommandError: unknown command or bad arguments.
+        """
+        ...
+
+
 #: The entry-point group under which installed distributions register world factories
 #: (``name = "package.module:example"``); ``xabsl serve PATH --world NAME`` picks one.
 WORLDS_GROUP = "xabsl.worlds"

@@ -23,9 +23,14 @@ from typing import Annotated, Any
 
 import orjson
 from fastapi import APIRouter, Depends, FastAPI, Header, HTTPException, Query, Request, Response, WebSocket
+from fastapi import Path as FastApiPath
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.responses import HTMLResponse, JSONResponse, StreamingResponse
+from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, JsonValue
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
 
 from engine.emit.dot import GraphvizMissing
 from engine.ir.model import Program
@@ -33,7 +38,27 @@ from server import frames
 from server.clients import Client, Hub
 from server.files import BehaviorFiles, FileError
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
-from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION, Command, Op, ProtocolError, parse_command
+from server.messages import (
+    BEHAVIOR_PARAMS_INDEX,
+    DEPTH_INDEX,
+    ID_INDEX,
+    OPTION_NODE,
+    OPTION_PARAMS_INDEX,
+    Command,
+    CompileEvent,
+    FileEvent,
+    History,
+    ProtocolError,
+    Reload,
+    Reply,
+    RestReply,
+    encode,
+    encode_history_chunk,
+    guess_id,
+    openapi_schemas,
+    parse_command,
+)
+from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
 from server.security import SecurityMiddleware, SecurityPolicy
 from server.session import CommandError, Session
 
@@ -55,18 +80,84 @@ then reload this page.</p>
 """
 
 
+#: What a behavior file path looks like (documented, not enforced here: ``server.files`` checks
+#: paths and answers 400/403/404 with the reason, which a pattern mismatch could not give).
+FILE_PATH_PATTERN = r"^([^/\\\x00.][^/\\\x00]*/)*[^/\\\x00.][^/\\\x00]*\.xabsl$"
+_FILE_PATH: dict[str, JsonValue] = {"pattern": FILE_PATH_PATTERN}
+FilePath = Annotated[str, FastApiPath(description="relative to the example folder", json_schema_extra=_FILE_PATH)]
+
+
 class FileBody(BaseModel):
+    """The body of writing or creating a file."""
+
     text: str = Field(description="the whole file content")
     version: str | None = Field(default=None, description="the version edited (instead of If-Match)")
 
 
 class RenameBody(BaseModel):
-    path: str = Field(description="the new path, relative to the example folder")
+    """The body of renaming a file."""
+
+    path: str = Field(description="the new path, relative to the example folder", json_schema_extra=_FILE_PATH)
 
 
 class CompileBody(BaseModel):
-    path: str = Field(description="the file the text belongs to, relative to the example folder")
+    """The body of compiling unsaved text."""
+
+    path: str = Field(
+        description="the file the text belongs to, relative to the example folder", pattern=FILE_PATH_PATTERN
+    )
     text: str = Field(description="its unsaved content")
+
+
+class ErrorBody(BaseModel):
+    """A refused request: what was wrong."""
+
+    detail: str = Field(description="the reason, for a human")
+
+
+class NdjsonResponse(StreamingResponse):
+    """JSON lines (``/api/log``)."""
+
+    media_type = "application/x-ndjson"
+
+
+class SvgResponse(Response):
+    """An SVG document (``/api/graph``)."""
+
+    media_type = "image/svg+xml"
+
+
+_WHY = {
+    400: "a malformed request (its text says what is wrong)",
+    401: "the server requires a token and none or a wrong one was given",
+    403: "a foreign Origin, or a path outside the behavior folders",
+    404: "no such file, folder, behavior set or option",
+    409: "the file changed since the version given, or the target exists; a command that does not fit the session now",
+    413: "a request body over 1 MiB",
+    415: "a file that is not UTF-8 text",
+    422: "saved or compiled, but a behavior set has errors (the body lists them); or a malformed parameter",
+    428: "overwriting without the version edited",
+    503: "Graphviz (dot) is not installed",
+}
+
+
+_ERROR_JSON = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
+# 422 is also FastAPI's answer to a malformed parameter or body.
+_UNPROCESSABLE_JSON = {
+    "application/json": {
+        "schema": {
+            "anyOf": [{"$ref": "#/components/schemas/ErrorBody"}, {"$ref": "#/components/schemas/HTTPValidationError"}]
+        }
+    }
+}
+
+
+def _errors(*codes: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` for error statuses a route answers (besides 401/403 on every /api route)."""
+    return {
+        code: {"description": _WHY[code], "content": _UNPROCESSABLE_JSON if code == 422 else _ERROR_JSON}
+        for code in sorted({401, 403, *codes})
+    }
 
 
 def _etag(value: str | None) -> str | None:
@@ -91,27 +182,34 @@ class Studio:
 
     # -- commands -------------------------------------------------------------------------------
 
-    async def run_command(self, command: Command, client: Client | None) -> tuple[bool, Any, str | None]:
-        """Carry out a websocket or REST command: ``(ok, result, error)``."""
+    async def run_command(self, command: Command, client: Client | None) -> Reply:
+        """Carry out a (validated) websocket or REST command; its reply.
+
+        ``reload`` and ``history`` are the server process's (compiling, the ring buffer); every
+        other op goes to the simulation (``Session.request``).
+        """
         session = self.session
-        args = command.args
         try:
-            if command.op is Op.RELOAD:
-                key = args.get("program")
+            if isinstance(command, Reload):
+                key = command.program
                 if key is not None and key not in session.programs:
                     raise CommandError(f"unknown program {key!r}")
                 results = await self.recompile([key] if key else list(session.programs))
                 ok = all(r["ok"] for r in results.values())
-                return ok, {"programs": results}, None if ok else "a behavior has errors; the running one is kept"
-            if command.op is Op.HISTORY:
-                return self.start_history(command, client)
+                error = None if ok else "a behavior has errors; the running one is kept"
+                return Reply(id=command.id, ok=ok, result={"programs": results}, error=error)
+            if isinstance(command, History):
+                return Reply(id=command.id, ok=True, result=self.start_history(command, client))
             owner = client.id if client is not None else None
-            return True, await session.request(command.op, args, owner), None
+            return Reply(id=command.id, ok=True, result=await session.request(command, owner))
         except CommandError as error:
-            return False, None, str(error)
+            return Reply(id=command.id, ok=False, error=str(error))
 
-    def start_history(self, command: Command, client: Client | None) -> tuple[bool, Any, str | None]:
-        t0, t1, every = _history_args(command.args)
+    def start_history(self, command: History, client: Client | None) -> dict[str, int]:
+        """Queue the ``history`` chunks for ``client``; the reply's result (frames and chunks)."""
+        t0, t1, every = command.t0, command.t1, command.every
+        if t1 < t0:
+            raise CommandError("history needs t0 <= t1")
         if client is None:
             raise CommandError("history streams over the websocket; use GET /api/log over REST")
         encoded = frames.history(self.session.ring, t0, t1, every)
@@ -124,15 +222,15 @@ class Studio:
             for frame in encoded:
                 chunk.append(frame)
                 if len(chunk) == HISTORY_CHUNK:
-                    yield _history_message(command.id, index, False, chunk)
+                    yield encode_history_chunk(command.id, index, False, chunk)
                     index += 1
                     chunk = []
-            yield _history_message(command.id, index, True, chunk)
+            yield encode_history_chunk(command.id, index, True, chunk)
 
         if count:
             client.history.append(messages())
             client.wake.set()
-        return True, {"frames": count, "chunks": chunks}, None
+        return {"frames": count, "chunks": chunks}
 
     # -- compiling and hot reload -------------------------------------------------------------------------
 
@@ -146,17 +244,7 @@ class Studio:
             diagnostics = [d.as_dict() for d in compilation.diagnostics]
             results[key] = {"ok": problem is None, "diagnostics": diagnostics, "error": problem}
             if self.hub is not None:
-                self.hub.broadcast(
-                    orjson.dumps(
-                        {
-                            "type": "event",
-                            "event": "compile",
-                            "program": key,
-                            "ok": problem is None,
-                            "diagnostics": diagnostics,
-                        }
-                    )
-                )
+                self.hub.broadcast(CompileEvent(program=key, ok=problem is None, diagnostics=diagnostics))
         return results
 
     def programs_of(self, path: str) -> list[str]:
@@ -173,6 +261,7 @@ class Studio:
     async def after_write(
         self, paths: list[str], version: str | None, status: int, deleted: str | None = None
     ) -> Response:
+        """Recompile the behavior sets ``paths`` belong to, tell the clients, answer the write."""
         keys: list[str] = []
         for path in paths:
             keys.extend(k for k in self.programs_of(path) if k not in keys)
@@ -181,17 +270,8 @@ class Studio:
         diagnostics = [dict(d, program=k) for k, r in results.items() for d in r["diagnostics"]]
         if self.hub is not None:
             for path in paths:
-                self.hub.broadcast(
-                    orjson.dumps(
-                        {
-                            "type": "event",
-                            "event": "file",
-                            "path": path,
-                            "version": None if path == deleted else version,
-                            "deleted": path == deleted,
-                        }
-                    )
-                )
+                gone = path == deleted
+                self.hub.broadcast(FileEvent(path=path, version=None if gone else version, deleted=gone))
         body: dict[str, Any] = {
             "path": paths[-1],
             "version": version,
@@ -207,16 +287,6 @@ class Studio:
         return JSONResponse(body, status_code=status)
 
 
-def _history_args(args: dict[str, Any]) -> tuple[int, int, int]:
-    t0, t1, every = args.get("t0", 0), args.get("t1", 2**62), args.get("every", 1)
-    for name, value in (("t0", t0), ("t1", t1), ("every", every)):
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise CommandError(f"{name} must be an integer")
-    if every < 1 or t1 < t0:
-        raise CommandError("history needs t0 <= t1 and every >= 1")
-    return t0, t1, every
-
-
 def _count_history(session: Session, t0: int, t1: int, every: int) -> int:
     entries = session.ring.snapshot()
     if not entries:
@@ -224,15 +294,6 @@ def _count_history(session: Session, t0: int, t1: int, every: int) -> int:
     gen = entries[-1].gen
     n = sum(1 for e in entries if e.gen is gen and t0 <= e.t <= t1)
     return 0 if n == 0 else 1 + (n - 1) // every
-
-
-def _history_message(command_id: Any, index: int, last: bool, chunk: list[bytes]) -> bytes:
-    return b'{"type":"history","id":%s,"chunk":%d,"last":%s,"frames":[%s]}' % (
-        orjson.dumps(command_id),
-        index,
-        b"true" if last else b"false",
-        b",".join(chunk),
-    )
 
 
 def _studio(request: Request) -> Studio:
@@ -249,6 +310,7 @@ router = APIRouter()
 
 @router.websocket("/ws")
 async def websocket(ws: WebSocket) -> None:
+    """The live session (docs/protocol.md): one :class:`~server.clients.Client` per connection."""
     studio: Studio = ws.app.state.studio
     assert studio.hub is not None, "the app's lifespan did not run"
     await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
@@ -257,7 +319,7 @@ async def websocket(ws: WebSocket) -> None:
 # -- session --------------------------------------------------------------------------------------
 
 
-@router.get("/api/status", tags=["session"])
+@router.get("/api/status", tags=["session"], responses=_errors())
 async def status(studio: StudioDep) -> dict[str, Any]:
     """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
     result = await studio.session.status()
@@ -267,50 +329,90 @@ async def status(studio: StudioDep) -> dict[str, Any]:
     return result
 
 
-@router.get("/api/structure", tags=["session"])
+@router.get("/api/structure", tags=["session"], responses=_errors())
 async def structure(studio: StudioDep) -> Response:
     """The ``structure`` of the current hello (programs JSON and agents)."""
     gen = studio.session.generation
     return Response(gen.structure_bytes if gen is not None else b"{}", media_type="application/json")
 
 
-@router.post("/api/command", tags=["session"])
-async def command(studio: StudioDep, body: dict[str, Any]) -> JSONResponse:
-    """A websocket command over REST (``{"op": "pause"}``); answers the reply."""
+_REPLY = {"$ref": "#/components/schemas/RestReply"}
+_COMMAND_DOC: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/json": {"schema": {"$ref": "#/components/schemas/Command"}}},
+    },
+    "responses": {
+        "200": {"description": "the command's reply", "content": {"application/json": {"schema": _REPLY}}},
+        "400": {
+            "description": "a malformed command (the reply's error says what is wrong)",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+        "409": {
+            "description": "a command that does not fit the session now: no such robot, option or symbol, "
+            "step while running, the simulation stopped",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+        "422": {
+            "description": "reload: a behavior set has errors (the running one is kept)",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+    },
+}
+
+
+@router.post("/api/command", tags=["session"], responses=_errors(401, 403, 413), openapi_extra=_COMMAND_DOC)
+async def command(studio: StudioDep, request: Request) -> Response:
+    """A websocket command over REST (``{"op": "pause"}``); answers the reply.
+
+    The body is read and validated by the same parser as the websocket's messages
+    (``server.messages.parse_command``): one rule for both edges. 400: the command is malformed;
+    409: it is well formed but does not fit the session (an unknown robot or option...).
+    """
+    body = await request.body()
     try:
         parsed = parse_command(body)
     except ProtocolError as error:
-        return JSONResponse(
-            {"type": "reply", "id": body.get("id"), "ok": False, "error": str(error), "detail": str(error)},
-            status_code=400,
-        )
-    ok, result, error = await studio.run_command(parsed, None)
-    payload: dict[str, Any] = {"type": "reply", "id": parsed.id, "ok": ok}
-    if result is not None:
-        payload["result"] = result
-    if error is not None:
-        payload["error"] = error
-        payload["detail"] = error
-    return JSONResponse(payload, status_code=200 if ok else (422 if parsed.op is Op.RELOAD else 400))
+        return _reply_response(Reply(id=guess_id(body), ok=False, error=str(error)), 400)
+    answer = await studio.run_command(parsed, None)
+    if answer.ok:
+        return _reply_response(answer, 200)
+    # A reload that compiled (a result) with errors is 422; anything else refused is a conflict.
+    return _reply_response(answer, 422 if isinstance(parsed, Reload) and answer.result is not None else 409)
 
 
-@router.get("/api/log", tags=["session"])
+def _reply_response(answer: Reply, status: int) -> Response:
+    # A failed reply also carries the error as ``detail``, as every other REST error does.
+    rest = RestReply(id=answer.id, ok=answer.ok, result=answer.result, error=answer.error, detail=answer.error)
+    return Response(encode(rest), status_code=status, media_type="application/json")
+
+
+@router.get(
+    "/api/log",
+    tags=["session"],
+    response_class=NdjsonResponse,
+    responses={
+        **_errors(422),
+        200: {
+            "description": "one JSON object per line and tick",
+            "content": {"application/x-ndjson": {"schema": {"type": "string"}}},
+        },
+    },
+)
 async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(2**62)) -> StreamingResponse:
-    """The ring buffer between behavior times t0 and t1 as JSON lines, with names."""
-    if t1 < t0:
-        raise HTTPException(400, "t1 must not be before t0")
+    """The ring buffer between behavior times t0 and t1 as JSON lines, with names (none when t1 < t0)."""
     session = studio.session
     latest = session.ring.latest
-    if latest is None:
-        return StreamingResponse(iter(()), media_type="application/x-ndjson")
+    if latest is None or t1 < t0:
+        return NdjsonResponse(iter(()))
     encoded = frames.history(session.ring, t0, t1)
-    return StreamingResponse(_log_lines(encoded, latest.gen), media_type="application/x-ndjson")
+    return NdjsonResponse(_log_lines(encoded, latest.gen))
 
 
 # -- files ------------------------------------------------------------------------------------------
 
 
-@router.get("/api/files", tags=["files"])
+@router.get("/api/files", tags=["files"], responses=_errors())
 async def list_files(studio: StudioDep) -> dict[str, Any]:
     """Every behavior file: path, version, size, the behaviors it belongs to."""
     listed = await asyncio.to_thread(studio.files.list)
@@ -319,16 +421,16 @@ async def list_files(studio: StudioDep) -> dict[str, Any]:
     return {"files": listed}
 
 
-@router.get("/api/files/{path:path}", tags=["files"])
-async def read_file(studio: StudioDep, path: str) -> JSONResponse:
+@router.get("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 415))
+async def read_file(studio: StudioDep, path: FilePath) -> JSONResponse:
     """A file's text and version (also as ETag)."""
     text, version = await asyncio.to_thread(studio.files.read, path)
     return JSONResponse({"path": path, "version": version, "text": text}, headers={"ETag": f'"{version}"'})
 
 
-@router.put("/api/files/{path:path}", tags=["files"])
+@router.put("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 413, 422, 428))
 async def write_file(
-    studio: StudioDep, path: str, body: FileBody, if_match: str | None = Header(default=None)
+    studio: StudioDep, path: FilePath, body: FileBody, if_match: str | None = Header(default=None)
 ) -> Response:
     """Replace a file (If-Match: its version); compile; hot-swap when clean, else 422."""
     expected = _etag(if_match) or body.version
@@ -337,17 +439,17 @@ async def write_file(
         return await studio.after_write([path], version, 200)
 
 
-@router.post("/api/files/{path:path}", tags=["files"])
-async def create_file(studio: StudioDep, path: str, body: FileBody) -> Response:
+@router.post("/api/files/{path:path}", tags=["files"], status_code=201, responses=_errors(400, 404, 409, 413, 422))
+async def create_file(studio: StudioDep, path: FilePath, body: FileBody) -> Response:
     """Create a file (409 if it exists); compile the behaviors it belongs to."""
     async with studio.write_lock:
         version = await asyncio.to_thread(studio.files.create, path, body.text)
         return await studio.after_write([path], version, 201)
 
 
-@router.patch("/api/files/{path:path}", tags=["files"])
+@router.patch("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 413, 422))
 async def rename_file(
-    studio: StudioDep, path: str, body: RenameBody, if_match: str | None = Header(default=None)
+    studio: StudioDep, path: FilePath, body: RenameBody, if_match: str | None = Header(default=None)
 ) -> Response:
     """Rename a file to ``body.path`` (409 if that exists)."""
     async with studio.write_lock:
@@ -355,15 +457,15 @@ async def rename_file(
         return await studio.after_write([path, body.path], version, 200, deleted=path)
 
 
-@router.delete("/api/files/{path:path}", tags=["files"])
-async def delete_file(studio: StudioDep, path: str, if_match: str | None = Header(default=None)) -> Response:
+@router.delete("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 422))
+async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = Header(default=None)) -> Response:
     """Delete a file; compile the behaviors it belonged to."""
     async with studio.write_lock:
         await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
         return await studio.after_write([path], None, 200, deleted=path)
 
 
-@router.post("/api/compile", tags=["files"])
+@router.post("/api/compile", tags=["files"], responses=_errors(400, 404, 413, 422))
 async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
     """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
     real = studio.files.resolve(body.path, must_exist=False)
@@ -397,7 +499,14 @@ async def _svg(studio: Studio, request: Request, dot: str) -> Response:
     return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
 
 
-@router.get("/api/graph/{program}", tags=["graphs"])
+_SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
+    **_errors(404, 422, 503),
+    200: {"description": "the graph", "content": {"image/svg+xml": {"schema": {"type": "string"}}}},
+    304: {"description": "the SVG of the If-None-Match ETag is still current"},
+}
+
+
+@router.get("/api/graph/{program}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
 async def graph(studio: StudioDep, request: Request, program: str, agent: str | None = None) -> Response:
     """The option graph below an XABSL agent's root option (SVG)."""
     try:
@@ -407,7 +516,7 @@ async def graph(studio: StudioDep, request: Request, program: str, agent: str | 
     return await _svg(studio, request, dot)
 
 
-@router.get("/api/graph/{program}/{option}", tags=["graphs"])
+@router.get("/api/graph/{program}/{option}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
 async def option_graph(studio: StudioDep, request: Request, program: str, option: str) -> Response:
     """The state machine of one option (SVG)."""
     try:
@@ -423,7 +532,23 @@ async def _file_error(request: Request, error: Exception) -> JSONResponse:
 
 
 async def _command_error(request: Request, error: Exception) -> JSONResponse:
-    return JSONResponse({"detail": str(error)}, status_code=400)
+    return JSONResponse({"detail": str(error)}, status_code=409)
+
+
+async def _method_not_allowed(request: Request, error: Exception) -> Response:
+    """405 with the methods *every* route of the path allows (one route per method in FastAPI)."""
+    assert isinstance(error, StarletteHTTPException)
+    if error.status_code != 405:
+        return await http_exception_handler(request, error)
+    allowed: set[str] = set()
+    for route in router.routes:  # the API's own routes (the app wraps the included router)
+        if isinstance(route, APIRoute) and route.matches({**request.scope, "method": "GET"})[0] is not Match.NONE:
+            allowed.update(route.methods or ())
+    if "GET" in allowed:
+        allowed.add("HEAD")
+    return JSONResponse(
+        {"detail": "Method Not Allowed"}, status_code=405, headers={"Allow": ", ".join(sorted(allowed))}
+    )
 
 
 async def _no_ui(request: Request) -> HTMLResponse:
@@ -475,7 +600,9 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.add_middleware(SecurityMiddleware, policy=policy)
     app.add_exception_handler(FileError, _file_error)
     app.add_exception_handler(CommandError, _command_error)
+    app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     app.include_router(router)
+    _document_messages(app)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")
     else:
@@ -483,33 +610,49 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     return app
 
 
+def _document_messages(app: FastAPI) -> None:
+    """Add the command and reply schemas of ``server.messages`` to the app's OpenAPI components."""
+    base = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        schema = base()
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        if "Command" not in components:
+            components.update(openapi_schemas())
+            components["ErrorBody"] = ErrorBody.model_json_schema()
+        return schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+
+
 def _log_lines(encoded: Iterator[bytes], gen: frames.Generation) -> Iterator[bytes]:
     """Decoded frames (full first, then deltas) -> one JSON line per tick with names."""
     state: dict[int, dict[str, dict[str, Any]]] = {}
     names = _names(gen)
+    robots_info = gen.structure["robots"]
     for data in encoded:
         frame = orjson.loads(data)
-        agents = []
-        for agent in frame["agents"]:
-            index = agent["id"]
+        robots = []
+        for robot in frame["robots"]:
+            index = robot["id"]
             values = state.setdefault(index, {"inputs": {}, "outputs": {}})
             for kind in ("inputs", "outputs"):
-                values[kind].update(agent.get(kind, {}))
+                values[kind].update(robot.get(kind, {}))
             table = names.get(index)
             if table is None:
-                agents.append({"id": index, "name": gen.structure["agents"][index]["name"], "path": []})
+                robots.append({"id": index, "name": robots_info[index]["name"], "path": []})
                 continue
-            agents.append(
+            robots.append(
                 {
                     "id": index,
-                    "name": gen.structure["agents"][index]["name"],
-                    "path": [table.node(node) for node in agent["path"]],
+                    "name": robots_info[index]["name"],
+                    "path": [table.node(node) for node in robot["path"]],
                     "outputs": {table.outputs.get(int(k), k): v for k, v in values["outputs"].items()},
                     "inputs": {table.inputs.get(int(k), k): v for k, v in values["inputs"].items()},
-                    **{k: agent[k] for k in ("fault", "forced", "overrides") if k in agent},
+                    **{k: robot[k] for k in ("fault", "forced", "overrides") if k in robot},
                 }
             )
-        yield orjson.dumps({"seq": frame["seq"], "t": frame["t"], "agents": agents}) + b"\n"
+        yield orjson.dumps({"seq": frame["seq"], "t": frame["t"], "robots": robots}) + b"\n"
 
 
 class _Names:
@@ -522,33 +665,36 @@ class _Names:
         self.outputs = {s["id"]: s["name"] for s in program["outputs"]}
 
     def node(self, node: list[Any]) -> dict[str, Any]:
-        if node[0] == 0:
-            _, depth, option_id, state_id, option_time, state_time, decided_in, leaf, params = node
-            option = self.options[option_id]
+        """A path node (``server.messages.OptionNode`` or ``BehaviorNode``) with names."""
+        depth = node[DEPTH_INDEX]
+        if node[0] == OPTION_NODE:
+            option = self.options[node[ID_INDEX]]
             states = option["states"]
+            state, option_time, state_time, decided_in, leaf = node[ID_INDEX + 1 : OPTION_PARAMS_INDEX]
+            params = node[OPTION_PARAMS_INDEX]
             return {
                 "depth": depth,
                 "option": option["name"],
-                "state": states[state_id]["name"],
+                "state": states[state]["name"],
                 "option_time": option_time,
                 "state_time": state_time,
                 "decided_in": states[decided_in]["name"] if decided_in >= 0 else None,
                 "leaf": leaf,
                 "params": dict(zip((p["name"] for p in option["params"]), params, strict=False)),
             }
-        _, depth, behavior_id, time, params = node
-        return {"depth": depth, "behavior": self.behaviors[behavior_id], "time": time, "params": params}
+        time, params = node[ID_INDEX + 1], node[BEHAVIOR_PARAMS_INDEX]
+        return {"depth": depth, "behavior": self.behaviors[node[ID_INDEX]], "time": time, "params": params}
 
 
 def _names(gen: frames.Generation) -> dict[int, _Names]:
     tables: dict[str, _Names] = {}
     result: dict[int, _Names] = {}
     programs = gen.structure["programs"]
-    for agent in gen.structure["agents"]:
-        key = agent["program"]
+    for robot in gen.structure["robots"]:
+        key = robot["program"]
         if key is None:
             continue
         if key not in tables:
             tables[key] = _Names(programs[key])
-        result[agent["id"]] = tables[key]
+        result[robot["id"]] = tables[key]
     return result

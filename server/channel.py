@@ -1,6 +1,8 @@
 """The pipe between the studio server and its simulation process: framed messages, never blocking.
 
-One ``AF_UNIX`` stream socket pair carries pickled tuples (``<length><pickle>``) both ways. Both
+One ``AF_UNIX`` stream socket pair carries pickled messages (``<length><pickle>``) both ways: the
+dataclasses of ``server.messages`` (:data:`~server.messages.ToWorker` one way,
+:data:`~server.messages.FromWorker` the other). Both
 ends keep their socket non-blocking:
 
 * writes go straight to the kernel; what the kernel does not take waits in a user-space buffer
@@ -19,7 +21,7 @@ from __future__ import annotations
 import pickle
 import socket
 import struct
-from typing import Any
+from typing import Generic, TypeVar
 
 from engine.errors import ServerError
 
@@ -31,8 +33,15 @@ class ChannelClosed(ServerError, ConnectionError):
     """The other end closed the socket (its process ended)."""
 
 
-class Channel:
-    """Length-prefixed pickled messages over a non-blocking stream socket (see the module docstring)."""
+SendT = TypeVar("SendT")
+ReceiveT = TypeVar("ReceiveT")
+
+
+class Channel(Generic[SendT, ReceiveT]):
+    """Length-prefixed pickled messages over a non-blocking stream socket (see the module docstring).
+
+    ``Channel[SendT, ReceiveT]``: this end sends ``SendT`` and receives ``ReceiveT``.
+    """
 
     def __init__(self, sock: socket.socket) -> None:
         sock.setblocking(False)
@@ -44,6 +53,7 @@ class Channel:
         self.bytes_sent = 0
 
     def fileno(self) -> int:
+        """The socket's file descriptor (for ``select`` and ``loop.add_reader``)."""
         return self.sock.fileno()
 
     @property
@@ -51,7 +61,7 @@ class Channel:
         """Bytes written but not yet taken by the kernel."""
         return len(self._out)
 
-    def send(self, message: tuple[Any, ...], droppable: bool = False) -> bool:
+    def send(self, message: SendT, droppable: bool = False) -> bool:
         """Send ``message``; a droppable one is dropped (False) while older bytes still wait.
 
         Raises:
@@ -93,7 +103,7 @@ class Channel:
             del self._out[:written]
         return True
 
-    def receive(self) -> list[tuple[Any, ...]]:
+    def receive(self) -> list[ReceiveT]:
         """The complete messages that arrived (possibly none).
 
         Raises:
@@ -114,7 +124,7 @@ class Channel:
             self._in += data
             if len(data) < _READ_SIZE:
                 break
-        messages = []
+        messages: list[ReceiveT] = []
         buffer = self._in
         start = 0
         while len(buffer) - start >= _HEADER.size:
@@ -131,4 +141,5 @@ class Channel:
         return messages
 
     def close(self) -> None:
+        """Close this end."""
         self.sock.close()

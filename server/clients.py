@@ -29,35 +29,36 @@ from collections import deque
 from collections.abc import Awaitable, Callable, Iterator
 from typing import Any
 
-import orjson
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from server.frames import Entry, FrameEncoder, Generation
-from server.protocol import (
-    DEFAULT_RATE,
-    MAX_MESSAGE_BYTES,
-    MAX_PENDING_CONTROL,
-    VERSION,
-    CloseCode,
+from server.messages import (
     Command,
+    CrashEvent,
     HelloReason,
     ProtocolError,
+    Reply,
     Resync,
-    ServerMessage,
+    ServerEvent,
+    SessionInfo,
     Subscribe,
-    event,
+    encode,
+    encode_hello,
+    guess_id,
     parse_message,
-    reply,
 )
+from server.protocol import DEFAULT_RATE, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL, CloseCode
 from server.session import Session
 
 log = logging.getLogger("xabsl.server")
 
-#: Runs a command for a client: returns (ok, result, error).
-CommandRunner = Callable[[Command, "Client"], Awaitable[tuple[bool, Any, str | None]]]
+#: Runs a command for a client: returns its reply.
+CommandRunner = Callable[[Command, "Client"], Awaitable[Reply]]
 
 
 class ClientState(enum.Enum):
+    """Where a connection is (see the module docstring)."""
+
     CONNECTING = "connecting"
     LIVE = "live"
     CLOSING = "closing"
@@ -83,10 +84,11 @@ class Client:
         self.hub = hub
         self.state = ClientState.CONNECTING
         self.rate = DEFAULT_RATE
-        self.agents: frozenset[int] | None = None
+        #: the robots whose values are streamed (None: all)
+        self.robots: frozenset[int] | None = None
         self.last_seq: int | None = None
         self.last_gen: int | None = None
-        self.hello_reason: str | None = HelloReason.CONNECT
+        self.hello_reason: HelloReason | None = "connect"
         self.target: Entry | None = None
         self._due_seq = -1
         self.control: deque[bytes] = deque()
@@ -114,31 +116,47 @@ class Client:
         return int(entry.seq * ratio) != int(self._due_seq * ratio) and entry.seq > self._due_seq
 
     def offer(self, entry: Entry) -> None:
+        """Put ``entry`` in the latest-frame slot (replacing one not sent yet) and wake the sender."""
         self._due_seq = entry.seq
         self.target = entry
         self.wake.set()
 
-    def push(self, message: bytes) -> None:
+    def push(self, message: bytes | Reply | ServerEvent) -> None:
         """Queue a reply/event; a client that lets MAX_PENDING_CONTROL pile up is closed (1008)."""
         if self.state is not ClientState.LIVE:
             return
         if len(self.control) >= MAX_PENDING_CONTROL:
             self.hub.close_soon(self, CloseCode.POLICY_VIOLATION)
             return
-        self.control.append(message)
+        self.control.append(message if isinstance(message, bytes) else encode(message))
         self.wake.set()
 
-    def resync(self, reason: str = HelloReason.RESYNC) -> None:
+    def resync(self, reason: HelloReason = "resync") -> None:
+        """Send a hello (and then a full frame) next."""
         self.hello_reason = reason
         self.wake.set()
 
     # -- the two tasks ----------------------------------------------------------------------------
 
     async def send(self, data: bytes) -> None:
+        """Send one text message.
+
+        Raises:
+            WebSocketDisconnect: the connection is closing or gone (the peer left, or we closed it):
+                the server then sends nothing more on it.
+        """
+        if self.state is not ClientState.LIVE:
+            raise WebSocketDisconnect(self.close_code or CloseCode.NORMAL)
         self.bytes_sent += len(data)
-        await self.websocket.send_text(data.decode("utf-8"))
+        try:
+            await self.websocket.send_text(data.decode("utf-8"))
+        except (RuntimeError, OSError) as error:
+            # The peer went away between our state check and the send (uvicorn: "Unexpected ASGI
+            # message 'websocket.send', after sending 'websocket.close'"): a disconnect, not a bug.
+            raise WebSocketDisconnect(CloseCode.GOING_AWAY) from error
 
     async def sender(self) -> None:
+        """The task that sends hellos, control messages, frames and history chunks, in that order."""
         hub = self.hub
         while self.state is ClientState.LIVE:
             await self.wake.wait()
@@ -167,7 +185,7 @@ class Client:
                         target = latest  # too old to encode (or a reload came in between): the newest
                     if target is None or target.gen.number != self.last_gen:
                         continue
-                    await self.send(hub.encoder.frame(self.last_seq, self.last_gen, target, self.agents))
+                    await self.send(hub.encoder.frame(self.last_seq, self.last_gen, target, self.robots))
                     self.frames_sent += 1
                     self.last_seq = target.seq
                     continue
@@ -182,6 +200,7 @@ class Client:
                 break
 
     async def receiver(self, run_command: CommandRunner) -> None:
+        """The task that reads the client's messages until it disconnects."""
         websocket = self.websocket
         while True:
             message = await websocket.receive()
@@ -197,30 +216,31 @@ class Client:
             await self.handle(text, run_command)
 
     async def handle(self, text: str, run_command: CommandRunner) -> None:
+        """Carry out one client message; every problem is an error reply (the connection stays)."""
         try:
             message = parse_message(text)
         except ProtocolError as error:
-            self.push(reply(_guess_id(text), False, error=str(error)))
+            self.push(Reply(id=guess_id(text), ok=False, error=str(error)))
             return
         if isinstance(message, Subscribe):
             self.rate = message.rate
-            self.agents = message.agents
-            self.last_seq = None  # the subscribed agents changed: the next frame is full
-            ident = _guess_id(text)
-            if ident is not None:
-                self.push(reply(ident, True))
+            self.robots = frozenset(message.robots) if message.robots is not None else None
+            self.last_seq = None  # the subscribed robots changed: the next frame is full
+            if message.id is not None:
+                self.push(Reply(id=message.id, ok=True))
             return
         if isinstance(message, Resync):
             self.resync()
             return
         try:
-            ok, result, error = await run_command(message, self)
+            answer = await run_command(message, self)
         except Exception as exc:  # a bug must not end the connection: answer and log it
             log.exception("command %s failed", message.op)
-            ok, result, error = False, None, f"internal error: {type(exc).__name__}: {exc}"
-        self.push(reply(message.id, ok, result, error))
+            answer = Reply(id=message.id, ok=False, error=f"internal error: {type(exc).__name__}: {exc}")
+        self.push(answer)
 
     async def close(self, code: int) -> None:
+        """Close the connection with ``code`` (once; later calls do nothing)."""
         if self.state in (ClientState.CLOSING, ClientState.CLOSED):
             return
         self._move(ClientState.CLOSING)
@@ -228,15 +248,6 @@ class Client:
         self.wake.set()
         with contextlib.suppress(Exception):  # the peer may be gone already
             await self.websocket.close(code)
-
-
-def _guess_id(text: str) -> Any:
-    try:
-        message = orjson.loads(text)
-    except orjson.JSONDecodeError:
-        return None
-    value = message.get("id") if isinstance(message, dict) else None
-    return value if isinstance(value, int | float | str) and not isinstance(value, bool) else None
 
 
 class Hub:
@@ -275,41 +286,33 @@ class Hub:
 
     def on_crash(self, crash: dict[str, Any]) -> None:
         """The simulation process ended unasked: tell every client (``event`` ``crash``)."""
-        self.broadcast(event("crash", message=crash["message"], seq=crash["seq"], t=crash["t"]))
+        self.broadcast(CrashEvent(message=crash["message"], seq=crash["seq"], t=crash["t"]))
 
     # -- messages ------------------------------------------------------------------------------------
 
-    def hello(self, gen: Generation, reason: str) -> bytes:
+    def hello(self, gen: Generation, reason: HelloReason) -> bytes:
+        """A :class:`~server.messages.Hello`, spliced from the generation's pre-encoded parts."""
         session = self.session
         latest = session.ring.latest
-        info = {
-            "example": session.example.name,
-            "paused": session.paused,
-            "speed": session.speed,
-            "seed": session.seed,
-            "behavior_hz": session.behavior_hz,
-            "seq": latest.seq if latest else 0,
-            "t": latest.t if latest else 0,
-            "token_required": self.token_required,
-        }
-        return b"".join(
-            [
-                b'{"type":"%s","version":%d,"reason":%s,"generation":%d,"session":'
-                % (ServerMessage.HELLO.value.encode(), VERSION, orjson.dumps(reason), gen.number),
-                orjson.dumps(info),
-                b',"structure":',
-                gen.structure_bytes,
-                b',"scene":',
-                gen.scene_bytes,
-                b"}",
-            ]
+        info = SessionInfo(
+            example=session.example.name,
+            paused=session.paused,
+            speed=session.speed,
+            seed=session.seed,
+            behavior_hz=session.behavior_hz,
+            seq=latest.seq if latest else 0,
+            t=latest.t if latest else 0,
+            token_required=self.token_required,
         )
+        return encode_hello(reason, gen.number, info, gen.structure_bytes, gen.scene_bytes)
 
     token_required = False
 
-    def broadcast(self, message: bytes) -> None:
+    def broadcast(self, message: Reply | ServerEvent) -> None:
+        """Queue ``message`` for every client (encoded once)."""
+        data = encode(message)
         for client in list(self.clients.values()):
-            client.push(message)
+            client.push(data)
 
     # -- connections -----------------------------------------------------------------------------------
 
@@ -345,14 +348,17 @@ class Hub:
             self.session.release_owner(client.id)
 
     def close_soon(self, client: Client, code: int) -> None:
+        """Close ``client`` from a callback that cannot await."""
         task = self.loop.create_task(client.close(code))
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
     async def close_all(self, code: int = CloseCode.GOING_AWAY) -> None:
+        """Close every client (the server shuts down)."""
         await asyncio.gather(*(c.close(code) for c in list(self.clients.values())), return_exceptions=True)
 
     def stats(self) -> dict[str, Any]:
+        """Counters for ``GET /api/status``."""
         return {
             "clients": len(self.clients),
             "encoded": self.encoder.encoded,

@@ -6,7 +6,7 @@ Three stages, split between the two processes (docs/server.md):
    an engine's activation tree into the compact ``path`` of docs/protocol.md (integer ids) and
    reads its input and output symbols into tuples of display values (decimals rounded, enums as
    element indices); the tick's sample goes to the server process. There
-   :class:`FrameRecorder` compares the values with the previous sample and stores, per agent, a
+   :class:`FrameRecorder` compares the values with the previous sample and stores, per robot, a
    bit mask of the symbols that changed, encodes the tick's delta (and, every :data:`KEY_EVERY`
    ticks, a full frame), then appends an :class:`Entry` to the :class:`Ring`.
 2. **Storage** (server process): the ring keeps the last ``seconds`` of ticks. Old entries keep only their encoded
@@ -16,7 +16,7 @@ Three stages, split between the two processes (docs/server.md):
 3. **Encoding for a client** (asyncio loop, :class:`FrameEncoder`): a client that last received
    frame L gets frame K with the values of the symbols whose bit is set in any mask of
    (L, K] -- so a client that skips frames still ends with exact values. Clients with the same L,
-   K and agent filter share one encoding (a cache per K), which is what makes twenty clients
+   K and robot filter share one encoding (a cache per K), which is what makes twenty clients
    cheap: with the same rate they receive the same ticks.
 
 Ids are those of the program JSON (``engine.emit.json``); see docs/protocol.md for the layout.
@@ -36,7 +36,19 @@ import orjson
 from engine.ir.model import Program
 from engine.runtime import Engine
 from engine.types import Kind, Value
-from server.protocol import BEHAVIOR_NODE, FULL_EVERY, OPTION_NODE
+from server.messages import (
+    BEHAVIOR_NODE,
+    BEHAVIOR_PARAMS_INDEX,
+    ID_INDEX,
+    KIND_INDEX,
+    OPTION_NODE,
+    OPTION_PARAMS_INDEX,
+    HelloReason,
+    NewGeneration,
+    Sample,
+    WireValue,
+)
+from server.protocol import FULL_EVERY
 
 #: A key frame (full values stored) every this many ticks, so history can start anywhere cheaply.
 KEY_EVERY = 40
@@ -145,7 +157,7 @@ class AgentSampler:
         }
 
     def path(self) -> list[list[Any]]:
-        """The agent's activation path in the frame format (docs/protocol.md "path").
+        """The robot's activation path in the frame format (docs/protocol.md "path").
 
         The engine's compact path already has the frame's node layout and the JSON ids; only the
         parameter values are turned into display values (rounded decimals, enum element indices).
@@ -153,11 +165,17 @@ class AgentSampler:
         nodes = self.engine.path()
         option_params, behavior_params = self._option_params, self._behavior_params
         for node in nodes:
-            if node[0] == OPTION_NODE:
-                if node[8]:
-                    node[8] = [convert(v) for convert, v in zip(option_params[node[2]], node[8], strict=True)]
-            elif node[4]:
-                node[4] = [convert(v) for convert, v in zip(behavior_params[node[2]], node[4], strict=True)]
+            if node[KIND_INDEX] == OPTION_NODE:
+                if node[OPTION_PARAMS_INDEX]:
+                    node[OPTION_PARAMS_INDEX] = [
+                        convert(v)
+                        for convert, v in zip(option_params[node[ID_INDEX]], node[OPTION_PARAMS_INDEX], strict=True)
+                    ]
+            elif node[BEHAVIOR_PARAMS_INDEX]:
+                node[BEHAVIOR_PARAMS_INDEX] = [
+                    convert(v)
+                    for convert, v in zip(behavior_params[node[ID_INDEX]], node[BEHAVIOR_PARAMS_INDEX], strict=True)
+                ]
         return nodes
 
     def _converter(self, kind: Kind, enum: str | None) -> Callable[[Any], Value | None]:
@@ -169,6 +187,7 @@ class AgentSampler:
         return lambda value: table.get(int(value), -1)
 
     def inputs(self) -> tuple[Value | None, ...]:
+        """The display values of the plain input symbols (None: the host getter failed)."""
         # One engine sampler reads all plain inputs (overrides included), converted in C.
         try:
             return tuple(map(operator.call, self._input_converters, self._sample_inputs()))
@@ -183,6 +202,7 @@ class AgentSampler:
             return tuple(values)
 
     def outputs(self) -> tuple[Value | None, ...]:
+        """The display values of the output and internal symbols."""
         try:
             return tuple(map(operator.call, self._output_converters, self._sample_outputs()))
         except Exception:
@@ -196,7 +216,7 @@ class AgentSampler:
             return tuple(values)
 
     def extras(self) -> bytes:
-        """``,"fault":...,"forced":...,"overrides":...`` for the agent object, or b''."""
+        """``,"fault":...,"forced":...,"overrides":...`` for the robot's object, or b''."""
         engine = self.engine
         parts: dict[str, Any] = {}
         fault = engine.fault
@@ -227,30 +247,29 @@ class Generation:
     """The ids in force between two reloads or resets: structure, static scene, symbol id tables."""
 
     number: int
-    reason: str
+    reason: HelloReason
     structure: dict[str, Any]
     structure_bytes: bytes
     scene_bytes: bytes
-    #: per agent: symbol ids of its program (inputs, outputs), aligned with the sampled tuples
+    #: per robot: symbol ids of its program (inputs, outputs), aligned with the sampled tuples
     input_ids: tuple[tuple[int, ...], ...]
     output_ids: tuple[tuple[int, ...], ...]
-    #: per agent (agent id order): whether it runs an XABSL engine
+    #: per robot (robot id order): whether it runs an XABSL engine
     engines: tuple[bool, ...] = ()
 
     @classmethod
-    def from_message(cls, message: tuple[Any, ...]) -> Generation:
-        """The generation announced by the simulation process (``("g", number, reason, ...)``)."""
-        _, number, reason, structure_bytes, scene_bytes, input_ids, output_ids, *_ = message
-        structure = orjson.loads(structure_bytes)
+    def from_message(cls, message: NewGeneration) -> Generation:
+        """The generation announced by the simulation process."""
+        structure = orjson.loads(message.structure)
         return cls(
-            number=number,
-            reason=reason,
+            number=message.number,
+            reason=message.reason,
             structure=structure,
-            structure_bytes=structure_bytes,
-            scene_bytes=scene_bytes,
-            input_ids=input_ids,
-            output_ids=output_ids,
-            engines=tuple(a["program"] is not None for a in structure["agents"]),
+            structure_bytes=message.structure,
+            scene_bytes=message.scene,
+            input_ids=message.input_ids,
+            output_ids=message.output_ids,
+            engines=tuple(r["program"] is not None for r in structure["robots"]),
         )
 
 
@@ -271,15 +290,15 @@ class Entry:
     # live part, dropped once the entry is LIVE_ENTRIES old:
     paths: tuple[bytes, ...] | None = None
     extras: tuple[bytes, ...] | None = None
-    inputs: tuple[tuple[Value | None, ...], ...] | None = None
-    outputs: tuple[tuple[Value | None, ...], ...] | None = None
+    inputs: tuple[tuple[WireValue, ...], ...] | None = None
+    outputs: tuple[tuple[WireValue, ...], ...] | None = None
     scene: bytes = b"{}"
     status: bytes = b"{}"
     nbytes: int = field(default=0)
 
 
 def _head(entry: Entry, full: bool) -> bytes:
-    return b'{"type":"frame","seq":%d,"gen":%d,"t":%d,"wall":%.1f,"full":%s,"agents":[' % (
+    return b'{"type":"frame","seq":%d,"gen":%d,"t":%d,"wall":%.1f,"full":%s,"robots":[' % (
         entry.seq,
         entry.gen.number,
         entry.t,
@@ -305,10 +324,10 @@ def encode(
     entry: Entry,
     in_masks: Sequence[int] | None,
     out_masks: Sequence[int] | None,
-    agents: frozenset[int] | None,
+    robots: frozenset[int] | None,
     with_status: bool,
 ) -> bytes:
-    """The frame message of ``entry`` (a live entry): values by masks (None: full), for ``agents``."""
+    """The frame message of ``entry`` (a live entry): values by masks (None: full), for ``robots``."""
     assert entry.paths is not None and entry.inputs is not None and entry.outputs is not None and entry.extras, (
         "only live entries can be encoded"
     )
@@ -322,7 +341,7 @@ def encode(
             parts.append(b'{"id":%d,"path":[]}' % i)
             continue
         parts.append(b'{"id":%d,"path":%s' % (i, path))
-        if agents is None or i in agents:
+        if robots is None or i in robots:
             parts.append(b',"outputs":')
             parts.append(_values(gen.output_ids[i], entry.outputs[i], None if out_masks is None else out_masks[i]))
             parts.append(b',"inputs":')
@@ -352,6 +371,7 @@ class Ring:
         self._bytes = 0
 
     def append(self, entry: Entry) -> None:
+        """Append the newest entry; entries older than LIVE_ENTRIES drop their live part."""
         entries = self._entries
         if len(entries) == entries.maxlen:
             self._bytes -= entries[0].nbytes
@@ -368,6 +388,7 @@ class Ring:
 
     @property
     def latest(self) -> Entry | None:
+        """The newest entry (None before the first sample)."""
         try:
             return self._entries[-1]
         except IndexError:
@@ -404,8 +425,7 @@ class Ring:
 class FrameRecorder:
     """Turns the simulation's samples into :class:`Entry` objects and appends them to the ring.
 
-    ``record(gen, sample)`` takes a sample of ``server.worker`` (``("s", seq, gen, t, wall, paused,
-    speed, paths, extras, inputs, outputs, scene, status)``) of generation ``gen``.
+    ``record(gen, sample)`` takes a :class:`~server.messages.Sample` of generation ``gen``.
     """
 
     def __init__(self, ring: Ring) -> None:
@@ -418,9 +438,11 @@ class FrameRecorder:
         self.record_seconds = 0.0
         self.recorded = 0
 
-    def record(self, gen: Generation, sample: tuple[Any, ...]) -> Entry:
+    def record(self, gen: Generation, sample: Sample) -> Entry:
+        """Record one sample as the ring's newest entry (masks, delta, key frame); returns it."""
         started = time.perf_counter()
-        _, seq, _, t, wall, _, _, paths, extras, inputs, outputs, scene, status = sample
+        seq, t, wall, paths, extras = sample.seq, sample.t, sample.wall, sample.paths, sample.extras
+        inputs, outputs, scene, status = sample.inputs, sample.outputs, sample.scene, sample.status
         n = len(paths)
         new_gen = gen is not self._prev_gen
         prev_inputs, prev_outputs = self._prev_inputs, self._prev_outputs
@@ -477,7 +499,7 @@ def _round(value: float) -> float:
 
     ``round(v * 1000) / 1000`` rather than ``round(v, 3)``: the two-argument round does exact
     decimal rounding through a string conversion and costs 3-4x as much, and every decimal input
-    and output of every agent passes here on every tick. NaN and infinities raise (the sampler
+    and output of every robot passes here on every tick. NaN and infinities raise (the sampler
     then records None for the value).
     """
     return round(value * _SCALE) / _SCALE
@@ -500,7 +522,7 @@ def _changed(new: tuple[Value | None, ...], old: tuple[Value | None, ...]) -> in
 class FrameEncoder:
     """Frames for clients, each a delta against the last frame *that client* received (asyncio side).
 
-    ``frame(last_seq, last_gen, entry, agents, force_full)`` returns the bytes to send; results are
+    ``frame(last_seq, last_gen, entry, robots)`` returns the bytes to send; results are
     cached for the current entry, so clients in the same position share one encoding.
     """
 
@@ -511,22 +533,23 @@ class FrameEncoder:
         self.encoded = 0
         self.cache_hits = 0
 
-    def frame(self, last_seq: int | None, last_gen: int | None, entry: Entry, agents: frozenset[int] | None) -> bytes:
+    def frame(self, last_seq: int | None, last_gen: int | None, entry: Entry, robots: frozenset[int] | None) -> bytes:
+        """The bytes of ``entry`` for a client that last received ``last_seq`` of ``last_gen``."""
         if entry.seq != self._cache_seq:
             self._cache_seq = entry.seq
             self._cache = {}
         in_masks, out_masks, status = self._masks(last_seq, last_gen, entry)
-        cache_key = (None if in_masks is None else last_seq, agents)
+        cache_key = (None if in_masks is None else last_seq, robots)
         cached = self._cache.get(cache_key)
         if cached is not None:
             self.cache_hits += 1
             return cached
-        if in_masks is not None and agents is None and last_seq == entry.seq - 1:
+        if in_masks is not None and robots is None and last_seq == entry.seq - 1:
             data = entry.delta  # exactly the tick's own delta, already encoded by the recorder
-        elif in_masks is None and agents is None and entry.full is not None:
+        elif in_masks is None and robots is None and entry.full is not None:
             data = entry.full
         else:
-            data = encode(entry, in_masks, out_masks, agents, status)
+            data = encode(entry, in_masks, out_masks, robots, status)
         self.encoded += 1
         self._cache[cache_key] = data
         return data
@@ -573,10 +596,10 @@ def history(ring: Ring, t0: int, t1: int, every: int = 1) -> Iterator[bytes]:
     while key >= 0 and entries[key].full is None:
         key -= 1
     if key < 0:
-        key = next((k for k in range(start, len(entries)) if entries[k].full is not None), None)
-        if key is None:
+        first_key = next((k for k in range(start, len(entries)) if entries[k].full is not None), None)
+        if first_key is None:
             return
-        start = key
+        key = start = first_key
     state = orjson.loads(entries[key].full)  # type: ignore[arg-type]
     for e in entries[key + 1 : start + 1]:
         _merge(state, orjson.loads(e.delta))
@@ -598,10 +621,10 @@ def history(ring: Ring, t0: int, t1: int, every: int = 1) -> Iterator[bytes]:
 
 def _merge(into: dict[str, Any], delta: dict[str, Any]) -> None:
     """Apply a decoded delta frame to a decoded frame (values merged, everything else replaced)."""
-    agents = {a["id"]: a for a in into["agents"]}
+    robots = {r["id"]: r for r in into["robots"]}
     merged = []
-    for a in delta["agents"]:
-        old = agents.get(a["id"], {})
+    for a in delta["robots"]:
+        old = robots.get(a["id"], {})
         for name in ("inputs", "outputs"):
             if name in a:
                 values = dict(old.get(name, {}))
@@ -610,6 +633,6 @@ def _merge(into: dict[str, Any], delta: dict[str, Any]) -> None:
         merged.append(a)
     status = into.get("status")
     into.update(delta)
-    into["agents"] = merged
+    into["robots"] = merged
     if "status" not in delta and status is not None:
         into["status"] = status

@@ -9,8 +9,9 @@ slow the simulation through the GIL (docs/server.md). This module is that proces
   into a ring :class:`~server.frames.Entry` (masks, delta and key frames) and calls ``notify``
   (the :class:`~server.clients.Hub`). Generation messages (start, reload, reset) come before the
   first sample of their generation and become :attr:`Session.generation`;
-* **commands**: :meth:`Session.request` sends ``(id, op, args, owner)`` and resolves when the
-  worker answers (the samples a command produced, e.g. by ``step``, arrive before the answer);
+* **commands**: :meth:`Session.request` sends a validated command (a dataclass of
+  ``server.messages``) in a :class:`~server.messages.WorkerRequest` and resolves when the worker
+  answers (the samples a command produced, e.g. by ``step``, arrive before the answer);
 * **compiling** stays here (:meth:`Session.compile`, run in a worker thread by the app); a clean
   program is pickled to the simulation, which hot-swaps it between two ticks (:meth:`Session.apply`);
 * **crashes**: when the simulation process ends unasked (an exception in the world, a kill), the
@@ -40,8 +41,25 @@ from engine.lang import Compilation, compile_file
 from server import worker
 from server.channel import Channel, ChannelClosed
 from server.frames import Entry, FrameRecorder, Generation, Ring
-from server.protocol import HelloReason, Op
-from server.worker import CommandError, WorkerConfig, check_seed, check_speed
+from server.messages import (
+    Apply,
+    Crash,
+    FromWorker,
+    HelloReason,
+    NewGeneration,
+    ReleaseOwner,
+    Pause,
+    Reset,
+    Resume,
+    Sample,
+    Status,
+    Stop,
+    ToWorker,
+    WorkerCommand,
+    WorkerReply,
+    WorkerRequest,
+)
+from server.worker import CommandError, WorkerConfig, check_speed
 
 __all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session"]
 
@@ -66,6 +84,7 @@ class ProgramState:
     error: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
+        """The behavior set as ``GET /api/status`` shows it."""
         comp = self.compilation
         return {
             "folder": self.source.folder.name,
@@ -125,7 +144,7 @@ class Session:
         self.restarts = 0
         self.pid: int | None = None
         self._process: Any = None
-        self._channel: Channel | None = None
+        self._channel: Channel[ToWorker, FromWorker] | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._pending: dict[int, asyncio.Future[tuple[bool, Any, str | None]]] = {}
         self._ids = itertools.count(1)
@@ -155,6 +174,7 @@ class Session:
 
     @property
     def running(self) -> bool:
+        """Whether the simulation process runs (started, not crashed, not stopped)."""
         return self._process is not None and self._channel is not None and self.crash is None
 
     async def start(self) -> None:
@@ -163,9 +183,9 @@ class Session:
         self._loop = asyncio.get_running_loop()
         self._restart_lock = asyncio.Lock()
         self._stopping = False
-        await self._spawn(self.seed, HelloReason.CONNECT)
+        await self._spawn(self.seed, "connect")
 
-    async def _spawn(self, seed: int, reason: str) -> None:
+    async def _spawn(self, seed: int, reason: HelloReason) -> None:
         loop = self._loop
         assert loop is not None
         latest = self.ring.latest
@@ -184,7 +204,7 @@ class Session:
             },
             seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
             generation=self.generation.number if self.generation is not None else 0,
-            reason=str(reason),
+            reason=reason,
         )
         ours, theirs = socket.socketpair()
         process = _context(self.example).Process(
@@ -194,7 +214,7 @@ class Session:
             await asyncio.to_thread(process.start)
         finally:
             theirs.close()
-        channel = Channel(ours)
+        channel: Channel[ToWorker, FromWorker] = Channel(ours)
         self._process, self._channel, self.pid = process, channel, process.pid
         self._started = loop.create_future()
         self.crash = None
@@ -215,26 +235,29 @@ class Session:
             return
         latest: Entry | None = None
         for message in messages:
-            kind = message[0]
-            if kind == "s":
-                if self.generation is None or message[2] != self.generation.number:
+            if isinstance(message, Sample):
+                if self.generation is None or message.gen != self.generation.number:
                     continue  # never expected: a sample always follows its generation
                 latest = self.recorder.record(self.generation, message)
-                self.paused, self.speed = message[5], message[6]
-            elif kind == "r":
-                future = self._pending.pop(message[1], None)
+                self.paused, self.speed = message.paused, message.speed
+            elif isinstance(message, WorkerReply):
+                future = self._pending.pop(message.ident, None) if message.ident is not None else None
                 if future is not None and not future.done():
-                    future.set_result((message[2], message[3], message[4]))
-            elif kind == "g":
+                    future.set_result((message.ok, message.result, message.error))
+            elif isinstance(message, NewGeneration):
                 self.generation = Generation.from_message(message)
-                self.seed = message[7]
-                for key, error in message[8].items():
+                self.seed = message.seed
+                for key, error in message.errors.items():
                     if key in self.programs:
                         self.programs[key].error = error
-            elif kind == "crash":
-                _, text, trace, seq, t = message
-                self.crash = {"message": text, "traceback": trace, "seq": seq, "t": t}
-                log.error("the simulation stopped: %s\n%s", text, trace)
+            elif isinstance(message, Crash):
+                self.crash = {
+                    "message": message.message,
+                    "traceback": message.traceback,
+                    "seq": message.seq,
+                    "t": message.t,
+                }
+                log.error("the simulation stopped: %s\n%s", message.message, message.traceback)
         if latest is not None:
             if self._started is not None and not self._started.done():
                 self._started.set_result(None)
@@ -288,7 +311,7 @@ class Session:
             with contextlib.suppress(Exception):
                 loop.remove_writer(channel.fileno())
             with contextlib.suppress(ChannelClosed, OSError):
-                channel.send(("stop",))
+                channel.send(Stop())
                 channel.flush()
         await asyncio.to_thread(self.stop)
 
@@ -298,7 +321,7 @@ class Session:
         process, channel = self._process, self._channel
         if channel is not None:
             with contextlib.suppress(ChannelClosed, OSError):
-                channel.send(("stop",))
+                channel.send(Stop())
                 channel.flush()
         if process is not None:
             process.join(timeout=STOP_TIMEOUT)
@@ -320,26 +343,26 @@ class Session:
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, op: str, args: Mapping[str, Any], owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand, owner: str | None = None) -> Any:
         """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
-            CommandError: bad arguments, or the simulation is not running (crashed) and the
-                command needs it.
+            CommandError: arguments that do not fit the world or program, or the simulation is
+                not running (crashed) and the command needs it.
         """
-        if op == Op.RESET and self.crash is not None and not self._stopping:
-            return await self._restart(args)
-        if op == Op.STATUS:
+        if isinstance(command, Reset) and self.crash is not None and not self._stopping:
+            return await self._restart(command)
+        if isinstance(command, Status):
             return await self.status()
-        ok, result, error = await self._send(op, args, owner)
+        ok, result, error = await self._send(command, owner)
         if not ok:
             raise CommandError(error)
-        if op in (Op.PAUSE, Op.RESUME):
+        if isinstance(command, Pause | Resume):
             # a paused simulation sends no sample that would carry the new state: mirror the answer
             self.paused = bool(result["paused"])
         return result
 
-    async def _send(self, op: str, args: Mapping[str, Any], owner: str | None) -> tuple[bool, Any, str | None]:
+    async def _send(self, command: WorkerCommand, owner: str | None) -> tuple[bool, Any, str | None]:
         channel, loop = self._channel, self._loop
         if channel is None or loop is None or self.crash is not None:
             raise CommandError(self._stopped_message())
@@ -347,7 +370,7 @@ class Session:
         future: asyncio.Future[tuple[bool, Any, str | None]] = loop.create_future()
         self._pending[ident] = future
         try:
-            channel.send(("c", ident, str(op), dict(args), owner))
+            channel.send(WorkerRequest(ident, command, owner))
         except ChannelClosed:
             self._pending.pop(ident, None)
             raise CommandError(self._stopped_message()) from None
@@ -369,9 +392,9 @@ class Session:
 
         loop.add_writer(channel.fileno(), flush)
 
-    async def _restart(self, args: Mapping[str, Any]) -> Any:
+    async def _restart(self, command: Reset) -> Any:
         """``reset`` after a crash: a new simulation process (same seed unless given)."""
-        seed = check_seed(args.get("seed", self.seed))
+        seed = self.seed if command.seed is None else command.seed
         assert self._restart_lock is not None
         async with self._restart_lock:
             if self.crash is not None:
@@ -379,7 +402,7 @@ class Session:
                     await asyncio.to_thread(self._process.join, STOP_TIMEOUT)
                 self._process = None
                 self.restarts += 1
-                await self._spawn(seed, HelloReason.RESET)
+                await self._spawn(seed, "reset")
         return {"seed": seed}
 
     def release_owner(self, owner: str) -> None:
@@ -388,7 +411,7 @@ class Session:
         if channel is None or self.crash is not None:
             return
         with contextlib.suppress(ChannelClosed):
-            channel.send(("c", None, "release_owner", {}, owner))
+            channel.send(WorkerRequest(None, ReleaseOwner(), owner))
             self._watch_backlog()
 
     # -- hot reload ----------------------------------------------------------------------------------
@@ -406,7 +429,7 @@ class Session:
             return "the behavior has errors; the running version is kept"
         program_json = program_to_json(program, compilation.source_text)
         if self.running:
-            ok, problem, error = await self._send("apply", {"key": key, "program": program, "json": program_json}, None)
+            ok, problem, error = await self._send(Apply(key, program, program_json), None)
             if not ok:
                 raise CommandError(error)
             if problem is not None:
@@ -423,7 +446,7 @@ class Session:
         """The session status (``GET /api/status``): the simulation's counters and the server's."""
         if self.running:
             try:
-                ok, answer, _ = await self._send(Op.STATUS, {}, None)
+                ok, answer, _ = await self._send(Status(op="status"), None)
                 if ok:
                     self._worker_status = answer
             except CommandError:

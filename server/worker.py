@@ -6,18 +6,21 @@ through the GIL. This process owns everything that touches the world and the eng
 
 * :class:`Simulation`: the world, the :class:`~engine.host.BehaviorLoop`, the engines, the
   hot swap of programs compiled by the server, the commands (``_op_*``) and who forced what;
-* per tick, one compact *sample* (:data:`Sample`): seq, generation, clocks, and per agent the
-  activation path (JSON bytes), the extras (fault, force, overrides), the input and output
+* per tick, one compact :class:`~server.messages.Sample`: seq, generation, clocks, and per robot
+  the activation path (JSON bytes), the extras (fault, force, overrides), the input and output
   values as tuples; the dynamic scene and the world status (JSON bytes). Everything per client
   (masks, deltas, full frames, the ring buffer, history) happens in the server process;
-* a *generation* message (:meth:`Simulation.generation`) whenever the ids change (start, reload,
-  reset): structure bytes, static scene bytes, the symbol id tables, sent before its first sample.
+* a :class:`~server.messages.NewGeneration` (:meth:`Simulation.generation`) whenever the ids
+  change (start, reload, reset): structure bytes, static scene bytes, the symbol id tables, sent
+  before its first sample.
 
-The loop (:func:`run`) ticks when a tick is due and otherwise waits on the channel for commands
-(``("c", id, op, args, owner)``), answered with ``("r", id, ok, result, error)`` after the samples
-the command produced. Samples are droppable (``server.channel``): a server that falls behind
-never blocks a tick. An exception escaping the world ends the process after a ``("crash", ...)``
-message; the server reports it and starts a fresh process on ``reset``.
+The loop (:func:`run`) ticks when a tick is due and otherwise waits on the channel for
+:class:`~server.messages.WorkerRequest` messages: a command the server validated already (a
+dataclass of ``server.messages``), answered with a :class:`~server.messages.WorkerReply` after the
+samples the command produced. Samples are droppable (``server.channel``): a server that falls
+behind never blocks a tick. An exception escaping the world ends the process after a
+:class:`~server.messages.Crash` message; the server reports it and starts a fresh process on
+``reset``.
 
 Timing: ticks are due every ``1 / (behavior_hz x speed)`` wall seconds; more than a quarter of a
 second behind (a slow machine at 20x), the backlog is dropped instead of burst through.
@@ -38,17 +41,52 @@ from typing import Any
 
 import orjson
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, Example, World
+from engine.host import (
+    DEFAULT_BEHAVIOR_HZ,
+    DEFAULT_PHYSICS_HZ,
+    BehaviorLoop,
+    CommandableWorld,
+    Example,
+    World,
+    WorldCommandError,
+)
 from engine.ir.model import Program, leaf_path
 from engine.runtime import DebugError, Debugger, Engine, EngineError
-from engine.types import Value
 from server.channel import Channel, ChannelClosed
 from server.frames import AgentSampler, ProgramCodec
-from server.protocol import MAX_SPEED, MAX_STEP_TICKS, MIN_SPEED, HelloReason
+from server.messages import (
+    Apply,
+    Crash,
+    Explain,
+    ForceBehavior,
+    ForceOption,
+    FromWorker,
+    HelloReason,
+    NewGeneration,
+    OverrideInput,
+    Pause,
+    Release,
+    ReleaseInput,
+    ReleaseOwner,
+    Reset,
+    ResetAgent,
+    Resume,
+    Sample,
+    SelectAgent,
+    Speed,
+    Status,
+    Step,
+    ToWorker,
+    WireValue,
+    WorkerCommand,
+    WorkerReply,
+    WorkerRequest,
+    WorldCommand,
+)
+from server.protocol import MAX_SPEED, MIN_SPEED
 
-#: ``(seq, gen, t, wall_ms, paused, speed, paths, extras, inputs, outputs, scene, status)``:
-#: one tick as the worker sends it (tag ``"s"`` in front); see the module docstring.
-Sample = tuple[Any, ...]
+#: The channel as the simulation process sees it.
+WorkerChannel = Channel[FromWorker, ToWorker]
 
 
 class CommandError(DebugError, ValueError):
@@ -71,7 +109,7 @@ class WorkerConfig:
     seq: int = 0
     generation: int = 0
     #: the ``hello`` reason of the first generation (``reset`` when restarted after a crash)
-    reason: str = HelloReason.CONNECT
+    reason: HelloReason = "connect"
 
 
 @dataclass(slots=True)
@@ -115,18 +153,18 @@ class Simulation:
         self.seq = config.seq
         self.generation_number = config.generation
         self.timing = _Timing()
-        self._owners: dict[tuple[int, str], str] = {}  # (agent, "root" | input name) -> client
+        self._owners: dict[tuple[int, str], str] = {}  # (robot, "root" | "input:" name) -> client
         self.world: World
         self.loop: BehaviorLoop
         self.engines: list[Engine | None] = []
         self.keys: list[str | None] = []
         self.samplers: list[AgentSampler | None] = []
-        self.reason = str(config.reason)
+        self.reason: HelloReason = config.reason
         #: the channel to the server (its counters show in the status), None in tests
-        self.channel: Channel | None = None
+        self.channel: WorkerChannel | None = None
         #: where generation messages and samples produced by commands go: ``emit(message,
         #: droppable) -> sent``; the process loop sends them, tests may collect them
-        self.emit: Callable[[tuple[Any, ...], bool], bool] = _collect
+        self.emit: Callable[[FromWorker, bool], bool] = _collect
         self._build_world(self.seed)
 
     # -- world and generations ---------------------------------------------------------------------
@@ -155,19 +193,19 @@ class Simulation:
         self.loop = BehaviorLoop(world, self.physics_hz, self.behavior_hz)
         self._owners.clear()
 
-    def generation(self, reason: str) -> tuple[Any, ...]:
-        """Start a new generation of ids; returns its message (``"g"``) for the server."""
+    def generation(self, reason: HelloReason) -> NewGeneration:
+        """Start a new generation of ids; returns its message for the server."""
         self.generation_number += 1
-        self.reason = str(reason)
+        self.reason = reason
         codecs: dict[str, ProgramCodec] = {}
         samplers: list[AgentSampler | None] = []
         input_ids: list[tuple[int, ...]] = []
         output_ids: list[tuple[int, ...]] = []
-        agents = []
-        for index, (agent, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
+        robots = []
+        for index, (robot, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
             program_key = key if engine is not None else None
-            agents.append(
-                {"id": index, "name": agent.name, "team": agent.team, "number": agent.number, "program": program_key}
+            robots.append(
+                {"id": index, "name": robot.name, "team": robot.team, "number": robot.number, "program": program_key}
             )
             if engine is None or key is None:
                 samplers.append(None)
@@ -182,9 +220,8 @@ class Simulation:
             output_ids.append(tuple(i for i, *_ in codec.outputs))
         self.samplers = samplers
         programs = {key: running[1] for key, running in self.programs.items() if running is not None}
-        structure = {"programs": programs, "agents": agents}
-        return (
-            "g",
+        structure = {"programs": programs, "robots": robots}
+        return NewGeneration(
             self.generation_number,
             self.reason,
             orjson.dumps(structure),
@@ -206,8 +243,8 @@ class Simulation:
         self.seq += 1
         paths: list[bytes] = []
         extras: list[bytes] = []
-        inputs: list[tuple[Value | None, ...]] = []
-        outputs: list[tuple[Value | None, ...]] = []
+        inputs: list[tuple[WireValue, ...]] = []
+        outputs: list[tuple[WireValue, ...]] = []
         dumps = orjson.dumps
         for sampler in self.samplers:
             if sampler is None:
@@ -224,8 +261,7 @@ class Simulation:
             inputs.append(sampler.inputs())
             outputs.append(sampler.outputs())
         world = self.world
-        sample = (
-            "s",
+        sample = Sample(
             self.seq,
             self.generation_number,
             self._tick_time(),
@@ -258,32 +294,36 @@ class Simulation:
 
     # -- commands ---------------------------------------------------------------------------------
 
-    def execute(self, op: str, args: Mapping[str, Any], owner: str | None = None) -> Any:
+    def execute(self, command: WorkerCommand | WorkerRequest, owner: str | None = None) -> Any:
         """Carry out one command (docs/protocol.md); generations and samples it makes go to :attr:`emit`.
 
+        ``command`` is a command dataclass of ``server.messages`` (validated at the server's edge,
+        so its arguments have their types and static ranges) or a :class:`WorkerRequest`.
+
         Raises:
-            CommandError: bad arguments; the simulation is unchanged.
+            CommandError: arguments that do not fit this world or program; the simulation is unchanged.
         """
-        handler = getattr(self, f"_op_{op}", None)
+        body = command.body if isinstance(command, WorkerRequest) else command
+        if isinstance(command, WorkerRequest):
+            owner = command.owner
+        handler = getattr(self, f"_op_{body.op}", None)
         if handler is None:
-            raise CommandError(f"unknown op {op!r}")
+            raise CommandError(f"unknown op {body.op!r}")
         try:
-            return handler(args, owner)
+            return handler(body, owner)
         except (DebugError, EngineError) as error:
             raise CommandError(str(error)) from None
 
-    def _op_pause(self, args: Mapping[str, Any], owner: str | None) -> Any:
+    def _op_pause(self, command: Pause, owner: str | None) -> Any:
         self.paused = True
         return {"paused": True}
 
-    def _op_resume(self, args: Mapping[str, Any], owner: str | None) -> Any:
+    def _op_resume(self, command: Resume, owner: str | None) -> Any:
         self.paused = False
         return {"paused": False}
 
-    def _op_step(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        ticks = args.get("ticks", 1)
-        if isinstance(ticks, bool) or not isinstance(ticks, int) or not 1 <= ticks <= MAX_STEP_TICKS:
-            raise CommandError(f"ticks must be an integer in 1..{MAX_STEP_TICKS}")
+    def _op_step(self, command: Step, owner: str | None) -> Any:
+        ticks = command.ticks
         if not self.paused:
             raise CommandError("step works while the session is paused")
         sample = None
@@ -297,87 +337,73 @@ class Simulation:
             self.emit(sample, False)
         if sample is None:
             return {"seq": self.seq, "t": self._tick_time() if self.loop.ticks else 0}
-        return {"seq": sample[1], "t": sample[3]}
+        return {"seq": sample.seq, "t": sample.t}
 
-    def _op_speed(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        try:
-            self.speed = check_speed(args.get("speed"))
-        except ValueError as error:
-            raise CommandError(str(error)) from None
+    def _op_speed(self, command: Speed, owner: str | None) -> Any:
+        self.speed = command.speed
         return {"speed": self.speed}
 
-    def _op_reset(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        seed = check_seed(args.get("seed", self.seed))
+    def _op_reset(self, command: Reset, owner: str | None) -> Any:
+        seed = self.seed if command.seed is None else command.seed
         self._build_world(seed)
-        self.emit(self.generation(HelloReason.RESET), False)
+        self.emit(self.generation("reset"), False)
         self.emit(self.sample(), False)
         return {"seed": seed}
 
-    def _op_select_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        _, engine, _ = self._agent(args)
-        name = args.get("name")
-        if not isinstance(name, str):
-            raise CommandError("name (an XABSL agent of the program) is required")
-        engine.root_actions.select_agent(name)
+    def _op_select_agent(self, command: SelectAgent, owner: str | None) -> Any:
+        _, engine, _ = self._robot(command.robot)
+        engine.root_actions.select_agent(command.agent)
         return None
 
-    def _op_force_option(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        option = self._named(args.get("option"), codec.option_ids, "option")
-        params = args.get("params")
-        if params is not None and not isinstance(params, dict):
-            raise CommandError("params must be an object of parameter values")
-        engine.root_actions.force_option(option, params, by_index=True)
+    def _op_force_option(self, command: ForceOption, owner: str | None) -> Any:
+        index, engine, codec = self._robot(command.robot)
+        option = self._named(command.option, codec.option_ids, "option")
+        engine.root_actions.force_option(option, command.params, by_index=True)
         self._own(index, "root", owner)
         return None
 
-    def _op_force_behavior(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        behavior = self._named(args.get("behavior"), codec.behavior_ids, "basic behavior")
-        params = args.get("params")
-        if params is not None and not isinstance(params, dict):
-            raise CommandError("params must be an object of parameter values")
-        engine.root_actions.force_behavior(behavior, params, by_index=True)
+    def _op_force_behavior(self, command: ForceBehavior, owner: str | None) -> Any:
+        index, engine, codec = self._robot(command.robot)
+        behavior = self._named(command.behavior, codec.behavior_ids, "basic behavior")
+        engine.root_actions.force_behavior(behavior, command.params, by_index=True)
         self._own(index, "root", owner)
         return None
 
-    def _op_release(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, _ = self._agent(args)
+    def _op_release(self, command: Release, owner: str | None) -> Any:
+        index, engine, _ = self._robot(command.robot)
         engine.root_actions.release()
         self._owners.pop((index, "root"), None)
         return None
 
-    def _op_override_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
+    def _op_override_input(self, command: OverrideInput, owner: str | None) -> Any:
+        index, engine, codec = self._robot(command.robot)
         ids = {s.name: s.index for s in codec.program.inputs.values()}
-        name = self._named(args.get("symbol"), ids, "input symbol")
-        if "value" not in args:
-            raise CommandError("value is required")
-        engine.root_actions.override_input(name, args["value"], by_index=True)
+        name = self._named(command.symbol, ids, "input symbol")
+        engine.root_actions.override_input(name, command.value, by_index=True)
         self._own(index, "input:" + name, owner)
         return None
 
-    def _op_release_input(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        index, engine, codec = self._agent(args)
-        if args.get("symbol") is None:
+    def _op_release_input(self, command: ReleaseInput, owner: str | None) -> Any:
+        index, engine, codec = self._robot(command.robot)
+        if command.symbol is None:
             engine.root_actions.release_inputs()
             for key in [k for k in self._owners if k[0] == index and k[1].startswith("input:")]:
                 del self._owners[key]
             return None
         ids = {s.name: s.index for s in codec.program.inputs.values()}
-        name = self._named(args.get("symbol"), ids, "input symbol")
+        name = self._named(command.symbol, ids, "input symbol")
         engine.root_actions.release_input(name)
         self._owners.pop((index, "input:" + name), None)
         return None
 
-    def _op_reset_agent(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        _, engine, _ = self._agent(args)
+    def _op_reset_agent(self, command: ResetAgent, owner: str | None) -> Any:
+        _, engine, _ = self._robot(command.robot)
         engine.reset()
         return None
 
-    def _op_explain(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        _, engine, codec = self._agent(args)
-        option = self._named(args.get("option"), codec.option_ids, "option")
+    def _op_explain(self, command: Explain, owner: str | None) -> Any:
+        _, engine, codec = self._robot(command.robot)
+        option = self._named(command.option, codec.option_ids, "option")
         explanation = Debugger(engine).explain(option)
         states = codec.state_ids[option]
         ir_option = codec.program.options[option]
@@ -414,41 +440,53 @@ class Simulation:
             ],
         }
 
-    def _op_status(self, args: Mapping[str, Any], owner: str | None) -> Any:
+    def _op_status(self, command: Status, owner: str | None) -> Any:
         return self.status()
 
-    def _op_apply(self, args: Mapping[str, Any], owner: str | None) -> Any:
-        """Internal: hot-swap a program the server compiled clean (``key``, ``program``, ``json``)."""
-        return self.apply(args["key"], args["program"], args["json"])
+    def _op_world_command(self, command: WorldCommand, owner: str | None) -> Any:
+        """A command of the world itself (``engine.host.CommandableWorld``); without ``name``: the list."""
+        world = self.world
+        if not isinstance(world, CommandableWorld):
+            raise CommandError("this world has no commands")
+        if command.name is None:
+            return {"commands": world.commands()}
+        try:
+            result = world.command(command.name, dict(command.args))
+        except WorldCommandError as error:
+            raise CommandError(str(error)) from None
+        if self.paused:  # a paused client must see what the command changed
+            self.emit(self.sample(), False)
+        return result
 
-    def _op_release_owner(self, args: Mapping[str, Any], owner: str | None) -> Any:
+    def _op_apply(self, command: Apply, owner: str | None) -> Any:
+        """Internal: hot-swap a program the server compiled clean."""
+        return self.apply(command.key, command.program, command.program_json)
+
+    def _op_release_owner(self, command: ReleaseOwner, owner: str | None) -> Any:
         """Internal: release what the client ``owner`` forced and overrode (it disconnected)."""
         return self.release_owner(str(owner))
 
     # -- helpers for commands -----------------------------------------------------------------------
 
-    def _agent(self, args: Mapping[str, Any]) -> tuple[int, Engine, ProgramCodec]:
-        index = args.get("agent")
-        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(self.engines):
-            raise CommandError(f"agent must be an agent id in 0..{len(self.engines) - 1}")
+    def _robot(self, index: int) -> tuple[int, Engine, ProgramCodec]:
+        if not 0 <= index < len(self.engines):
+            raise CommandError(f"robot must be a robot id in 0..{len(self.engines) - 1}")
         engine = self.engines[index]
         sampler = self.samplers[index]
         if engine is None or sampler is None:
-            raise CommandError(f"agent {index} runs no XABSL engine")
+            raise CommandError(f"robot {index} runs no XABSL engine")
         return index, engine, sampler.codec
 
     @staticmethod
-    def _named(value: Any, ids: Mapping[str, int], what: str) -> str:
+    def _named(value: int | str, ids: Mapping[str, int], what: str) -> str:
         if isinstance(value, str):
             if value not in ids:
                 raise CommandError(f"unknown {what} {value!r}")
             return value
-        if isinstance(value, int) and not isinstance(value, bool):
-            for name, i in ids.items():
-                if i == value:
-                    return name
-            raise CommandError(f"unknown {what} id {value}")
-        raise CommandError(f"{what} must be a name or an id")
+        for name, i in ids.items():
+            if i == value:
+                return name
+        raise CommandError(f"unknown {what} id {value}")
 
     def _own(self, agent: int, what: str, owner: str | None) -> None:
         if owner is None:
@@ -501,7 +539,7 @@ class Simulation:
             return f"the behavior does not run on this host: {error}"
         self.errors[key] = None
         self.programs[key] = (program, program_json)
-        self.emit(self.generation(HelloReason.RELOAD), False)
+        self.emit(self.generation("reload"), False)
         self.emit(self.sample(), False)
         return None
 
@@ -540,18 +578,13 @@ class Simulation:
 
 
 def check_speed(speed: Any) -> float:
+    """``speed`` as a float when it is a number in the allowed range (the server's start option)."""
     if isinstance(speed, bool) or not isinstance(speed, int | float) or not MIN_SPEED <= speed <= MAX_SPEED:
         raise ValueError(f"speed must be a number in {MIN_SPEED:g}..{MAX_SPEED:g}")
     return float(speed)
 
 
-def check_seed(seed: Any) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
-        raise CommandError("seed must be an integer in 0..2**32-1")
-    return seed
-
-
-def _collect(message: tuple[Any, ...], droppable: bool) -> bool:
+def _collect(message: FromWorker, droppable: bool) -> bool:
     return True
 
 
@@ -567,7 +600,7 @@ def main(sock: socket.socket, config: WorkerConfig) -> None:
     # Ctrl+C reaches the whole process group; the server decides when this process ends.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
-    channel = Channel(sock)
+    channel: WorkerChannel = Channel(sock)
     try:
         run(channel, Simulation(config))
     except ChannelClosed:
@@ -576,7 +609,7 @@ def main(sock: socket.socket, config: WorkerConfig) -> None:
         channel.close()
 
 
-def run(channel: Channel, sim: Simulation) -> None:
+def run(channel: WorkerChannel, sim: Simulation) -> None:
     """The tick loop (see the module docstring); returns on a ``stop`` message.
 
     Raises:
@@ -601,7 +634,7 @@ def run(channel: Channel, sim: Simulation) -> None:
                 channel.flush()
                 continue
         for message in channel.receive():
-            if message[0] == "stop":
+            if not isinstance(message, WorkerRequest):  # Stop
                 channel.flush()
                 return
             _command(channel, sim, message)
@@ -610,9 +643,7 @@ def run(channel: Channel, sim: Simulation) -> None:
         try:
             sample = sim.tick()
         except Exception as error:  # the world broke: report, end this process (reset starts a new one)
-            channel.send(
-                ("crash", f"{type(error).__name__}: {error}", traceback.format_exc(), sim.seq, sim._tick_time())
-            )
+            channel.send(Crash(f"{type(error).__name__}: {error}", traceback.format_exc(), sim.seq, sim._tick_time()))
             _drain(channel)
             raise SystemExit(1) from None
         channel.send(sample, droppable=True)
@@ -621,20 +652,19 @@ def run(channel: Channel, sim: Simulation) -> None:
             next_due = time.perf_counter()
 
 
-def _command(channel: Channel, sim: Simulation, message: tuple[Any, ...]) -> None:
-    _, ident, op, args, owner = message
+def _command(channel: WorkerChannel, sim: Simulation, request: WorkerRequest) -> None:
     try:
-        result = sim.execute(op, args, owner)
+        result = sim.execute(request.body, request.owner)
         ok, error = True, None
     except CommandError as problem:
         result, ok, error = None, False, str(problem)
     except Exception as problem:  # a bug in a command must not end the simulation: answer it
         traceback.print_exc()
         result, ok, error = None, False, f"internal error: {type(problem).__name__}: {problem}"
-    channel.send(("r", ident, ok, result, error))
+    channel.send(WorkerReply(request.ident, ok, result, error))
 
 
-def _drain(channel: Channel, timeout: float = 2.0) -> None:
+def _drain(channel: WorkerChannel, timeout: float = 2.0) -> None:
     deadline = time.monotonic() + timeout
     fd = channel.fileno()
     while channel.backlog and time.monotonic() < deadline:

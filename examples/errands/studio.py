@@ -55,9 +55,17 @@ class ErrandsExample:
 
     def build_world(self, seed: int) -> World:
         """The errands world of §1.5, without a controller until :meth:`make_controller`."""
-        from examples.errands.world import ErrandsWorld
+        from examples.errands.world import MODEL_PATH, ErrandsWorld
 
-        return ErrandsWorld(seed, plan=self.plan, dt=DT, noise=self.noise, controller=False)
+        model = self.root / "model" / "errands_dd.json"  # the served folder's model, if it has one
+        return ErrandsWorld(
+            seed,
+            plan=self.plan,
+            dt=DT,
+            noise=self.noise,
+            controller=False,
+            model_path=model if model.is_file() else MODEL_PATH,
+        )
 
     def program_key(self, agent: Agent) -> str | None:
         """The robot runs the plan monitor."""

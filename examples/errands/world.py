@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from engine.dynamics.model import DDModel, load_model
-from engine.dynamics.system import DDSystem
+from engine.dynamics.system import DDSystem, TickRecord
 from engine.host import AgentController, RunStats, Scene, run_headless
 from engine.ir.model import Program
 from engine.planning.facts import FactDeriver, FactEvent
@@ -96,6 +96,37 @@ def _model(path: str, dt: float) -> DDModel:
 @cache
 def _task(domain: str, problem: str) -> Task:
     return load_task(domain, problem)
+
+
+@dataclass(frozen=True, slots=True)
+class _SparseRows:
+    """The model's B and W as sparse Python rows, for the studio's per-tick drive decomposition."""
+
+    b: list[list[tuple[int, float]]]
+    w_self: list[float]
+    w_others: list[list[tuple[int, float]]]
+    bias: list[float]
+    pair_behavior: list[int]
+    pair_actuator: list[int]
+
+
+_SPARSE: dict[int, tuple[DDModel, _SparseRows]] = {}
+
+
+def _sparse_rows(m: DDModel) -> _SparseRows:
+    hit = _SPARSE.get(id(m))
+    if hit is None or hit[0] is not m:
+        B, W = m.B.tolist(), m.W.tolist()
+        rows = _SparseRows(
+            b=[[(j, v) for j, v in enumerate(row) if v] for row in B],
+            w_self=[W[i][i] for i in range(m.n)],
+            w_others=[[(j, v) for j, v in enumerate(row) if v and j != i] for i, row in enumerate(W)],
+            bias=[round(v, 5) for v in m.bias.tolist()],
+            pair_behavior=[int(v) for v in m.pair_behavior.tolist()],
+            pair_actuator=[int(v) for v in m.pair_actuator.tolist()],
+        )
+        hit = _SPARSE[id(m)] = (m, rows)
+    return hit[1]
 
 
 @dataclass
@@ -190,6 +221,9 @@ class ErrandsWorld:
         self.dt = float(dt)
         physics_rate(self.dt)  # reject a tick the loop cannot run before building anything
         self.arena = Arena(layout)
+        self.model_path = Path(model_path)
+        #: the model file's name as the studio shows it (relative to the example folder)
+        self.model_name = f"{self.model_path.parent.name}/{self.model_path.name}"
         self.dd = DDSystem(_model(str(model_path), self.dt), seed=self.seed, dt=self.dt, noise=noise)
         self.behaviors = self.dd.model.behaviors
         self._roam = self.behaviors.index("roam") if "roam" in self.behaviors else -1
@@ -231,6 +265,13 @@ class ErrandsWorld:
         self.engine: Engine | None = None
         self._agents = (ErrandsAgent(self, None),)
         self.sense_hooks: list[Callable[[ErrandsWorld], None]] = []
+        # The studio's view of the plan and the interventions (commands.py); cheap per change.
+        self.versions: list[dict[str, Any]] = []
+        self.forced_op: str | None = None
+        self.interventions: list[tuple[float, str]] = []
+        self._last_op: str | None = None
+        self._op_since = 0.0
+        self._prev_tick: TickRecord | None = None
         if controller:
             self.attach(program if program is not None else _program(str(agents_path)))
 
@@ -279,8 +320,28 @@ class ErrandsWorld:
 
     def plan_from_facts(self, reason: str) -> None:
         """Run GRAPHPLAN from the derived facts (the basic behavior plan_from_facts)."""
-        self.board.plan_from(self.facts, self.t, reason)
+        board = self.board
+        first = len(board.results)
+        if self.versions:
+            self.versions[-1]["done"] = sorted(board.done)
+        board.plan_from(self.facts, self.t, reason)
         self._next = None
+        event = board.events[-1]
+        self.versions.append(
+            {
+                "version": len(self.versions) + 1,
+                "t": round(self.t * 1000),
+                "reason": reason,
+                "kind": event.kind,
+                "detail": event.detail,
+                "layers": board.plan.names() if board.solved and board.plan is not None else [],
+                "dropped": sorted(board.dropped),
+                "solved": board.solved,
+                "failed": {},
+                "done": [],
+                "results": (first, len(board.results)),
+            }
+        )
 
     def complete_operator(self) -> None:
         """Mark the monitor's operator done (the basic behavior complete_operator)."""
@@ -338,17 +399,23 @@ class ErrandsWorld:
         key = (out["plan.op"], out["plan.op.from"], out["plan.op.loc"], out["plan.op.obj"])
         if key != self._op_key:
             self._op_key = key
-            op = self._operator()
+            op = self._operator() if self.forced_op is None else self.forced_op
             if op != self.operator:
                 self.dd.set_current_operator(op)
                 self.operator = op
+                self._op_since = self.t
                 if op is not None:
                     rec.started.append(op)
+                    self._last_op = op
         op = self.operator
         mon = (out["plan.status"], op, out["plan.last_failure"])
         if mon != self._monitor_seen:
             self._monitor_seen = mon
             rec.monitor.append((round(self.t, 3), STATUSES[mon[0]], op, REASONS[mon[2]]))
+            failure = REASONS[mon[2]]
+            if mon[0] == 2 and failure in ("op_timeout", "precondition_lost") and self._last_op and self.versions:
+                self.versions[-1]["failed"][self._last_op] = failure  # the operator that was running
+        self._prev_tick = self.dd.last
         tick = self.dd.step(self.sensors)
         a = self.dd.actuators
         arena = self.arena
@@ -398,6 +465,63 @@ class ErrandsWorld:
         return all(
             it.present and not it.held and (it.x - ax) ** 2 + (it.y - ay) ** 2 <= r2 for it in self.arena.items.values()
         )
+
+    # -- interventions (the studio's world commands, commands.py) ---------------------------------
+
+    def commands(self) -> list[dict[str, Any]]:
+        """The world's commands (``engine.host.CommandableWorld``): perturb, monitor, query."""
+        from examples.errands.commands import describe
+
+        return describe(self)
+
+    def command(self, name: str, args: dict[str, Any]) -> Any:
+        """Carry out one world command (see :mod:`examples.errands.commands`)."""
+        from examples.errands.commands import run
+
+        return run(self, name, args)
+
+    def note_intervention(self, what: str) -> dict[str, Any]:
+        """Log an intervention by hand (shown in the plan panel) and return it as a reply."""
+        self.interventions.append((self.t, what))
+        return {"t": round(self.t * 1000), "done": what}
+
+    def force_operator(self, op: str | None) -> None:
+        """Run ``op``'s couplings whatever the monitor selects; None gives the monitor back the say."""
+        if op is not None:
+            self.dd.set_current_operator(op)  # validates before anything changes
+        self.forced_op = op
+        self._op_key = (-1, -1, -1, -1)  # re-read the monitor's choice (or the force) next tick
+
+    def swap_model(self, model: DDModel) -> str | None:
+        """Run ``model`` from now on, keeping α, actuators, slow variables, switches and the noise stream.
+
+        Returns:
+            None when swapped; else why not (other behavior, actuator or slow-variable names: the
+            model runs after a reset).
+        """
+        old = self.dd
+        om = old.model
+        if (model.behaviors, model.actuators, model.slow) != (om.behaviors, om.actuators, om.slow):
+            return "saved; the model names other behaviors, actuators or slow variables: Reset to run it"
+        new = DDSystem(model, seed=self.seed, dt=self.dt, noise=old.noise)
+        new.alpha, new.act, new.slow = old.alpha, old.act, old.slow
+        new.rng, new.t, new.s, new.sigma_op, new.pinned = old.rng, old.t, old.s, old.sigma_op, old.pinned
+        new.last = old.last
+        self.dd = new
+        _model.cache_clear()  # a reset builds from the file, which now holds this model
+        return None
+
+    def set_fact(self, fact: Fact, value: bool) -> None:
+        """Set or clear a derived fact by hand; logged as a fact event with the cause ``by hand``."""
+        deriver = self.deriver
+        facts = set(deriver.facts)
+        if value:
+            facts.add(fact)
+        else:
+            facts.discard(fact)
+        deriver.facts = self.facts = frozenset(facts)
+        deriver.events.append(FactEvent(self.t, fact, value, {"rule": "by hand", "phase": "forced"}))
+        self._next = None
 
     # -- perturbations ---------------------------------------------------------------------------
 
@@ -463,6 +587,16 @@ class ErrandsWorld:
             "behaviors": list(self.behaviors),
             "facts": list(self.task.facts),
             "goal": sorted(self.task.goal),
+            # What the studio shows for this world beyond the field (generic panel names, see
+            # docs/studio.md) and the world commands it offers (op world_command).
+            "panels": ["dynamics", "plan", "facts"],
+            "dd": {
+                "behaviors": list(self.behaviors),
+                "actuators": list(self.dd.model.actuators),
+                "theta": [round(v, 4) for v in self.dd.model.theta.tolist()],
+                "terms": list(ALPHA_TERMS),
+            },
+            "commands": self.commands(),
         }
 
     def dynamic_scene(self) -> Scene:
@@ -539,6 +673,69 @@ class ErrandsWorld:
             "plan_status": self.plan_status,
             "facts": sorted(self.facts),
             "truth": sorted(self.truth),
+            "tentative": sorted(self.deriver.tentative),
+            "fact_events": len(self.deriver.events),
+            "plan_version": len(self.versions),
+            "done": sorted(self.board.done),
+            "forced_op": self.forced_op,
+            "op_since": round(self._op_since * 1000),
+            "op_timeout": self._op_timeout(),
+            "interventions": len(self.interventions),
+        } | self._dd_scene()
+
+    def _op_timeout(self) -> int | None:
+        """The monitor's timeout (ms) for the running operator's schema (its XABSL constant)."""
+        op = self.operator
+        if op is None or self.engine is None:
+            return None
+        const = self.engine.program.constants.get(op.split(" ", 1)[0] + "_timeout")
+        return round(const.value) if const is not None else None
+
+    def _dd_scene(self) -> Scene:
+        """The last DD tick for the dynamics panel: Δα by term, drive u by source, actuator fusion.
+
+        ``terms``: per term of :data:`ALPHA_TERMS`, one value per behavior: the increments of the
+        tick (``relax`` = dt·λ(T − α), ``plan`` = Σ OCT dt·s·c·(Z − α), ``noise``) and the parts
+        of the drive u = sensors + self + others + bias whose sigmoid is the target T.
+        ``fusion``: per actuator, each behavior's α·λ·(m* − m) (1/s), ``decay`` and the value.
+        """
+        tick = self.dd.last
+        if tick is None:
+            return {}
+        m = self.dd.model
+        rows = _sparse_rows(m)
+        prev = self._prev_tick
+        # The record's own lists (no arrays: this runs for every sampled tick of the studio).
+        alpha0: list[float] = prev._alpha if prev is not None else m.alpha_init.tolist()
+        feats: list[float] = tick._features
+        n = m.n
+        sensors = [sum(b * feats[j] for j, b in rows.b[i]) for i in range(n)]
+        self_ex = [rows.w_self[i] * alpha0[i] for i in range(n)]
+        others = [sum(w * alpha0[j] for j, w in rows.w_others[i]) for i in range(n)]
+        plan = [0.0] * n
+        for d in tick._d_oct.values():
+            plan = [a + b for a, b in zip(plan, d, strict=True)]
+        parts = {
+            "relax": tick._d_relax,
+            "plan": plan,
+            "noise": tick._d_noise,
+            "T": tick._T,
+            "u": tick._u,
+            "sensors": sensors,
+            "self": self_ex,
+            "others": others,
+            "bias": rows.bias,
+        }
+        shares = [[0.0] * n for _ in m.actuators]
+        for p, c in enumerate(tick._contrib):
+            shares[rows.pair_actuator[p]][rows.pair_behavior[p]] = c
+        # One numpy rounding for all numbers (a hundred round() calls cost more than the rest).
+        values = np.round(np.array(list(parts.values())), 5).tolist()
+        fused = np.round(np.array(shares), 4).tolist()
+        decay, acts = np.round(np.array([tick._decay, tick._act]), 4).tolist()
+        return {
+            "terms": dict(zip(parts, values, strict=True)),
+            "fusion": {a: {"value": acts[j], "decay": decay[j], "shares": fused[j]} for j, a in enumerate(m.actuators)},
         }
 
     def status(self) -> Scene:
@@ -606,6 +803,9 @@ class ErrandsWorld:
             }
         return frame
 
+
+#: The per-behavior terms of a DD tick in the dynamic scene (see ``ErrandsWorld._dd_scene``).
+ALPHA_TERMS = ("relax", "plan", "noise", "T", "u", "sensors", "self", "others", "bias")
 
 #: Colours of the scene's shapes (the studio draws them as given).
 BEACON = "#ffd54a"

@@ -152,7 +152,7 @@ def test_the_speeds_of_the_docs_are_offered_and_the_clock_shows_one_step(
 
 def open_option_view(page: Any, option: str) -> int:
     option_id = int(
-        page.evaluate(f"{STUDIO}.session.indexOf({STUDIO}.session.selectedAgent).optionByName.get({option!r}).id")
+        page.evaluate(f"{STUDIO}.session.indexOf({STUDIO}.session.selectedRobot).optionByName.get({option!r}).id")
     )
     page.evaluate(f"{STUDIO}.session.openOptionById({option_id})")
     page.keyboard.press("o")
@@ -224,19 +224,19 @@ def test_the_tester_says_what_is_wrong_with_a_parameter(page: Any) -> None:
     assert "-57" in error.first.inner_text() and "57" in error.first.inner_text()
     assert page.get_attribute("#param-rate", "aria-invalid") == "true"
     page.wait_for_timeout(500)
-    assert page.evaluate(f"{STUDIO}.session.agentInView().forced") is None
+    assert page.evaluate(f"{STUDIO}.session.robotInView().forced") is None
     page.fill("#param-rate", "")
     page.click("#test-run")
     wait_until(page, "() => document.querySelector('.tester-panel .param-error').innerText.includes('number')")
     page.wait_for_timeout(300)
-    assert page.evaluate(f"{STUDIO}.session.agentInView().forced") is None
+    assert page.evaluate(f"{STUDIO}.session.robotInView().forced") is None
     # A good value clears the message and runs.
     page.fill("#param-rate", "20")
     page.click("#test-run")
     page.locator(".toast.ok", has_text="turn runs as the root").wait_for()
     assert page.locator(".tester-panel .param-error:visible").count() == 0
     page.click("#test-release")
-    wait_until(page, f"() => {STUDIO}.session.agentInView().forced === null")
+    wait_until(page, f"() => {STUDIO}.session.robotInView().forced === null")
 
 
 def test_an_override_is_released_with_one_click_and_its_row_fits(page: Any) -> None:
@@ -269,7 +269,7 @@ def test_an_override_is_released_with_one_click_and_its_row_fits(page: Any) -> N
     overridden.locator("button.release").click()
     row_of = f"document.querySelector(\".symbol-row[data-symbol='{name}']\")"
     wait_until(page, f"() => !{row_of}.classList.contains('overridden')")
-    assert page.evaluate(f"Object.keys({STUDIO}.session.agentInView().overrides ?? {{}}).length") == 0
+    assert page.evaluate(f"Object.keys({STUDIO}.session.robotInView().overrides ?? {{}}).length") == 0
 
 
 # -- layout at common sizes (issue 13, deliverable 5) ------------------------------------------------
@@ -386,9 +386,9 @@ def boxes_overlap(a: dict[str, float], b: dict[str, float]) -> bool:
 
 def test_robot_labels_on_the_field_do_not_overlap(page: Any, studio: StudioServer) -> None:
     # Crowd three robots of the home team on one spot: their labels ("forced", roles) meet.
-    agents = page.evaluate(f"{STUDIO}.session.agents.slice(0, 3).map(a => a.id)")
+    agents = page.evaluate(f"{STUDIO}.session.robots.slice(0, 3).map(a => a.id)")
     for agent in agents:
-        command(studio, "force_option", agent=agent, option="go_to_position", params={"x": -1500, "y": 0, "rot": 0})
+        command(studio, "force_option", robot=agent, option="go_to_position", params={"x": -1500, "y": 0, "rot": 0})
     overlaps: list[Any] = []
     closest = float("inf")
     try:
@@ -403,7 +403,7 @@ def test_robot_labels_on_the_field_do_not_overlap(page: Any, studio: StudioServe
             page.wait_for_timeout(200)
     finally:
         for agent in agents:
-            command(studio, "release", agent=agent)
+            command(studio, "release", robot=agent)
     assert closest < 500, f"the robots did not crowd (closest {closest} mm): the test proves nothing"
     assert not overlaps, f"{len(overlaps)} overlapping labels, e.g. {overlaps[0]}"
 
@@ -468,8 +468,8 @@ def test_a_twelve_state_option_is_legible_at_fit(page: Any, studio: StudioServer
     generation = page.evaluate(f"{STUDIO}.session.hello.generation")
     assert command(studio, "reload")["ok"]
     wait_until(page, f"() => {STUDIO}.session.hello.generation > {generation}")
-    agent = page.evaluate(f"{STUDIO}.session.selectedAgent")
-    command(studio, "force_option", agent=agent, option="many_states", params={})
+    agent = page.evaluate(f"{STUDIO}.session.selectedRobot")
+    command(studio, "force_option", robot=agent, option="many_states", params={})
     try:
         open_option_view(page, "many_states")
         wait_until(page, "() => document.querySelectorAll('.option-panel g.node[id^=\"state_\"]').length === 12")
@@ -536,4 +536,4 @@ def test_a_twelve_state_option_is_legible_at_fit(page: Any, studio: StudioServer
         page.wait_for_timeout(500)
         assert zoom_of(page) == fit
     finally:
-        command(studio, "release", agent=agent)
+        command(studio, "release", robot=agent)

@@ -33,7 +33,7 @@ def test_watch_robots_move_and_the_activation_path_changes(page: Any) -> None:
     moved = False
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and not (moved and len(shapes) >= 3):
-        shapes.update(page.evaluate(f"{STUDIO}.session.live.agents.map(a => a.shape)"))
+        shapes.update(page.evaluate(f"{STUDIO}.session.live.robots.map(a => a.shape)"))
         moved = page.evaluate(f"{STUDIO}.session.live.scene.robots") != robots_before
         page.wait_for_timeout(250)
     assert moved, "robots did not move"
@@ -60,9 +60,9 @@ def test_watch_robots_move_and_the_activation_path_changes(page: Any) -> None:
         [robots, box["width"], box["height"]],
     )
     page.mouse.click(box["x"] + target[0], box["y"] + target[1])
-    wait_until(page, f"() => {STUDIO}.session.selectedAgent === 2")
+    wait_until(page, f"() => {STUDIO}.session.selectedRobot === 2")
     # panels redraw on the next animation frame after the session changes
-    wait_until(page, "() => document.querySelector(\".chip[data-agent='2']\").classList.contains('selected')")
+    wait_until(page, "() => document.querySelector(\".chip[data-robot='2']\").classList.contains('selected')")
 
     page.wait_for_timeout(1500)
     stats = page.evaluate(f"{STUDIO}.stats")
@@ -76,14 +76,14 @@ def test_click_an_option_and_see_its_state_machine(page: Any) -> None:
     # The deepest active option: click it in the graph.
     option_id = page.evaluate(
         f"""() => {{
-            const path = {STUDIO}.session.agentInView().path.filter(n => n.kind === 'option');
+            const path = {STUDIO}.session.robotInView().path.filter(n => n.kind === 'option');
             return path[path.length - 1].option;
         }}"""
     )
     page.locator(f".graph-panel g#option_{option_id}").click()
     page.locator(".option-panel").wait_for(state="visible")
     wait_until(page, "() => document.querySelectorAll('.option-panel g.node').length >= 1")
-    name = page.evaluate(f"{STUDIO}.session.indexOf({STUDIO}.session.selectedAgent).optionById.get({option_id}).name")
+    name = page.evaluate(f"{STUDIO}.session.indexOf({STUDIO}.session.selectedRobot).optionById.get({option_id}).name")
     wait_until(page, f"() => document.querySelector('.option-title').innerText === {name!r}")
     # The active state is highlighted (the option may have left the path meanwhile: pick the
     # root option then, which is always active).
@@ -155,12 +155,12 @@ def test_force_an_option_with_a_parameter_and_see_it_at_the_root(page: Any) -> N
         "return r && r.textContent.includes('go_to_position') && r.textContent.includes('@x=1234'); }",
     )
     assert "go_to_position" in first.inner_text()
-    assert page.evaluate(f"{STUDIO}.session.agentInView().forced") is not None
+    assert page.evaluate(f"{STUDIO}.session.robotInView().forced") is not None
     wait_until(page, "() => document.querySelector('.chip.selected').classList.contains('forced')")
     screenshot(page, "test")
     page.keyboard.press("x")
     page.click("#test-release")
-    wait_until(page, f"() => {STUDIO}.session.agentInView() && {STUDIO}.session.agentInView().forced === null")
+    wait_until(page, f"() => {STUDIO}.session.robotInView() && {STUDIO}.session.robotInView().forced === null")
     page.keyboard.press("a")
     first_row = "document.querySelector('.activation-panel .option-row')"
     wait_until(page, f"() => !{first_row}.textContent.includes('go_to_position')")

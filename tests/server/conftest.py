@@ -137,12 +137,12 @@ class WsClient:
             self.seqs.append(message["seq"])
             self.log.append({k: message[k] for k in ("seq", "gen", "t", "full")})
             self.sizes.append(len(data))
-            for agent in message["agents"]:
-                values = self.values.setdefault(agent["id"], {"inputs": {}, "outputs": {}})
+            for robot in message["robots"]:
+                values = self.values.setdefault(robot["id"], {"inputs": {}, "outputs": {}})
                 for kind_ in ("inputs", "outputs"):
-                    if message["full"] and kind_ in agent:
+                    if message["full"] and kind_ in robot:
                         values[kind_] = {}
-                    values[kind_].update(agent.get(kind_, {}))
+                    values[kind_].update(robot.get(kind_, {}))
         elif kind == "reply":
             self.replies[message["id"]] = message
         else:
@@ -191,27 +191,27 @@ class WsClient:
         self.send({"type": "command", "id": ident, "op": op, **args})
         return self.until(lambda m: m["type"] == "reply" and m["id"] == ident, timeout)
 
-    def root(self, agent: int) -> list[Any]:
-        """The root node of an agent's path in the latest frame."""
+    def root(self, robot: int) -> list[Any]:
+        """The root node of a robot's path in the latest frame."""
         assert self.frame is not None
-        path = self.frame["agents"][agent]["path"]
-        assert path, f"agent {agent} has an empty path"
+        path = self.frame["robots"][robot]["path"]
+        assert path, f"robot {robot} has an empty path"
         return path[0]
 
-    def program(self, agent: int = 0) -> dict[str, Any]:
+    def program(self, robot: int = 0) -> dict[str, Any]:
         assert self.hello is not None
-        key = self.hello["structure"]["agents"][agent]["program"]
+        key = self.hello["structure"]["robots"][robot]["program"]
         return self.hello["structure"]["programs"][key]
 
-    def option_id(self, name: str, agent: int = 0) -> int:
-        return next(o["id"] for o in self.program(agent)["options"] if o["name"] == name)
+    def option_id(self, name: str, robot: int = 0) -> int:
+        return next(o["id"] for o in self.program(robot)["options"] if o["name"] == name)
 
-    def state_id(self, option: str, state: str, agent: int = 0) -> int:
-        o = next(o for o in self.program(agent)["options"] if o["name"] == option)
+    def state_id(self, option: str, state: str, robot: int = 0) -> int:
+        o = next(o for o in self.program(robot)["options"] if o["name"] == option)
         return next(s["id"] for s in o["states"] if s["name"] == state)
 
-    def symbol_id(self, kind: str, name: str, agent: int = 0) -> int:
-        return next(s["id"] for s in self.program(agent)[kind] if s["name"] == name)
+    def symbol_id(self, kind: str, name: str, robot: int = 0) -> int:
+        return next(s["id"] for s in self.program(robot)[kind] if s["name"] == name)
 
 
 @pytest.fixture

@@ -31,7 +31,7 @@ def test_status_structure_and_the_no_ui_page(api: TestClient) -> None:
     assert status["example"] == "demo" and status["version"] == 1 and status["programs"]["demo"]["ok"]
     assert status["ring"]["capacity"] == 120 * 40
     structure = api.get("/api/structure").json()
-    assert [a["name"] for a in structure["agents"]] == ["robot1", "robot2"]
+    assert [a["name"] for a in structure["robots"]] == ["robot1", "robot2"]
     assert structure["programs"]["demo"]["options"][0]["states"]
     page = api.get("/")
     assert page.status_code == 200 and "web/dist" in page.text
@@ -109,7 +109,7 @@ def test_compile_unsaved_text(api: TestClient) -> None:
     error = next(d for d in body["diagnostics"] if d["severity"] == "error")
     assert error["file"] == "options/play.xabsl" and error["span"]["line"] > 1
     assert api.get("/api/files/options/play.xabsl").json()["text"] == text, "compile never saves"
-    assert api.post("/api/compile", json={"path": "../x.xabsl", "text": ""}).status_code == 400
+    assert api.post("/api/compile", json={"path": "../x.xabsl", "text": ""}).status_code == 422, "not a file path"
 
 
 def test_graphs_are_svg_and_cached(api: TestClient) -> None:
@@ -137,16 +137,17 @@ def test_command_endpoint_and_the_activation_log(api: TestClient) -> None:
     assert stepped["ok"] and stepped["result"]["t"] >= 29 * 25
     bad = api.post("/api/command", json={"op": "warp"})
     assert bad.status_code == 400 and "unknown op" in bad.json()["detail"]
-    assert api.post("/api/command", json={"op": "release", "agent": 7}).status_code == 400
-    assert api.post("/api/command", json={"op": "history"}).status_code == 400, "history needs the websocket"
+    assert api.post("/api/command", json={"op": "release", "robot": 7}).status_code == 409
+    assert api.post("/api/command", json={"op": "history"}).status_code == 409, "history needs the websocket"
     log = api.get("/api/log", params={"t0": 100, "t1": 400})
     assert log.headers["content-type"].startswith("application/x-ndjson")
     lines = [orjson.loads(line) for line in log.text.splitlines()]
     assert [line["t"] for line in lines] == list(range(100, 401, 25))
-    first = lines[0]["agents"][0]
+    first = lines[0]["robots"][0]
     assert first["name"] == "robot1" and first["path"][0]["option"] == "play"
     assert "ball.distance" in first["inputs"] and "activity" in first["outputs"]
-    assert api.get("/api/log", params={"t0": 5, "t1": 1}).status_code == 400
+    empty = api.get("/api/log", params={"t0": 5, "t1": 1})
+    assert empty.status_code == 200 and empty.text == "", "an empty interval has no ticks"
     assert api.get("/api/log", params={"t0": "x"}).status_code == 422
 
 
@@ -155,7 +156,7 @@ def test_websocket_hello_frames_and_errors(api: TestClient) -> None:
         hello = orjson.loads(ws.receive_text())
         assert hello["type"] == "hello" and hello["version"] == 1 and hello["scene"]["kind"] == "bench"
         frame = orjson.loads(ws.receive_text())
-        assert frame["type"] == "frame" and frame["full"] is True and len(frame["agents"]) == 2
+        assert frame["type"] == "frame" and frame["full"] is True and len(frame["robots"]) == 2
         ws.send_text("nope")
         while (message := orjson.loads(ws.receive_text()))["type"] != "reply":
             pass
@@ -227,3 +228,41 @@ def test_policy_for_hosts() -> None:
     assert not policy.origin_ok({"host": "localhost:8000", "origin": "null"})
     assert policy.origin_ok({"host": "localhost", "origin": "http://localhost:80"})
     assert policy.host_ok({"host": "[::1]:8000"}) and not policy.host_ok({"host": "127.0.0.1.nip.io:8000"})
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": ' + b"9" * 400 + b"}",
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": 1e999}',
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": NaN}',
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": Infinity}',
+        b'{"op": "override_input", "robot": 0, "symbol": "ball.distance", "value": -Infinity}',
+        b'{"op": "force_behavior", "robot": 0, "behavior": "walk", "params": {"speed": ' + b"9" * 400 + b"}}",
+        b'{"op": "force_behavior", "robot": 0, "behavior": "walk", "params": {"speed": 1e999}}',
+        b'{"op": "force_option", "robot": 0, "option": "approach_ball", "params": {"stop_at": NaN}}',
+    ],
+)
+def test_non_finite_and_out_of_range_numbers_over_rest_are_a_clear_400(api: TestClient, body: bytes) -> None:
+    """Issue 18 item 3: was ``internal error: OverflowError`` (a 400 saying nothing) or accepted NaN."""
+    answer = api.post("/api/command", content=body, headers={"Content-Type": "application/json"})
+    assert answer.status_code == 400, answer.text
+    reply = answer.json()
+    assert reply["type"] == "reply" and reply["ok"] is False
+    assert "internal error" not in reply["error"] and reply["detail"] == reply["error"]
+    assert "finite" in reply["error"] or "less than or equal" in reply["error"] or "valid number" in reply["error"]
+    status = api.get("/api/status").json()
+    assert status["simulation"]["running"], "the simulation is unharmed"
+
+
+def test_rest_and_websocket_commands_answer_the_same_errors(api: TestClient) -> None:
+    body = {"op": "force_option", "robot": 0, "option": "approach_ball", "params": {"stop_at": "far"}, "id": 9}
+    rest = api.post("/api/command", json=body).json()
+    with api.websocket_connect("ws://127.0.0.1/ws") as ws:
+        ws.send_text(orjson.dumps({"type": "command", **body}).decode())
+        while (message := orjson.loads(ws.receive_text()))["type"] != "reply":
+            pass
+    assert rest["ok"] is False and message["ok"] is False and message["id"] == rest["id"] == 9
+    assert message["error"] == rest["error"]
+    unknown = api.post("/api/command", json={"op": "release", "agent": 0}).json()
+    assert "agent: unknown argument" in unknown["error"] and "robot: Field required" in unknown["error"]

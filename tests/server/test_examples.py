@@ -81,7 +81,7 @@ def test_an_agents_file_deep_in_a_tree_serves_its_include_closure_only(tmp_path:
             assert not any(p.startswith("tools/") for p in listed)
             assert httpx.get(server.url + "/api/files/tools/other.xabsl").status_code == 403
             client = client_for(server)
-            frame = client.frame_after(lambda f: bool(f["agents"][0]["path"]))
+            frame = client.frame_after(lambda f: bool(f["robots"][0]["path"]))
             assert frame["scene"]["robots"]
     finally:
         session.stop()
@@ -127,8 +127,8 @@ def test_a_users_folder_outside_the_package_runs_through_its_studio_py(tmp_path:
         with LiveServer(session) as server:
             client = client_for(server)
             hello = client.until(lambda m: m["type"] == "hello")
-            assert len(hello["structure"]["agents"]) == 3
-            frame = client.frame_after(lambda f: all(a["path"] for a in f["agents"]))
+            assert len(hello["structure"]["robots"]) == 3
+            frame = client.frame_after(lambda f: all(a["path"] for a in f["robots"]))
             assert len(frame["scene"]["robots"]) == 3
     finally:
         session.stop()
@@ -214,7 +214,7 @@ def _names(client: WsClient) -> list[str]:
     options = {o["id"]: o["name"] for o in program["options"]}
     behaviors = {b["id"]: b["name"] for b in program["behaviors"]}
     assert client.frame is not None
-    return [options[n[2]] if n[0] == 0 else behaviors[n[2]] for n in client.frame["agents"][0]["path"]]
+    return [options[n[2]] if n[0] == 0 else behaviors[n[2]] for n in client.frame["robots"][0]["path"]]
 
 
 def test_errands_runs_live_with_the_plan_monitor_as_the_robots_engine(
@@ -229,7 +229,7 @@ def test_errands_runs_live_with_the_plan_monitor_as_the_robots_engine(
         assert len(scene["walls"]) == 4 and scene["robot_radius"] == 200
         labels = {s.get("label") for s in scene["shapes"]}
         assert {"a", "b", "c"} <= labels and sum(s["shape"] == "rect" for s in scene["shapes"]) == 3
-        assert hello["structure"]["agents"] == [
+        assert hello["structure"]["robots"] == [
             {"id": 0, "name": "robot", "team": "errands", "number": 1, "program": "behavior"}
         ]
         # The monitor plans, then drives the first operator: goto a c.
@@ -244,7 +244,7 @@ def test_errands_runs_live_with_the_plan_monitor_as_the_robots_engine(
         moved = client.frame_after(lambda f: f["scene"]["robots"][0][:2] != start[:2], timeout=20)
         assert moved["scene"]["s"]["goto a c"] > 0.0
         # Forcing works on the plan monitor like on any behavior: hold it in `finished`.
-        reply = client.command("force_option", agent=0, option="execute_plan")
+        reply = client.command("force_option", robot=0, option="execute_plan")
         assert reply["ok"], reply
         status = httpx.get(server.url + "/api/status").json()
         assert status["example"] == "errands" and status["programs"]["behavior"]["ok"]

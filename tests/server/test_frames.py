@@ -9,6 +9,7 @@ import orjson
 
 from server.bench_world import BenchExample
 from server.frames import Entry, FrameEncoder, FrameRecorder, Generation, Ring, history
+from server.messages import FromWorker, NewGeneration, Sample
 from server.protocol import FULL_EVERY
 from server.session import Session
 from server.worker import Simulation, WorkerConfig
@@ -27,10 +28,10 @@ class _Recorded:
         self._emit(self.sim.generation("connect"))
         self._emit(self.sim.sample())
 
-    def _emit(self, message: tuple, droppable: bool = False) -> bool:
-        if message[0] == "g":
+    def _emit(self, message: FromWorker, droppable: bool = False) -> bool:
+        if isinstance(message, NewGeneration):
             self.generation = Generation.from_message(message)
-        elif message[0] == "s":
+        elif isinstance(message, Sample):
             self.latest = self.recorder.record(self.generation, message)
         return True
 
@@ -44,7 +45,7 @@ def _session(demo_dir: Path, ring_seconds: float = 120.0) -> _Recorded:
 
 
 def _apply(state: dict[int, dict[str, dict[str, object]]], frame: dict) -> None:
-    for agent in frame["agents"]:
+    for agent in frame["robots"]:
         values = state.setdefault(agent["id"], {"inputs": {}, "outputs": {}})
         for kind in ("inputs", "outputs"):
             if frame["full"]:
@@ -59,13 +60,13 @@ def test_path_nodes_use_program_ids(demo_dir: Path) -> None:
     frame = orjson.loads(session.ring.latest.delta)  # type: ignore[union-attr]
     program = session.generation.structure["programs"]["demo"]
     options = {o["id"]: o for o in program["options"]}
-    root = frame["agents"][0]["path"][0]
+    root = frame["robots"][0]["path"][0]
     kind, depth, option_id, state_id, option_time, state_time, decided_in, leaf, params = root
     assert (kind, depth) == (0, 0) and options[option_id]["name"] == "play"
     assert options[option_id]["states"][state_id]["name"] in {"wait", "chase", "search"}
     assert option_time == 725 and 0 <= state_time <= option_time and leaf >= 0 and decided_in >= 0
     assert params == []
-    depths = [node[1] for node in frame["agents"][0]["path"]]
+    depths = [node[1] for node in frame["robots"][0]["path"]]
     assert depths[0] == 0 and all(b <= a + 1 for a, b in itertools.pairwise(depths))
 
 
@@ -103,7 +104,7 @@ def test_full_frames_at_least_every_full_every_ticks_and_for_filters(demo_dir: P
         frame = orjson.loads(encoder.frame(last, session.generation.number, entry, frozenset({1})))
         if frame["full"]:
             fulls.append(entry.seq)
-        assert "inputs" not in frame["agents"][0] and "inputs" in frame["agents"][1]
+        assert "inputs" not in frame["robots"][0] and "inputs" in frame["robots"][1]
         last = entry.seq
     assert len(fulls) >= 3 and all(b - a <= FULL_EVERY for a, b in itertools.pairwise(fulls))
 

@@ -7,6 +7,7 @@ first ones run the soccer example (2 vs 2, both XABSL teams) to prove the produc
 from __future__ import annotations
 
 import itertools
+import logging
 import time
 from pathlib import Path
 from typing import Any
@@ -25,7 +26,7 @@ def _names(client: WsClient, agent: int) -> list[str]:
     options = {o["id"]: o["name"] for o in program["options"]}
     behaviors = {b["id"]: b["name"] for b in program["behaviors"]}
     assert client.frame is not None
-    return [options[n[2]] if n[0] == 0 else behaviors[n[2]] for n in client.frame["agents"][agent]["path"]]
+    return [options[n[2]] if n[0] == 0 else behaviors[n[2]] for n in client.frame["robots"][agent]["path"]]
 
 
 # -- soccer ---------------------------------------------------------------------------------------
@@ -36,7 +37,7 @@ def test_soccer_hello_and_frames_for_all_agents(soccer_session: Session, client_
         client = client_for(server)
         hello = client.until(lambda m: m["type"] == "hello")
         assert hello["version"] == 1 and hello["reason"] == "connect"
-        agents = hello["structure"]["agents"]
+        agents = hello["structure"]["robots"]
         assert [(a["team"], a["number"]) for a in agents] == [("blue", 1), ("blue", 2), ("red", 1), ("red", 2)]
         assert {a["program"] for a in agents} == {"behavior", "chase"}
         assert set(hello["structure"]["programs"]) == {"behavior", "chase"}
@@ -45,8 +46,8 @@ def test_soccer_hello_and_frames_for_all_agents(soccer_session: Session, client_
         assert first["full"] is True
         for _ in range(10):
             frame = client.frame_after()
-        assert [a["id"] for a in frame["agents"]] == [0, 1, 2, 3]
-        for agent in frame["agents"]:
+        assert [a["id"] for a in frame["robots"]] == [0, 1, 2, 3]
+        for agent in frame["robots"]:
             assert agent["path"], "every XABSL agent has an activation path"
         assert _names(client, 0)[0] == "play_soccer"
         assert len(frame["scene"]["robots"]) == 4
@@ -70,11 +71,11 @@ def test_soccer_frames_are_compact(soccer_session: Session, client_for: Any) -> 
 def test_subscribe_rate_and_agent_filter(live_demo: LiveServer, client_for: Any) -> None:
     client = client_for(live_demo)
     client.frame_after()
-    client.send({"type": "subscribe", "rate": 5, "agents": [1], "id": "s"})
+    client.send({"type": "subscribe", "rate": 5, "robots": [1], "id": "s"})
     assert client.until(lambda m: m["type"] == "reply" and m["id"] == "s")["ok"] is True
     frame = client.frame_after()
     assert frame["full"] is True, "a new subscription starts with a full frame"
-    assert "inputs" not in frame["agents"][0] and "inputs" in frame["agents"][1]
+    assert "inputs" not in frame["robots"][0] and "inputs" in frame["robots"][1]
     started = time.monotonic()
     seqs = [client.frame_after()["seq"] for _ in range(5)]
     elapsed = time.monotonic() - started
@@ -100,7 +101,7 @@ def test_delta_values_converge_to_exact_values(live_demo: LiveServer, client_for
     # The full frame's values equal the latest tick's values the server sampled.
     gen = latest.gen
     assert latest.inputs is not None
-    for i, agent in enumerate(frame["agents"]):
+    for i, agent in enumerate(frame["robots"]):
         expected = {str(k): v for k, v in zip(gen.input_ids[i], latest.inputs[i], strict=True)}
         assert agent["inputs"] == expected
 
@@ -171,36 +172,36 @@ def test_force_option_with_parameters_then_release(live_demo: LiveServer, client
     client = client_for(live_demo)
     client.frame_after()
     approach = client.option_id("approach_ball")
-    reply = client.command("force_option", agent=1, option="approach_ball", params={"stop_at": 123})
+    reply = client.command("force_option", robot=1, option="approach_ball", params={"stop_at": 123})
     assert reply["ok"], reply
-    frame = client.wait_frame(lambda f: f["agents"][1]["path"] and f["agents"][1]["path"][0][2] == approach)
-    root = frame["agents"][1]["path"][0]
+    frame = client.wait_frame(lambda f: f["robots"][1]["path"] and f["robots"][1]["path"][0][2] == approach)
+    root = frame["robots"][1]["path"][0]
     assert root[:2] == [0, 0] and root[8] == [123.0]
-    assert frame["agents"][1]["forced"] == [0, approach]
+    assert frame["robots"][1]["forced"] == [0, approach]
     assert _names(client, 0)[0] == "play", "the other agent is not forced"
-    assert client.command("release", agent=1)["ok"]
+    assert client.command("release", robot=1)["ok"]
     play = client.option_id("play")
-    frame = client.wait_frame(lambda f: f["agents"][1]["path"][0][2] == play)
-    assert "forced" not in frame["agents"][1]
+    frame = client.wait_frame(lambda f: f["robots"][1]["path"][0][2] == play)
+    assert "forced" not in frame["robots"][1]
 
 
 def test_force_behavior_by_id_and_bad_forces(live_demo: LiveServer, client_for: Any) -> None:
     client = client_for(live_demo)
     client.frame_after()
     walk = next(b["id"] for b in client.program()["behaviors"] if b["name"] == "walk")
-    assert client.command("force_behavior", agent=0, behavior=walk, params={"speed": 100, "direction": -20})["ok"]
-    frame = client.wait_frame(lambda f: f["agents"][0]["path"][0][0] == 1)
-    assert frame["agents"][0]["path"][0] == [1, 0, walk, frame["agents"][0]["path"][0][3], [100.0, -20.0]]
+    assert client.command("force_behavior", robot=0, behavior=walk, params={"speed": 100, "direction": -20})["ok"]
+    frame = client.wait_frame(lambda f: f["robots"][0]["path"][0][0] == 1)
+    assert frame["robots"][0]["path"][0] == [1, 0, walk, frame["robots"][0]["path"][0][3], [100.0, -20.0]]
     for args, message in [
-        ({"agent": 0, "option": "nope"}, "unknown option"),
-        ({"agent": 9, "option": "play"}, "agent"),
-        ({"agent": 0, "option": "approach_ball", "params": {"nope": 1}}, "no parameter"),
-        ({"agent": 0, "option": "approach_ball", "params": {"stop_at": True}}, "decimal"),
-        ({"agent": 0, "option": 9999}, "unknown option id"),
+        ({"robot": 0, "option": "nope"}, "unknown option"),
+        ({"robot": 9, "option": "play"}, "robot"),
+        ({"robot": 0, "option": "approach_ball", "params": {"nope": 1}}, "no parameter"),
+        ({"robot": 0, "option": "approach_ball", "params": {"stop_at": True}}, "decimal"),
+        ({"robot": 0, "option": 9999}, "unknown option id"),
     ]:
         reply = client.command("force_option", **args)
         assert reply["ok"] is False and message in reply["error"], reply
-    assert client.command("release", agent=0)["ok"]
+    assert client.command("release", robot=0)["ok"]
 
 
 def test_override_input_changes_a_decision_and_release(live_demo: LiveServer, client_for: Any) -> None:
@@ -208,31 +209,31 @@ def test_override_input_changes_a_decision_and_release(live_demo: LiveServer, cl
     client.wait_frame(lambda f: f["t"] > 600)  # the demo's game is playing after 500 ms
     seen = client.symbol_id("inputs", "ball.seen")
     chase = client.state_id("play", "chase")
-    assert client.command("override_input", agent=0, symbol="ball.seen", value=True)["ok"]
-    frame = client.wait_frame(lambda f: f["agents"][0]["path"][0][3] == chase and "overrides" in f["agents"][0])
-    assert frame["agents"][0]["overrides"] == {str(seen): True}
+    assert client.command("override_input", robot=0, symbol="ball.seen", value=True)["ok"]
+    frame = client.wait_frame(lambda f: f["robots"][0]["path"][0][3] == chase and "overrides" in f["robots"][0])
+    assert frame["robots"][0]["overrides"] == {str(seen): True}
     assert client.values[0]["inputs"][str(seen)] is True
-    explained = client.command("explain", agent=0, option="play")["result"]
+    explained = client.command("explain", robot=0, option="play")["result"]
     assert explained["target_name"] == "chase" or explained["decided_in_name"] == "chase"
     assert all({"text", "value", "branch", "span"} <= set(c) for c in explained["conditions"])
     game_state = client.symbol_id("inputs", "game.state")
     # An enum value by element index: game.state.init (0) makes the common decision go to wait.
-    assert client.command("override_input", agent=0, symbol=game_state, value=0)["ok"]
+    assert client.command("override_input", robot=0, symbol=game_state, value=0)["ok"]
     wait = client.state_id("play", "wait")
-    client.wait_frame(lambda f: f["agents"][0]["path"][0][3] == wait)
-    assert client.command("release_input", agent=0)["ok"]
-    frame = client.wait_frame(lambda f: f["agents"][0]["path"][0][3] != wait)
-    assert "overrides" not in frame["agents"][0]
-    assert client.command("override_input", agent=0, symbol="nope", value=1)["ok"] is False
-    assert client.command("override_input", agent=0, symbol="ball.seen")["ok"] is False
+    client.wait_frame(lambda f: f["robots"][0]["path"][0][3] == wait)
+    assert client.command("release_input", robot=0)["ok"]
+    frame = client.wait_frame(lambda f: f["robots"][0]["path"][0][3] != wait)
+    assert "overrides" not in frame["robots"][0]
+    assert client.command("override_input", robot=0, symbol="nope", value=1)["ok"] is False
+    assert client.command("override_input", robot=0, symbol="ball.seen")["ok"] is False
 
 
 def test_explain_history_select_agent_reset_agent_reload(live_demo: LiveServer, client_for: Any) -> None:
     client = client_for(live_demo)
     client.wait_frame(lambda f: f["t"] > 1200)
-    explained = client.command("explain", agent=0, option="play")["result"]
+    explained = client.command("explain", robot=0, option="play")["result"]
     assert explained["option_name"] == "play" and explained["conditions"][0]["text"] == "game.state != playing"
-    assert client.command("explain", agent=0, option="nope")["ok"] is False
+    assert client.command("explain", robot=0, option="nope")["ok"] is False
 
     reply = client.command("history", t0=200, t1=800)
     assert reply["ok"], reply
@@ -249,11 +250,11 @@ def test_explain_history_select_agent_reset_agent_reload(live_demo: LiveServer, 
     assert frames[0]["t"] >= 200 and frames[-1]["t"] <= 800
     assert [f["seq"] for f in frames] == list(range(frames[0]["seq"], frames[0]["seq"] + len(frames)))
 
-    assert client.command("select_agent", agent=0, name="searcher")["ok"]
+    assert client.command("select_agent", robot=0, agent="searcher")["ok"]
     search = client.option_id("search_ball")
-    client.wait_frame(lambda f: f["agents"][0]["path"][0][2] == search)
-    assert client.command("select_agent", agent=0, name="nobody")["ok"] is False
-    assert client.command("reset_agent", agent=0)["ok"]
+    client.wait_frame(lambda f: f["robots"][0]["path"][0][2] == search)
+    assert client.command("select_agent", robot=0, agent="nobody")["ok"] is False
+    assert client.command("reset_agent", robot=0)["ok"]
     reloaded = client.command("reload")
     assert reloaded["ok"] and reloaded["result"]["programs"]["demo"]["ok"]
     client.wait_hello("reload")
@@ -280,27 +281,27 @@ def test_forces_are_released_when_the_forcing_client_disconnects(live_demo: Live
     forcing, watching = client_for(live_demo), client_for(live_demo)
     forcing.frame_after()
     kick = next(b["id"] for b in forcing.program()["behaviors"] if b["name"] == "kick")
-    assert forcing.command("force_behavior", agent=0, behavior="kick", params={"strength": 0.5})["ok"]
-    assert forcing.command("override_input", agent=1, symbol="ball.seen", value=True)["ok"]
-    watching.wait_frame(lambda f: f["agents"][0]["path"][0][:3] == [1, 0, kick])
+    assert forcing.command("force_behavior", robot=0, behavior="kick", params={"strength": 0.5})["ok"]
+    assert forcing.command("override_input", robot=1, symbol="ball.seen", value=True)["ok"]
+    watching.wait_frame(lambda f: f["robots"][0]["path"][0][:3] == [1, 0, kick])
     forcing.ws.close()
-    frame = watching.wait_frame(lambda f: f["agents"][0]["path"][0][0] == 0, timeout=10)
-    assert "forced" not in frame["agents"][0]
-    watching.wait_frame(lambda f: "overrides" not in f["agents"][1])
+    frame = watching.wait_frame(lambda f: f["robots"][0]["path"][0][0] == 0, timeout=10)
+    assert "forced" not in frame["robots"][0]
+    watching.wait_frame(lambda f: "overrides" not in f["robots"][1])
 
 
 def test_a_force_taken_over_by_another_client_survives_the_first_ones_disconnect(
     live_demo: LiveServer, client_for: Any
 ) -> None:
     first, second = client_for(live_demo), client_for(live_demo)
-    assert first.command("force_option", agent=0, option="search_ball")["ok"]
-    assert second.command("force_option", agent=0, option="approach_ball")["ok"]
+    assert first.command("force_option", robot=0, option="search_ball")["ok"]
+    assert second.command("force_option", robot=0, option="approach_ball")["ok"]
     first.ws.close()
     approach = second.option_id("approach_ball")
-    second.wait_frame(lambda f: f["agents"][0]["path"][0][2] == approach)
+    second.wait_frame(lambda f: f["robots"][0]["path"][0][2] == approach)
     time.sleep(0.3)
     frame = second.frame_after()
-    assert frame["agents"][0]["forced"] == [0, approach]
+    assert frame["robots"][0]["forced"] == [0, approach]
 
 
 # -- behavior files and hot reload ---------------------------------------------------------------------
@@ -399,7 +400,7 @@ def test_good_edit_sends_hello_and_the_new_state_shows(live_demo: LiveServer, cl
     hello = client.wait_hello("reload")
     play = next(o for o in hello["structure"]["programs"]["demo"]["options"] if o["name"] == "play")
     spin = next(s["id"] for s in play["states"] if s["name"] == "spin")
-    frame = client.wait_frame(lambda f: f["agents"][0]["path"][0][3] == spin)
+    frame = client.wait_frame(lambda f: f["robots"][0]["path"][0][3] == spin)
     assert frame["full"] is True or client.frames > 1
     assert _names(client, 0)[:2] == ["play", "turn"]
 
@@ -527,3 +528,42 @@ def test_a_client_that_never_reads_does_not_slow_the_simulation_or_grow_memory(
         other = client_for(live_demo)
         other.frame_after()
         other.frame_after()
+
+
+def test_rapid_connect_and_disconnect_logs_no_send_after_close(
+    live_demo: LiveServer, client_for: Any, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Issue 18 item 7: a peer gone before its hello was sent logged ``RuntimeError: Unexpected ASGI
+    message 'websocket.send', after sending 'websocket.close'`` (the sender task sent on a closed socket)."""
+    import base64
+    import os
+    import socket
+    import struct
+
+    caplog.set_level(logging.DEBUG, logger="xabsl.server")
+    request = (
+        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1:%d\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "Sec-WebSocket-Key: %s\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
+    for i in range(150):
+        with socket.create_connection(("127.0.0.1", live_demo.port)) as s:
+            key = base64.b64encode(os.urandom(16)).decode()
+            s.sendall((request % (live_demo.port, key)).encode())
+            if i % 2:
+                s.recv(256)
+                # A frame a client must not send (unmasked): uvicorn answers with a close of its
+                # own, and every send of ours after it used to raise.
+                s.sendall(b"\x81\x05hello")
+                time.sleep(0.02)
+            # An abortive close (RST): the server finds out while it sends the hello and frames.
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    time.sleep(1.0)
+    client = client_for(live_demo)
+    client.frame_after()
+    assert client.command("status")["ok"]
+    problems = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    assert not [p for p in problems if "Unexpected ASGI message" in p or "RuntimeError" in p], problems[:3]
+    deadline = time.monotonic() + 10
+    while len(live_demo.studio.hub.clients) > 1 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert len(live_demo.studio.hub.clients) == 1, "every aborted connection was cleaned up"

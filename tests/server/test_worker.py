@@ -11,6 +11,7 @@ from typing import Any
 
 import httpx2 as httpx
 
+from server.bench_world import BenchExample
 from server.channel import Channel
 from server.session import Session
 from tests.server.conftest import LiveServer
@@ -100,3 +101,21 @@ def test_the_channel_drops_samples_instead_of_blocking_and_keeps_the_rest_in_ord
     assert [m[1] for m in received[:-1]] == sent and received[-1] == ("r", "must arrive")
     sender.close()
     receiver.close()
+
+
+def test_a_number_beyond_a_decimal_is_a_command_error_even_past_the_edge(demo_dir: Path) -> None:
+    """Issue 18 item 3 in the simulation itself: no ``internal error: OverflowError``."""
+    import pytest
+
+    from server.messages import ForceBehavior, OverrideInput
+    from server.worker import CommandError, Simulation, WorkerConfig
+
+    session = Session(BenchExample(demo_dir), seed=4)  # compiles; its process is never started
+    programs = {k: (s.running, s.running_json) for k, s in session.programs.items()}
+    sim = Simulation(WorkerConfig(session.example, seed=4, programs=programs))  # type: ignore[arg-type]
+    sim.generation("connect")
+    with pytest.raises(CommandError, match="out of the range of a decimal"):
+        sim.execute(OverrideInput(op="override_input", robot=0, symbol="ball.distance", value=10**400))
+    with pytest.raises(CommandError, match="out of the range of a decimal"):
+        sim.execute(ForceBehavior(op="force_behavior", robot=0, behavior="walk", params={"speed": -(10**400)}))
+    assert sim.execute(OverrideInput(op="override_input", robot=0, symbol="ball.distance", value=2**63 - 1)) is None

@@ -8,14 +8,16 @@
 import { Backoff } from "./backoff";
 import {
   type ClientMessage,
+  type CommandArgs,
   type CommandOp,
-  type ServerEvent,
+  type CommandResults,
   type Frame,
   type Hello,
   type HistoryChunk,
+  PROTOCOL_VERSION,
   parseServerMessage,
   type Reply,
-  PROTOCOL_VERSION,
+  type ServerEvent,
 } from "./protocol";
 
 export type LinkState = "connecting" | "live" | "waiting";
@@ -139,7 +141,7 @@ export class Connection {
     }
     this.socket = socket;
     socket.onopen = () => {
-      this.sendRaw({ type: "subscribe", rate: this.rate, agents: null });
+      this.sendRaw({ type: "subscribe", rate: this.rate, robots: null });
     };
     socket.onmessage = (ev) => {
       if (typeof ev.data === "string") this.receive(ev.data);
@@ -249,14 +251,21 @@ export class Connection {
   /// Change the frame rate wanted (frames per second, 1..60).
   subscribe(rate: number): void {
     this.rate = Math.max(1, Math.min(60, Math.round(rate)));
-    this.sendRaw({ type: "subscribe", rate: this.rate, agents: null });
+    this.sendRaw({ type: "subscribe", rate: this.rate, robots: null });
   }
 
   /// Send a command and wait for its reply; rejects with the server's error text.
-  command<T = unknown>(op: CommandOp, args: Record<string, unknown> = {}): Promise<T> {
+  ///
+  /// `args` are the op's arguments as `server/messages.py` declares them (generated types).
+  command<Op extends CommandOp>(
+    op: Op,
+    ...rest: {} extends CommandArgs<Op> ? [args?: CommandArgs<Op>] : [args: CommandArgs<Op>]
+  ): Promise<CommandResults[Op]> {
+    type T = CommandResults[Op];
     const id = this.nextId++;
+    const args = rest[0] ?? {};
     return new Promise<T>((resolve, reject) => {
-      if (!this.sendRaw({ type: "command", id, op, ...args })) {
+      if (!this.sendRaw({ type: "command", id, op, ...args } as ClientMessage)) {
         reject(new CommandError("not connected"));
         return;
       }
@@ -275,7 +284,7 @@ export class Connection {
       this.histories.set(id, { frames: [], resolve, reject });
     });
     frames.catch(() => undefined); // awaited below, or abandoned when the reply fails
-    const reply = new Promise<{ frames: number; chunks: number }>((resolve, reject) => {
+    const reply = new Promise<CommandResults["history"]>((resolve, reject) => {
       if (!this.sendRaw({ type: "command", id, op: "history", t0, t1, every })) {
         this.histories.delete(id);
         reject(new CommandError("not connected"));
@@ -287,7 +296,7 @@ export class Connection {
       }, this.options.commandTimeoutMs ?? 10000);
       this.pending.set(id, { resolve: resolve as (v: unknown) => void, reject, timer });
     });
-    let result: { frames: number; chunks: number };
+    let result: CommandResults["history"];
     try {
       result = await reply;
     } catch (error) {

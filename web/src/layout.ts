@@ -181,4 +181,19 @@ export class Tabs {
   isActive(name: string): boolean {
     return this.active === name;
   }
+
+  /// Show or hide a tab (panels a world announces); hiding the active one activates the first shown.
+  setAvailable(name: string, on: boolean): void {
+    const button = this.buttons.get(name);
+    if (!button || button.hidden === !on) return;
+    button.hidden = !on;
+    if (!on && this.active === name) {
+      const first = [...this.buttons].find(([, b]) => !b.hidden)?.[0];
+      if (first) this.activate(first);
+    }
+  }
+
+  isAvailable(name: string): boolean {
+    return this.buttons.get(name)?.hidden === false;
+  }
 }

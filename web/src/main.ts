@@ -18,6 +18,10 @@ import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
 import { TopBar } from "./panels/topbar";
+import { DynamicsPanel } from "./panels/dynamics";
+import { FactsPanel } from "./panels/facts";
+import { PlanPanel } from "./panels/plan";
+import { panelsOf } from "./panels/world";
 import { Session, type SessionEvent } from "./session";
 import { h, isTyping, toast } from "./ui";
 
@@ -58,7 +62,7 @@ function main(): void {
     center.activate("option");
   };
   const openBehavior = (id: number): void => {
-    const b = session.indexOf(session.selectedAgent)?.behaviorById.get(id);
+    const b = session.indexOf(session.selectedRobot)?.behaviorById.get(id);
     if (b) {
       tester.choose({ kind: "behavior", name: b.name });
       right.activate("test");
@@ -77,7 +81,7 @@ function main(): void {
       "table",
       {},
       ...[
-        ["1 … 9, 0", "select agent"],
+        ["1 … 9, 0", "select robot"],
         ["Space", "pause / resume"],
         [".", "step one tick (pauses first)"],
         ["← →  (in the timeline)", "step back / forward in time"],
@@ -85,6 +89,7 @@ function main(): void {
         ["G / O", "option graph / option view"],
         ["E", "editor, at the option shown in the option view"],
         ["Esc then Tab (in the editor)", "move the focus out of the editor"],
+        ["D / P / F", "dual dynamics / plan / facts (worlds that have them)"],
         ["A / S / X", "activation tree / symbols / test panel"],
         ["/", "find an option in the graph"],
         ["J", "jump to the active option"],
@@ -120,6 +125,10 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
+  // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
+  const dynamics = new DynamicsPanel(session, connection);
+  const plan = new PlanPanel(session, connection);
+  const facts = new FactsPanel(session, connection);
 
   const rerender = new Set<SessionEvent>(["hello", "select", "cursor", "option", "history"]);
   const forceAll = (): void => {
@@ -131,9 +140,16 @@ function main(): void {
       { name: "graph", label: "Option graph", key: "G", pane: graph.element },
       { name: "option", label: "Option", key: "O", pane: optionView.element },
       { name: "editor", label: "Editor", key: "E", pane: editor.element },
+      { name: "dynamics", label: "Dynamics", key: "D", pane: dynamics.element },
+      { name: "plan", label: "Plan", key: "P", pane: plan.element },
+      { name: "facts", label: "Facts", key: "F", pane: facts.element },
     ],
     forceAll,
   );
+  const worldPanels = (): void => {
+    const announced = panelsOf(session.scene);
+    for (const name of ["dynamics", "plan", "facts"]) center.setAvailable(name, announced.includes(name));
+  };
   const right = layout.tabs(
     "right",
     [
@@ -193,6 +209,10 @@ function main(): void {
       if (center.isActive("graph")) graph.render(changes);
       if (center.isActive("option")) optionView.render(changes);
       if (center.isActive("editor")) editor.render(changes);
+      if (changes.has("hello")) worldPanels();
+      if (center.isActive("dynamics") || changes.has("hello")) dynamics.render(changes);
+      if (center.isActive("plan") || changes.has("hello")) plan.render(changes);
+      if (center.isActive("facts") || changes.has("hello")) facts.render(changes);
       if (right.isActive("activation")) activation.render(changes);
       if (right.isActive("symbols")) symbols.render(changes);
       if (right.isActive("test")) tester.render(changes);
@@ -234,11 +254,11 @@ function main(): void {
       return;
     }
     const key = ev.key;
-    const agents = session.agents;
+    const robots = session.robots;
     if (/^[0-9]$/.test(key)) {
       const i = key === "0" ? 9 : Number(key) - 1;
-      const agent = agents[i];
-      if (agent) session.selectAgent(agent.id);
+      const robot = robots[i];
+      if (robot) session.selectRobot(robot.id);
     } else if (key === " ") topbar.togglePause();
     else if (key === ".") topbar.step();
     else if (key === "l" || key === "L" || key === "End") session.setCursor(null);
@@ -265,6 +285,8 @@ function main(): void {
       graph.jump();
     } else if (key === "w") {
       center.activate("option");
+    } else if ((key === "d" || key === "p" || key === "f") && center.isAvailable({ d: "dynamics", p: "plan", f: "facts" }[key])) {
+      center.activate({ d: "dynamics", p: "plan", f: "facts" }[key]);
     } else if (key === "t") layout.toggleTheme();
     else if (key === "?") help.showModal();
     else if (key === "ArrowLeft" && !session.isLive) session.stepCursor(-1);
@@ -273,6 +295,7 @@ function main(): void {
     ev.preventDefault();
   });
 
+  worldPanels(); // none until a world announces them (a remembered world tab falls back)
   connection.start();
   forceAll();
   requestAnimationFrame(loop);

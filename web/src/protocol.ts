@@ -1,11 +1,33 @@
-/// The studio protocol, version 1: the web UI's mirror of server/protocol.py and docs/protocol.md.
+/// The studio protocol, version 1 (docs/protocol.md): the web UI's side of server/messages.py.
 ///
-/// Message and field names are exactly the server's. Besides the wire types this module owns the
-/// decoding a client must do: activation paths from their compact arrays
-/// (`decodePath`), and symbol values from full frames and deltas (`applyValues`).
+/// The wire types are generated from the server's message definitions (`messages.gen.ts`, by
+/// `python -m server.tsgen --write`); this module re-exports them, narrows the parts the server
+/// leaves to the world or to the program JSON (scenes, status, programs), and owns the decoding a
+/// client must do: activation paths from their compact arrays (`decodePath`), and symbol values
+/// from full frames and deltas (`applyValues`).
 import type { BehaviorDescription } from "./description";
+import type * as wire from "./messages.gen";
 
-export const PROTOCOL_VERSION = 1;
+export { PROTOCOL_VERSION } from "./messages.gen";
+export type {
+  ClientMessage,
+  Command,
+  CommandResults,
+  CompileEvent,
+  CrashEvent,
+  Explanation,
+  Fault,
+  FileEvent,
+  HelloReason,
+  Reply,
+  RobotFrame,
+  RobotInfo,
+  ServerEvent,
+  SessionInfo,
+  Subscribe,
+  Resync,
+} from "./messages.gen";
+export type { OptionNode as WireOptionNode, BehaviorNode as WireBehaviorNode, PathNode as WirePathNode } from "./messages.gen";
 
 /// Websocket close codes (server/protocol.py `CloseCode`).
 export const CloseCode = {
@@ -24,31 +46,13 @@ export const MAX_CLIENT_MESSAGE = 64 * 1024;
 /// A symbol value on the wire: decimals, booleans, enum element indices (-1: no element).
 export type Value = number | boolean;
 
-export type HelloReason = "connect" | "reload" | "reset" | "resync";
+/// The `op` of a command, and the arguments each op takes (without `type`, `id`, `op`).
+export type CommandOp = wire.Command["op"];
+export type CommandArgs<Op extends CommandOp> = Omit<Extract<wire.Command, { op: Op }>, "type" | "id" | "op">;
 
-export interface SessionInfo {
-  example: string;
-  paused: boolean;
-  speed: number;
-  seed: number;
-  behavior_hz: number;
-  seq: number;
-  t: number;
-  token_required: boolean;
-  [key: string]: unknown;
-}
-
-export interface AgentInfo {
-  id: number;
-  name: string;
-  team: string;
-  number: number;
-  program: string | null;
-}
-
-export interface Structure {
+/// The ids of a generation, with each behavior set's program JSON typed.
+export interface Structure extends Omit<wire.Structure, "programs"> {
   programs: Record<string, BehaviorDescription>;
-  agents: AgentInfo[];
 }
 
 /// The world's static scene (soccer: examples/soccer/field.py `static_scene` + world.py).
@@ -79,7 +83,8 @@ export interface DynamicScene {
   [key: string]: unknown;
 }
 
-export interface Status {
+/// The world's status (`world.status()`).
+export interface WorldStatus {
   time_ms?: number;
   game_state?: string;
   score?: number[];
@@ -90,153 +95,21 @@ export interface Status {
   [key: string]: unknown;
 }
 
-export interface Hello {
-  type: "hello";
-  version: number;
-  reason: HelloReason;
-  generation: number;
-  session: SessionInfo;
+export interface Hello extends Omit<wire.Hello, "structure" | "scene"> {
   structure: Structure;
   scene: StaticScene;
 }
 
-/// An option node on the wire:
-/// `[0, depth, option_id, state_id, option_time, state_time, decided_in_state_id, leaf_id, [params]]`.
-export type WireOptionNode = [0, number, number, number, number, number, number, number, Value[]];
-/// A basic behavior node on the wire: `[1, depth, behavior_id, time_of_execution, [params]]`.
-export type WireBehaviorNode = [1, number, number, number, Value[]];
-export type WirePathNode = WireOptionNode | WireBehaviorNode;
-
-export interface Fault {
-  message: string;
-  option: string | null;
-  state: string | null;
-}
-
-export interface WireAgentFrame {
-  id: number;
-  path: WirePathNode[];
-  outputs?: Record<string, Value>;
-  inputs?: Record<string, Value>;
-  fault?: Fault;
-  forced?: [0 | 1, number];
-  overrides?: Record<string, Value>;
-}
-
-export interface Frame {
-  type: "frame";
-  seq: number;
-  gen: number;
-  t: number;
-  wall: number;
-  full: boolean;
-  agents: WireAgentFrame[];
+export interface Frame extends Omit<wire.Frame, "scene" | "status"> {
   scene?: DynamicScene;
-  status?: Status;
+  status?: WorldStatus | null;
 }
 
-export interface Reply {
-  type: "reply";
-  id: number | string | null;
-  ok: boolean;
-  result?: unknown;
-  error?: string;
-}
-
-export interface HistoryChunk {
-  type: "history";
-  id: number | string;
-  chunk: number;
-  last: boolean;
+export interface HistoryChunk extends Omit<wire.HistoryChunk, "frames"> {
   frames: Frame[];
 }
 
-export interface FileEvent {
-  type: "event";
-  event: "file";
-  path: string;
-  version: string | null;
-  deleted: boolean;
-}
-
-export interface CompileEvent {
-  type: "event";
-  event: "compile";
-  program: string;
-  ok: boolean;
-  diagnostics: unknown[];
-}
-
-/// The simulation process stopped (the world raised or the process died); `reset` restarts it.
-export interface CrashEvent {
-  type: "event";
-  event: "crash";
-  message: string;
-  seq: number;
-  t: number;
-}
-
-export type ServerEvent = FileEvent | CompileEvent | CrashEvent;
-
-export type ServerMessage = Hello | Frame | Reply | HistoryChunk | ServerEvent;
-
-/// Commands (`{"type": "command", "id", "op", ...arguments}`), by op.
-export type CommandOp =
-  | "pause"
-  | "resume"
-  | "step"
-  | "speed"
-  | "reset"
-  | "select_agent"
-  | "force_option"
-  | "force_behavior"
-  | "release"
-  | "override_input"
-  | "release_input"
-  | "reset_agent"
-  | "reload"
-  | "explain"
-  | "history"
-  | "status";
-
-export interface Subscribe {
-  type: "subscribe";
-  rate?: number;
-  agents?: number[] | null;
-  id?: number | string;
-}
-
-export interface Resync {
-  type: "resync";
-}
-
-export interface Command {
-  type: "command";
-  id: number | string;
-  op: CommandOp;
-  [argument: string]: unknown;
-}
-
-export type ClientMessage = Subscribe | Resync | Command;
-
-/// The `explain` result.
-export interface Explanation {
-  option: number;
-  option_name: string;
-  decided_in: number;
-  decided_in_name: string;
-  leaf: number;
-  target: number;
-  target_name: string;
-  stay: boolean;
-  conditions: Array<{
-    text: string;
-    source: string;
-    value: Value | string | null;
-    branch: boolean;
-    span: import("./description").Span | null;
-  }>;
-}
+export type ServerMessage = Hello | Frame | wire.Reply | HistoryChunk | wire.ServerEvent;
 
 // ------------------------------------------------------------------------------- decoding
 
@@ -250,7 +123,7 @@ export interface OptionNode {
   stateTime: number;
   decidedIn: number;
   leaf: number;
-  params: Value[];
+  params: wire.WireValue[];
 }
 
 /// A basic behavior node of a decoded activation path.
@@ -259,7 +132,7 @@ export interface BehaviorNode {
   depth: number;
   behavior: number;
   time: number;
-  params: Value[];
+  params: wire.WireValue[];
 }
 
 export type PathNode = OptionNode | BehaviorNode;
@@ -267,10 +140,10 @@ export type PathNode = OptionNode | BehaviorNode;
 /// Decode a wire activation path (pre-order, depth 0 = a root).
 ///
 /// Malformed nodes are dropped rather than thrown on: a frame must never take the UI down.
-export function decodePath(wire: readonly WirePathNode[] | undefined): PathNode[] {
+export function decodePath(nodes: readonly wire.PathNode[] | undefined): PathNode[] {
   const out: PathNode[] = [];
-  if (!wire) return out;
-  for (const n of wire) {
+  if (!nodes) return out;
+  for (const n of nodes) {
     if (!Array.isArray(n)) continue;
     if (n[0] === 0 && n.length >= 8) {
       out.push({
@@ -312,23 +185,23 @@ export function pathParents(path: readonly PathNode[]): number[] {
 }
 
 /// Symbol values of one agent, indexed by symbol id (`undefined`: not received yet).
-export type Values = Array<Value | undefined>;
+export type Values = Array<wire.WireValue | undefined>;
 
 /// Apply a frame's `{id: value}` map to `previous` (a full frame replaces, a delta patches).
 ///
 /// Returns `previous` itself when nothing changed, else a new array: frames kept in the history
 /// share unchanged arrays, so buffering many frames stays cheap.
-export function applyValues(previous: Values, wire: Record<string, Value> | undefined, full: boolean): Values {
+export function applyValues(previous: Values, values: Record<string, wire.WireValue> | null | undefined, full: boolean): Values {
   if (full) {
     const next: Values = [];
-    if (wire) for (const key in wire) next[Number(key)] = wire[key];
+    if (values) for (const key in values) next[Number(key)] = values[key];
     return next;
   }
-  if (!wire) return previous;
+  if (!values) return previous;
   let next: Values | null = null;
-  for (const key in wire) {
+  for (const key in values) {
     const id = Number(key);
-    const value = wire[key];
+    const value = values[key];
     if (previous[id] === value) continue;
     if (!next) next = previous.slice();
     next[id] = value;
@@ -336,16 +209,16 @@ export function applyValues(previous: Values, wire: Record<string, Value> | unde
   return next ?? previous;
 }
 
-/// One agent at one tick, decoded, with all symbol values known at that tick.
-export interface AgentState {
+/// One robot at one tick, decoded, with all symbol values known at that tick.
+export interface RobotState {
   id: number;
   path: PathNode[];
   shape: string;
   inputs: Values;
   outputs: Values;
-  fault: Fault | null;
+  fault: wire.Fault | null;
   forced: [0 | 1, number] | null;
-  overrides: Record<string, Value> | null;
+  overrides: Record<string, wire.WireValue> | null;
 }
 
 /// One tick, decoded: what every panel renders.
@@ -354,9 +227,9 @@ export interface Tick {
   gen: number;
   t: number;
   wall: number;
-  agents: AgentState[];
+  robots: RobotState[];
   scene: DynamicScene | null;
-  status: Status | null;
+  status: WorldStatus | null;
 }
 
 /// Turns a stream of frames (live, or one history stream) into `Tick`s, applying deltas against
@@ -375,20 +248,20 @@ export class FrameDecoder {
 
   decode(frame: Frame): Tick {
     const prev = this.last;
-    const prevAgents = new Map<number, AgentState>();
-    if (prev && !frame.full) for (const a of prev.agents) prevAgents.set(a.id, a);
-    const agents: AgentState[] = frame.agents.map((wire) => {
-      const before = prevAgents.get(wire.id);
-      const path = decodePath(wire.path);
+    const prevRobots = new Map<number, RobotState>();
+    if (prev && !frame.full) for (const r of prev.robots) prevRobots.set(r.id, r);
+    const robots: RobotState[] = frame.robots.map((r) => {
+      const before = prevRobots.get(r.id);
+      const path = decodePath(r.path);
       return {
-        id: wire.id,
+        id: r.id,
         path,
         shape: pathShape(path),
-        inputs: applyValues(before?.inputs ?? [], wire.inputs, frame.full || !before),
-        outputs: applyValues(before?.outputs ?? [], wire.outputs, frame.full || !before),
-        fault: wire.fault ?? null,
-        forced: wire.forced ?? null,
-        overrides: wire.overrides ?? null,
+        inputs: applyValues(before?.inputs ?? [], r.inputs, frame.full || !before),
+        outputs: applyValues(before?.outputs ?? [], r.outputs, frame.full || !before),
+        fault: r.fault ?? null,
+        forced: r.forced ?? null,
+        overrides: r.overrides ?? null,
       };
     });
     const tick: Tick = {
@@ -396,7 +269,7 @@ export class FrameDecoder {
       gen: frame.gen,
       t: frame.t,
       wall: frame.wall,
-      agents,
+      robots,
       scene: frame.scene ?? prev?.scene ?? null,
       status: frame.status ?? (frame.full ? null : (prev?.status ?? null)),
     };

@@ -1,5 +1,5 @@
 /// The client-side session: what the server said (hello, ticks) and what the user looks at
-/// (selected agent, option, time cursor), with change notification for the panels.
+/// (selected robot, option, time cursor), with change notification for the panels.
 ///
 /// Frames are decoded as they arrive (cheap) and kept in a `TickBuffer`; panels never render
 /// on a message. `main.ts` runs one `requestAnimationFrame` loop that asks each panel to draw
@@ -7,19 +7,11 @@
 /// it shows changed, so a burst of frames costs one draw.
 import { type DescriptionIndex, indexDescription } from "./description";
 import { TickBuffer } from "./history";
-import {
-  type AgentInfo,
-  type AgentState,
-  type Frame,
-  FrameDecoder,
-  type Hello,
-  type StaticScene,
-  type Tick,
-} from "./protocol";
+import { type Frame, FrameDecoder, type Hello, type RobotInfo, type RobotState, type StaticScene, type Tick } from "./protocol";
 
 export type SessionEvent = "hello" | "tick" | "select" | "cursor" | "option" | "history";
 
-/// The last state change of one option of one agent (for "the transition that fired").
+/// The last state change of one option of one robot (for "the transition that fired").
 export interface LastTransition {
   from: number;
   to: number;
@@ -30,16 +22,16 @@ export interface LastTransition {
 export class Session {
   hello: Hello | null = null;
   programs = new Map<string, DescriptionIndex>();
-  agents: AgentInfo[] = [];
+  robots: RobotInfo[] = [];
   scene: StaticScene | null = null;
   readonly buffer = new TickBuffer(60_000);
   live: Tick | null = null;
   /// Behavior time shown by every panel, or null for live.
   cursor: number | null = null;
-  selectedAgent = 0;
-  /// Option opened in the option view (by id, in the selected agent's program).
+  selectedRobot = 0;
+  /// Option opened in the option view (by id, in the selected robot's program).
   openOption: number | null = null;
-  /// Per agent and option id: the last state change seen.
+  /// Per robot and option id: the last state change seen.
   readonly transitions = new Map<number, Map<number, LastTransition>>();
   private readonly decoder = new FrameDecoder();
   private readonly listeners = new Map<SessionEvent, Set<() => void>>();
@@ -70,7 +62,7 @@ export class Session {
   applyHello(hello: Hello): void {
     this.hello = hello;
     this.programs = new Map(Object.entries(hello.structure.programs).map(([k, d]) => [k, indexDescription(d)]));
-    this.agents = hello.structure.agents;
+    this.robots = hello.structure.robots;
     this.scene = hello.scene;
     this.decoder.reset();
     // Ids may have changed (reload, reset): ticks of the old generation cannot be read any more.
@@ -78,10 +70,10 @@ export class Session {
     this.live = null;
     this.cursor = null;
     this.transitions.clear();
-    if (!this.agents.some((a) => a.id === this.selectedAgent)) {
-      this.selectedAgent = this.agents.find((a) => a.program !== null)?.id ?? this.agents[0]?.id ?? 0;
+    if (!this.robots.some((r) => r.id === this.selectedRobot)) {
+      this.selectedRobot = this.robots.find((r) => r.program !== null)?.id ?? this.robots[0]?.id ?? 0;
     }
-    const index = this.indexOf(this.selectedAgent);
+    const index = this.indexOf(this.selectedRobot);
     if (this.openOption !== null && !index?.optionById.has(this.openOption)) this.openOption = null;
     this.emit("hello");
   }
@@ -105,11 +97,11 @@ export class Session {
   }
 
   private noteTransitions(tick: Tick): void {
-    for (const agent of tick.agents) {
-      let perOption = this.transitions.get(agent.id);
-      for (const node of agent.path) {
+    for (const robot of tick.robots) {
+      let perOption = this.transitions.get(robot.id);
+      for (const node of robot.path) {
         if (node.kind !== "option" || node.leaf < 0 || node.decidedIn === node.state) continue;
-        if (!perOption) this.transitions.set(agent.id, (perOption = new Map()));
+        if (!perOption) this.transitions.set(robot.id, (perOption = new Map()));
         perOption.set(node.option, { from: node.decidedIn, to: node.state, leaf: node.leaf, t: tick.t });
       }
     }
@@ -146,10 +138,10 @@ export class Session {
     this.setCursor(next === ticks.length - 1 && n > 0 ? null : (ticks[next] as Tick).t);
   }
 
-  selectAgent(id: number): void {
-    if (id === this.selectedAgent || !this.agents.some((a) => a.id === id)) return;
-    const before = this.programOf(this.selectedAgent);
-    this.selectedAgent = id;
+  selectRobot(id: number): void {
+    if (id === this.selectedRobot || !this.robots.some((r) => r.id === id)) return;
+    const before = this.programOf(this.selectedRobot);
+    this.selectedRobot = id;
     if (this.programOf(id) !== before) this.openOption = null;
     this.emit("select");
   }
@@ -159,21 +151,22 @@ export class Session {
     this.emit("option");
   }
 
-  agentInfo(id: number): AgentInfo | undefined {
-    return this.agents.find((a) => a.id === id);
+  robotInfo(id: number): RobotInfo | undefined {
+    return this.robots.find((r) => r.id === id);
   }
 
-  programOf(agentId: number): string | null {
-    return this.agentInfo(agentId)?.program ?? null;
+  /// The behavior set the engine of a robot runs (null: no XABSL engine).
+  programOf(robotId: number): string | null {
+    return this.robotInfo(robotId)?.program ?? null;
   }
 
-  indexOf(agentId: number): DescriptionIndex | null {
-    const program = this.programOf(agentId);
+  indexOf(robotId: number): DescriptionIndex | null {
+    const program = this.programOf(robotId);
     return program ? (this.programs.get(program) ?? null) : null;
   }
 
-  /// The selected agent in the tick in view.
-  agentInView(): AgentState | null {
-    return this.view?.agents.find((a) => a.id === this.selectedAgent) ?? null;
+  /// The selected robot in the tick in view.
+  robotInView(): RobotState | null {
+    return this.view?.robots.find((r) => r.id === this.selectedRobot) ?? null;
   }
 }

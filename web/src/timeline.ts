@@ -15,8 +15,8 @@ export interface Segment {
 }
 
 export interface TimelineRow {
-  kind: "option" | "behavior" | "agent";
-  /// Option id, behavior id, or agent id.
+  kind: "option" | "behavior" | "robot";
+  /// Option id, behavior id, or robot id.
   id: number;
   label: string;
   depth: number;
@@ -38,19 +38,19 @@ function tickEnd(ticks: readonly Tick[], i: number): number {
   return tick.t + (prev ? Math.max(1, tick.t - prev.t) : 25);
 }
 
-/// One row per option (segments per state) and per basic behavior the agent ran in `ticks`.
+/// One row per option (segments per state) and per basic behavior the robot ran in `ticks`.
 ///
 /// Rows are ordered by the shallowest depth the option ran at (options before basic behaviors of
 /// the same depth), then by first appearance, so the root comes first and the chart reads like
 /// the option graph from top to bottom.
-export function buildAgentTimeline(ticks: readonly Tick[], agentId: number, index: DescriptionIndex | null): TimelineRow[] {
+export function buildRobotTimeline(ticks: readonly Tick[], robotId: number, index: DescriptionIndex | null): TimelineRow[] {
   const rows = new Map<string, TimelineRow & { first: number }>();
   const activeBefore = new Set<string>();
   ticks.forEach((tick, i) => {
-    const agent = tick.agents.find((a) => a.id === agentId);
+    const robot = tick.robots.find((a) => a.id === robotId);
     const t1 = tickEnd(ticks, i);
     const activeNow = new Set<string>();
-    for (const node of agent?.path ?? []) {
+    for (const node of robot?.path ?? []) {
       const key = node.kind === "option" ? `o${node.option}` : `b${node.behavior}`;
       let row = rows.get(key);
       if (!row) {
@@ -79,22 +79,22 @@ export function buildAgentTimeline(ticks: readonly Tick[], agentId: number, inde
     .map(({ first: _first, ...row }) => row);
 }
 
-/// One row per agent: segments labelled `root option/state` of its root (or the basic behavior).
+/// One row per robot: segments labelled `root option/state` of its root (or the basic behavior).
 export function buildTeamTimeline(
   ticks: readonly Tick[],
   agents: ReadonlyArray<{ id: number; name: string }>,
-  indexOf: (agentId: number) => DescriptionIndex | null,
+  indexOf: (robotId: number) => DescriptionIndex | null,
 ): TimelineRow[] {
-  const rows = agents.map<TimelineRow>((a) => ({ kind: "agent", id: a.id, label: a.name, depth: 0, segments: [] }));
+  const rows = agents.map<TimelineRow>((a) => ({ kind: "robot", id: a.id, label: a.name, depth: 0, segments: [] }));
   const byId = new Map(rows.map((r) => [r.id, r]));
   const labels = new Map<string, number>();
   ticks.forEach((tick, i) => {
     const t1 = tickEnd(ticks, i);
-    for (const agent of tick.agents) {
-      const row = byId.get(agent.id);
-      const root = agent.path[0];
+    for (const robot of tick.robots) {
+      const row = byId.get(robot.id);
+      const root = robot.path[0];
       if (!row || !root) continue;
-      const index = indexOf(agent.id);
+      const index = indexOf(robot.id);
       let label: string;
       if (root.kind === "option") {
         const option = index?.optionById.get(root.option);

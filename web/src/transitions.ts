@@ -30,13 +30,13 @@ export function transitionsOf(option: Option): TransitionInfo[] {
   return out;
 }
 
-/// The last state change of option `optionId` of agent `agentId` at or before `ticks[end]`
+/// The last state change of option `optionId` of robot `robotId` at or before `ticks[end]`
 /// (looking back at most `limit` ticks), or null.
-export function lastTransitionBefore(ticks: readonly Tick[], end: number, agentId: number, optionId: number, limit = 4800): { from: number; to: number; leaf: number; t: number } | null {
+export function lastTransitionBefore(ticks: readonly Tick[], end: number, robotId: number, optionId: number, limit = 4800): { from: number; to: number; leaf: number; t: number } | null {
   for (let i = Math.min(end, ticks.length - 1); i >= 0 && end - i < limit; i--) {
     const tick = ticks[i] as Tick;
-    const agent = tick.agents.find((a) => a.id === agentId);
-    const node = agent?.path.find((n) => n.kind === "option" && n.option === optionId) as OptionNode | undefined;
+    const robot = tick.robots.find((r) => r.id === robotId);
+    const node = robot?.path.find((n) => n.kind === "option" && n.option === optionId) as OptionNode | undefined;
     if (node && node.leaf >= 0 && node.decidedIn !== node.state) return { from: node.decidedIn, to: node.state, leaf: node.leaf, t: tick.t };
   }
   return null;

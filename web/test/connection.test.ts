@@ -64,7 +64,7 @@ describe("Connection", () => {
     const { connection, sockets, events } = setup();
     connection.start();
     sockets[0]?.open();
-    expect(sockets[0]?.sent[0]).toEqual({ type: "subscribe", rate: 30, agents: null });
+    expect(sockets[0]?.sent[0]).toEqual({ type: "subscribe", rate: 30, robots: null });
     sockets[0]?.serve(hello(4));
     expect(connection.state).toBe("live");
     expect(connection.generation).toBe(4);
@@ -110,7 +110,7 @@ describe("Connection", () => {
     sockets[0]?.open();
     sockets[0]?.serve(hello(1));
     const ok = connection.command("pause");
-    const bad = connection.command("force_option", { agent: 0, option: "kik" });
+    const bad = connection.command("force_option", { robot: 0, option: "kik" });
     const sent = sockets[0]?.sent.slice(1) as Array<{ id: number; op: string; option?: string }>;
     expect(sent.map((m) => m.op)).toEqual(["pause", "force_option"]);
     expect(sent[1]?.option).toBe("kik");

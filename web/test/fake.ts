@@ -3,7 +3,7 @@
 import demo from "./fixtures/demo.json";
 import scene from "./fixtures/soccer-static.json";
 import type { BehaviorDescription } from "../src/description";
-import type { Frame, Hello, WireAgentFrame, WirePathNode } from "../src/protocol";
+import type { Frame, Hello, RobotFrame, WirePathNode } from "../src/protocol";
 
 export const description = demo as unknown as BehaviorDescription;
 
@@ -16,7 +16,7 @@ export function hello(generation = 1, t = 0): Hello {
     session: { example: "demo", paused: false, speed: 1, seed: 1, behavior_hz: 40, seq: 0, t, token_required: false },
     structure: {
       programs: { behavior: description },
-      agents: [
+      robots: [
         { id: 0, name: "blue1", team: "blue", number: 1, program: "behavior" },
         { id: 1, name: "blue2", team: "blue", number: 2, program: "behavior" },
       ],
@@ -37,6 +37,6 @@ export function playPath(playState: number, approachState = 0, decidedIn = playS
   return path;
 }
 
-export function frame(seq: number, t: number, agents: WireAgentFrame[], full = false, gen = 1): Frame {
-  return { type: "frame", seq, gen, t, wall: 1_700_000_000_000 + t, full, agents };
+export function frame(seq: number, t: number, robots: RobotFrame[], full = false, gen = 1): Frame {
+  return { type: "frame", seq, gen, t, wall: 1_700_000_000_000 + t, full, robots };
 }

@@ -58,12 +58,12 @@ describe("FrameDecoder", () => {
     const d = new FrameDecoder();
     const a = d.decode({ ...frame(10, 250, [{ id: 0, path: playPath(0), inputs: { "0": false, "1": 3000 }, outputs: { "0": 0 } }], true), status: { game_state: "playing" }, scene: { t: 250, ball: [0, 0] } });
     const b = d.decode(frame(12, 300, [{ id: 0, path: playPath(1), inputs: { "0": true } }]));
-    expect(b.agents[0]?.inputs).toEqual([true, 3000]);
-    expect(b.agents[0]?.outputs).toBe(a.agents[0]?.outputs);
+    expect(b.robots[0]?.inputs).toEqual([true, 3000]);
+    expect(b.robots[0]?.outputs).toBe(a.robots[0]?.outputs);
     expect(b.status).toEqual({ game_state: "playing" });
     expect(b.scene).toEqual({ t: 250, ball: [0, 0] });
     const c = d.decode(frame(13, 325, [{ id: 0, path: [], inputs: { "1": 10 } }], true));
-    expect(c.agents[0]?.inputs).toEqual([undefined, 10]);
+    expect(c.robots[0]?.inputs).toEqual([undefined, 10]);
     expect(c.status).toBeNull();
   });
 
@@ -71,7 +71,7 @@ describe("FrameDecoder", () => {
     const d = new FrameDecoder();
     d.decode(frame(1, 25, [{ id: 0, path: [] }], true));
     const t = d.decode(frame(2, 50, [{ id: 0, path: [] }, { id: 3, path: [], inputs: { "2": 1 }, fault: { message: "boom", option: "play", state: "wait" }, forced: [0, 2], overrides: { "2": 1 } }]));
-    expect(t.agents[1]).toMatchObject({ id: 3, inputs: [undefined, undefined, 1], fault: { message: "boom" }, forced: [0, 2], overrides: { "2": 1 } });
+    expect(t.robots[1]).toMatchObject({ id: 3, inputs: [undefined, undefined, 1], fault: { message: "boom" }, forced: [0, 2], overrides: { "2": 1 } });
     d.reset();
     expect(d.previous).toBeNull();
   });

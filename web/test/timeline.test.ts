@@ -3,7 +3,7 @@ import { indexDescription } from "../src/description";
 import { TickBuffer } from "../src/history";
 import { FrameDecoder, type Tick } from "../src/protocol";
 import { Session } from "../src/session";
-import { buildAgentTimeline, buildTeamTimeline } from "../src/timeline";
+import { buildRobotTimeline, buildTeamTimeline } from "../src/timeline";
 import { description, frame, hello, playPath } from "./fake";
 
 const index = indexDescription(description);
@@ -15,9 +15,9 @@ function ticks(): Tick[] {
   return states.map(([play, approach], i) => d.decode(frame(i + 1, i * 25, [{ id: 0, path: playPath(play, approach) }, { id: 1, path: playPath(2) }], i === 0)));
 }
 
-describe("buildAgentTimeline", () => {
+describe("buildRobotTimeline", () => {
   it("has one row per option and behavior, root first, segments per state", () => {
-    const rows = buildAgentTimeline(ticks(), 0, index);
+    const rows = buildRobotTimeline(ticks(), 0, index);
     expect(rows.map((r) => `${r.kind}:${r.label}`)).toEqual(["option:play", "option:approach_ball", "behavior:stand", "behavior:walk"]);
     const play = rows[0];
     expect(play?.segments.map((s) => [s.label, s.t0, s.t1])).toEqual([
@@ -38,8 +38,8 @@ describe("buildAgentTimeline", () => {
   });
 
   it("works without a description and for an unknown agent", () => {
-    expect(buildAgentTimeline(ticks(), 0, null)[0]?.label).toBe("option 1");
-    expect(buildAgentTimeline(ticks(), 9, index)).toEqual([]);
+    expect(buildRobotTimeline(ticks(), 0, null)[0]?.label).toBe("option 1");
+    expect(buildRobotTimeline(ticks(), 9, index)).toEqual([]);
   });
 });
 

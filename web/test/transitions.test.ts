@@ -30,7 +30,7 @@ describe("transitionsOf", () => {
 });
 
 const tick = (t: number, state: number, decidedIn: number, leafId: number): Tick =>
-  ({ t, agents: [{ id: 7, path: [{ kind: "option", depth: 0, option: 3, state, decidedIn, leaf: leafId, optionTime: 0, stateTime: 0, params: [] }] }] }) as unknown as Tick;
+  ({ t, robots: [{ id: 7, path: [{ kind: "option", depth: 0, option: 3, state, decidedIn, leaf: leafId, optionTime: 0, stateTime: 0, params: [] }] }] }) as unknown as Tick;
 
 describe("lastTransitionBefore", () => {
   const ticks = [tick(0, 0, 0, 1), tick(25, 1, 0, 0), tick(50, 1, 1, 1), tick(75, 0, 1, 0), tick(100, 0, 0, 1)];

@@ -1,9 +1,9 @@
-/// The activation tree of the selected agent at the tick in view: options with their state,
+/// The activation tree of the selected robot at the tick in view: options with their state,
 /// option and state times and parameter values; basic behaviors with their parameters; and the
 /// output assignments of each active state with the values the outputs hold. Rows are rebuilt
 /// only when the path's shape changes; otherwise only their texts change.
 import type { DescriptionIndex } from "../description";
-import type { AgentState, PathNode } from "../protocol";
+import type { RobotState, PathNode } from "../protocol";
 import type { Session, SessionEvent } from "../session";
 import { formatClock, formatMs, formatValue, h, setText } from "../ui";
 
@@ -32,30 +32,30 @@ export class ActivationPanel {
 
   render(changes: Set<SessionEvent>): void {
     const session = this.session;
-    const agent = session.agentInView();
-    const index = session.indexOf(session.selectedAgent);
-    const info = session.agentInfo(session.selectedAgent);
+    const robot = session.robotInView();
+    const index = session.indexOf(session.selectedRobot);
+    const info = session.robotInfo(session.selectedRobot);
     const tick = session.view;
-    setText(this.head, info ? `${info.name}${tick ? ` · t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " · scrubbed"}${agent?.forced ? " · forced root" : ""}` : "");
-    const shape = `${agent?.shape ?? ""}|${agent?.fault ? "F" : ""}|${session.selectedAgent}`;
+    setText(this.head, info ? `${info.name}${tick ? ` · t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " · scrubbed"}${robot?.forced ? " · forced root" : ""}` : "");
+    const shape = `${robot?.shape ?? ""}|${robot?.fault ? "F" : ""}|${session.selectedRobot}`;
     if (shape !== this.shape || changes.has("hello")) {
       this.shape = shape;
-      this.build(agent, index);
+      this.build(robot, index);
     }
-    this.update(agent, index);
+    this.update(robot, index);
   }
 
-  private build(agent: AgentState | null, index: DescriptionIndex | null): void {
+  private build(robot: RobotState | null, index: DescriptionIndex | null): void {
     this.rows = [];
     const children: HTMLElement[] = [];
-    if (agent?.fault) {
-      const f = agent.fault;
+    if (robot?.fault) {
+      const f = robot.fault;
       children.push(h("div.fault", {}, h("strong", {}, "Fault: "), f.message, f.option ? ` (in ${f.option}${f.state ? `.${f.state}` : ""})` : ""));
     }
-    if (!agent || !agent.path.length) {
-      children.push(h("div.empty", {}, agent ? "Nothing active." : this.session.hello ? "No data for this agent yet." : "Connecting…"));
+    if (!robot || !robot.path.length) {
+      children.push(h("div.empty", {}, robot ? "Nothing active." : this.session.hello ? "No data for this robot yet." : "Connecting…"));
     }
-    for (const node of agent?.path ?? []) {
+    for (const node of robot?.path ?? []) {
       const indent = `padding-left:${node.depth * 16 + 4}px`;
       if (node.kind === "option") {
         const option = index?.optionById.get(node.option);
@@ -98,9 +98,9 @@ export class ActivationPanel {
     this.list.replaceChildren(...children);
   }
 
-  private update(agent: AgentState | null, index: DescriptionIndex | null): void {
-    if (!agent) return;
-    agent.path.forEach((node, i) => {
+  private update(robot: RobotState | null, index: DescriptionIndex | null): void {
+    if (!robot) return;
+    robot.path.forEach((node, i) => {
       const row = this.rows[i];
       if (!row) return;
       if (node.kind === "option") {
@@ -112,7 +112,7 @@ export class ActivationPanel {
         if (row.times) setText(row.times, formatMs(node.time));
         behavior?.params.forEach((p, k) => row.params[k] && setText(row.params[k] as HTMLElement, formatValue(node.params[k], p.type, p.enum, index)));
       }
-      for (const o of row.outputs) setText(o.el, formatValue(agent.outputs[o.id], o.type as "decimal", o.enumName, index));
+      for (const o of row.outputs) setText(o.el, formatValue(robot.outputs[o.id], o.type as "decimal", o.enumName, index));
     });
   }
 }

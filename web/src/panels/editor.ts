@@ -124,7 +124,7 @@ export class EditorPanel {
         if (index) return index;
       }
     }
-    return session.indexOf(session.selectedAgent) ?? session.programs.values().next().value ?? null;
+    return session.indexOf(session.selectedRobot) ?? session.programs.values().next().value ?? null;
   }
 
   private makeState(doc: string, path: string): EditorState {
@@ -492,7 +492,7 @@ export class EditorPanel {
   }
 
   compileEvent(event: CompileEvent): void {
-    if (!event.ok && this.current) this.lastDiagnostics = this.own(this.current.path, (event.diagnostics as ServerDiagnostic[]).map((d) => ({ ...d, program: event.program })));
+    if (!event.ok && this.current) this.lastDiagnostics = this.own(this.current.path, (event.diagnostics as unknown as ServerDiagnostic[]).map((d) => ({ ...d, program: event.program })));
   }
 
   render(changes: Set<SessionEvent>): void {

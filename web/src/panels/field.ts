@@ -7,7 +7,7 @@
 /// `shapes` (engine/host.py): `{shape: "circle", x, y, r}`, `{shape: "rect", x, y, w, h}` (centre
 /// and size) or `{shape: "segment", x1, y1, x2, y2}`, each with optional `fill`, `stroke`,
 /// `dash`, `label` (text centred on the shape) and `caption` (text below it).
-import type { AgentInfo, StaticScene, Tick } from "../protocol";
+import type { RobotInfo, StaticScene, Tick } from "../protocol";
 import type { Session, SessionEvent } from "../session";
 import { type LabelBox, type LabelRequest, placeLabels } from "../labels";
 import { h } from "../ui";
@@ -215,9 +215,9 @@ export class FieldPanel {
     }
   }
 
-  private teamColor(agent: AgentInfo | undefined): string {
+  private teamColor(robot: RobotInfo | undefined): string {
     const teams = this.session.scene?.teams ?? [];
-    const i = teams.findIndex((t) => t.name === agent?.team);
+    const i = teams.findIndex((t) => t.name === robot?.team);
     return teams[i]?.color ?? FALLBACK_COLORS[Math.max(0, i) % FALLBACK_COLORS.length] ?? "#888";
   }
 
@@ -256,10 +256,10 @@ export class FieldPanel {
     const labels: Array<LabelRequest & { fault: boolean }> = [];
     const labelSize = Math.max(9, Math.round(radius * 0.8));
     robots.forEach(([x, y, heading], i) => {
-      const agent = session.agents[i];
-      const state = tick.agents.find((a) => a.id === (agent?.id ?? i));
+      const robot = session.robots[i];
+      const state = tick.robots.find((a) => a.id === (robot?.id ?? i));
       const [sx, sy] = this.toScreen(x, y);
-      const selected = agent?.id === session.selectedAgent;
+      const selected = robot?.id === session.selectedRobot;
       if (selected) {
         ctx.beginPath();
         ctx.arc(sx, sy, radius + 5, 0, 2 * Math.PI);
@@ -269,7 +269,7 @@ export class FieldPanel {
       }
       ctx.beginPath();
       ctx.arc(sx, sy, radius, 0, 2 * Math.PI);
-      ctx.fillStyle = this.teamColor(agent);
+      ctx.fillStyle = this.teamColor(robot);
       ctx.fill();
       ctx.lineWidth = 1.5;
       ctx.strokeStyle = state?.fault ? "#ff2d2d" : "rgba(0,0,0,0.6)";
@@ -282,8 +282,8 @@ export class FieldPanel {
       ctx.lineWidth = 2;
       ctx.stroke();
       ctx.fillStyle = "#fff";
-      ctx.fillText(String(agent?.number ?? i + 1), sx, sy + 0.5);
-      const role = agent ? roleOf(session, agent.id, state ?? null) : null;
+      ctx.fillText(String(robot?.number ?? i + 1), sx, sy + 0.5);
+      const role = robot ? roleOf(session, robot.id, state ?? null) : null;
       const tag = [role, state?.forced ? "forced" : null, state?.fault ? "FAULT" : null].filter((s) => s).join(" · ");
       if (tag) {
         ctx.font = `500 ${labelSize}px system-ui, sans-serif`;
@@ -316,7 +316,7 @@ export class FieldPanel {
     this.caption.textContent = "";
   }
 
-  /// The agent id of the robot nearest to a canvas point, within reach.
+  /// The id of the robot nearest to a canvas point, within reach.
   robotAt(px: number, py: number): number | null {
     const robots = this.session.view?.scene?.robots ?? [];
     const radius = Math.max(6, (this.session.scene?.robot_radius ?? 150) * this.scale);
@@ -327,7 +327,7 @@ export class FieldPanel {
       const d = (sx - px) ** 2 + (sy - py) ** 2;
       if (d < bestD) {
         bestD = d;
-        best = this.session.agents[i]?.id ?? i;
+        best = this.session.robots[i]?.id ?? i;
       }
     });
     return best;
@@ -336,6 +336,6 @@ export class FieldPanel {
   private click(ev: MouseEvent): void {
     const rect = this.canvas.getBoundingClientRect();
     const id = this.robotAt(ev.clientX - rect.left, ev.clientY - rect.top);
-    if (id !== null) this.session.selectAgent(id);
+    if (id !== null) this.session.selectRobot(id);
   }
 }

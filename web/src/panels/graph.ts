@@ -1,4 +1,4 @@
-/// The option graph of the selected agent (server SVG) with the live activation path: active
+/// The option graph of the selected robot (server SVG) with the live activation path: active
 /// options, basic behaviors and the calls between them carry the class `active`; nothing is laid
 /// out on a tick. Search (/) marks matching options, Enter opens the first; J jumps to the
 /// deepest active option; a click on an option opens it in the option view.
@@ -59,7 +59,7 @@ export class GraphPanel {
   private matches(): string[] {
     const q = this.search.value.trim().toLowerCase();
     if (!q) return [];
-    const index = this.session.indexOf(this.session.selectedAgent);
+    const index = this.session.indexOf(this.session.selectedRobot);
     const out: string[] = [];
     for (const o of index?.description.options ?? []) if (o.name.toLowerCase().includes(q) && this.view.has(`option_${o.id}`)) out.push(`option_${o.id}`);
     return out;
@@ -80,10 +80,10 @@ export class GraphPanel {
   /// The XABSL agent whose option graph to show: the one whose root the robot runs.
   private graphKey(): { program: string; agent: string | undefined } | null {
     const session = this.session;
-    const program = session.programOf(session.selectedAgent);
-    const index = session.indexOf(session.selectedAgent);
+    const program = session.programOf(session.selectedRobot);
+    const index = session.indexOf(session.selectedRobot);
     if (!program || !index) return null;
-    const root = session.agentInView()?.path[0];
+    const root = session.robotInView()?.path[0];
     const rootName = root?.kind === "option" ? index.optionById.get(root.option)?.name : undefined;
     const agents = index.description.agents;
     const agent = agents.find((a) => a.root === rootName) ?? agents[0];
@@ -96,7 +96,7 @@ export class GraphPanel {
     if (k !== this.key && k !== this.loading) {
       if (!key) {
         this.key = k;
-        this.view.clear(this.session.hello ? "This agent has no XABSL behavior." : "Connecting…");
+        this.view.clear(this.session.hello ? "This robot has no XABSL behavior." : "Connecting…");
       } else {
         this.loading = k;
         graphSvg(key.program, undefined, key.agent)
@@ -122,9 +122,9 @@ export class GraphPanel {
   }
 
   private highlight(force: boolean): void {
-    const agent = this.session.agentInView();
-    const path = agent?.path ?? [];
-    const shape = agent?.shape ?? "";
+    const robot = this.session.robotInView();
+    const path = robot?.path ?? [];
+    const shape = robot?.shape ?? "";
     if (!force && shape === this.lastShape) return;
     this.lastShape = shape;
     const ids: string[] = [];

@@ -55,7 +55,7 @@ export class OptionView {
       this.title,
       this.picker,
       h("button", { title: "Show the source of this option (E)", onclick: () => this.current() && this.actions.edit(this.current() as Option) }, "Edit source"),
-      h("button", { title: "Run this option on the selected agent", onclick: () => this.current() && this.actions.test(this.current() as Option) }, "Test…"),
+      h("button", { title: "Run this option on the selected robot", onclick: () => this.current() && this.actions.test(this.current() as Option) }, "Test…"),
       h("button", { title: "Ask the engine again why (W)", onclick: () => this.explain(true) }, "Why?"),
       h("button", { title: "Fit: the whole machine, or at a legible size around the active state", onclick: () => this.view.fit() }, "Fit"),
       h("button", { title: "The whole machine, however small", onclick: () => this.view.fit(true) }, "Overview"),
@@ -83,26 +83,26 @@ export class OptionView {
     };
   }
 
-  /// The option shown: the one opened, else the root option of the selected agent.
+  /// The option shown: the one opened, else the root option of the selected robot.
   current(): Option | null {
     const session = this.session;
-    const index = session.indexOf(session.selectedAgent);
+    const index = session.indexOf(session.selectedRobot);
     if (!index) return null;
     if (session.openOption !== null) return index.optionById.get(session.openOption) ?? null;
-    const root = session.agentInView()?.path.find((n) => n.kind === "option") as OptionNode | undefined;
+    const root = session.robotInView()?.path.find((n) => n.kind === "option") as OptionNode | undefined;
     return root ? (index.optionById.get(root.option) ?? null) : (index.optionByName.get(index.description.agents[0]?.root ?? "") ?? null);
   }
 
   private node(option: Option): OptionNode | null {
-    const agent = this.session.agentInView();
-    return (agent?.path.find((n) => n.kind === "option" && n.option === option.id) as OptionNode | undefined) ?? null;
+    const robot = this.session.robotInView();
+    return (robot?.path.find((n) => n.kind === "option" && n.option === option.id) as OptionNode | undefined) ?? null;
   }
 
   render(changes: Set<SessionEvent>): void {
     const session = this.session;
-    const index = session.indexOf(session.selectedAgent);
+    const index = session.indexOf(session.selectedRobot);
     const option = this.current();
-    const program = session.programOf(session.selectedAgent);
+    const program = session.programOf(session.selectedRobot);
     if (changes.has("hello") || changes.has("select") || this.picker.options.length === 0) this.fillPicker(index);
     const wanted = session.openOption === null ? "" : String(session.openOption);
     if (this.picker.value !== wanted) this.picker.value = wanted;
@@ -149,12 +149,12 @@ export class OptionView {
   /// The last transition of `option` at the moment in view: seen live, or found in the history.
   private lastTransition(option: Option): { from: number; to: number; leaf: number; t: number } | null {
     const session = this.session;
-    if (session.isLive) return session.transitions.get(session.selectedAgent)?.get(option.id) ?? null;
-    const key = `${session.cursor}|${session.selectedAgent}|${option.id}|${session.buffer.length}`;
+    if (session.isLive) return session.transitions.get(session.selectedRobot)?.get(option.id) ?? null;
+    const key = `${session.cursor}|${session.selectedRobot}|${option.id}|${session.buffer.length}`;
     if (key !== this.pastKey) {
       this.pastKey = key;
       const ticks = session.buffer.all;
-      this.past = lastTransitionBefore(ticks, session.buffer.indexAt(session.cursor ?? 0), session.selectedAgent, option.id);
+      this.past = lastTransitionBefore(ticks, session.buffer.indexAt(session.cursor ?? 0), session.selectedRobot, option.id);
     }
     return this.past;
   }
@@ -198,7 +198,7 @@ export class OptionView {
   private renderInfo(option: Option, index: DescriptionIndex | null): void {
     const node = this.node(option);
     const lines: string[] = [];
-    if (!node) lines.push(`Not active on ${this.session.agentInfo(this.session.selectedAgent)?.name ?? "this agent"} ${this.session.isLive ? "now" : "at this moment"}.`);
+    if (!node) lines.push(`Not active on ${this.session.robotInfo(this.session.selectedRobot)?.name ?? "this robot"} ${this.session.isLive ? "now" : "at this moment"}.`);
     else {
       const state = option.states[node.state];
       lines.push(`state ${state?.name ?? node.state} for ${formatMs(node.stateTime)} · option active ${formatMs(node.optionTime)}`);
@@ -259,14 +259,14 @@ export class OptionView {
     if (!option || !session.isLive || this.explaining || this.element.closest("[hidden]")) return;
     const node = this.node(option);
     if (!node || node.leaf < 0) return;
-    const key = `${session.selectedAgent}|${option.id}|${node.decidedIn}|${node.leaf}`;
+    const key = `${session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}`;
     const now = performance.now();
     if (!force && key === this.explainKey && now - this.explainAt < 1000) return;
     this.explainKey = key;
     this.explainAt = now;
     this.explaining = true;
     this.connection
-      .command<Explanation>("explain", { agent: session.selectedAgent, option: option.id })
+      .command("explain", { robot: session.selectedRobot, option: option.id })
       .then((ex) => {
         this.explanation = ex;
       })

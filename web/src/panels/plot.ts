@@ -7,7 +7,7 @@ import type { Session, SessionEvent } from "../session";
 import { h } from "../ui";
 
 export interface Pin {
-  agent: number;
+  robot: number;
   kind: "input" | "output";
   id: number;
 }
@@ -34,20 +34,20 @@ export class PlotPanel {
     this.element = h("div.panel.plot-panel", {}, h("div.toolbar", {}, h("strong", {}, "Plot"), this.seconds, this.legend), this.host);
     try {
       const saved = JSON.parse(localStorage.getItem(KEY) ?? "[]") as Pin[];
-      if (Array.isArray(saved)) this.pins = saved.filter((p) => typeof p.agent === "number" && typeof p.id === "number");
+      if (Array.isArray(saved)) this.pins = saved.filter((p) => typeof p.robot === "number" && typeof p.id === "number");
     } catch {
       this.pins = [];
     }
     new ResizeObserver(() => this.resize()).observe(this.host);
   }
 
-  has(agent: number, kind: Pin["kind"], id: number): boolean {
-    return this.pins.some((p) => p.agent === agent && p.kind === kind && p.id === id);
+  has(robot: number, kind: Pin["kind"], id: number): boolean {
+    return this.pins.some((p) => p.robot === robot && p.kind === kind && p.id === id);
   }
 
-  toggle(agent: number, kind: Pin["kind"], id: number): void {
-    if (this.has(agent, kind, id)) this.pins = this.pins.filter((p) => !(p.agent === agent && p.kind === kind && p.id === id));
-    else this.pins.push({ agent, kind, id });
+  toggle(robot: number, kind: Pin["kind"], id: number): void {
+    if (this.has(robot, kind, id)) this.pins = this.pins.filter((p) => !(p.robot === robot && p.kind === kind && p.id === id));
+    else this.pins.push({ robot, kind, id });
     try {
       localStorage.setItem(KEY, JSON.stringify(this.pins));
     } catch {
@@ -58,10 +58,10 @@ export class PlotPanel {
 
   private label(p: Pin): string {
     const s = this.session;
-    const index = s.indexOf(p.agent);
+    const index = s.indexOf(p.robot);
     const list = p.kind === "input" ? index?.description.inputs : index?.description.outputs;
     const name = list?.find((x) => x.id === p.id)?.name ?? `${p.kind} ${p.id}`;
-    return `${s.agentInfo(p.agent)?.name ?? p.agent}: ${name}`;
+    return `${s.robotInfo(p.robot)?.name ?? p.robot}: ${name}`;
   }
 
   private resize(): void {
@@ -85,7 +85,7 @@ export class PlotPanel {
       ...this.pins.map((p, i) =>
         h(
           "button.legend-item",
-          { title: "Unpin", onclick: () => this.toggle(p.agent, p.kind, p.id) },
+          { title: "Unpin", onclick: () => this.toggle(p.robot, p.kind, p.id) },
           h("span.swatch", { style: `background:${COLORS[i % COLORS.length]}` }),
           this.label(p),
           " ×",
@@ -137,8 +137,8 @@ export class PlotPanel {
     const xs = ticks.map((t) => t.t / 1000);
     const series = this.pins.map((p) =>
       ticks.map((t) => {
-        const agent = t.agents.find((a) => a.id === p.agent);
-        const v = (p.kind === "input" ? agent?.inputs : agent?.outputs)?.[p.id];
+        const robot = t.robots.find((a) => a.id === p.robot);
+        const v = (p.kind === "input" ? robot?.inputs : robot?.outputs)?.[p.id];
         return v === undefined ? null : typeof v === "boolean" ? (v ? 1 : 0) : v;
       }),
     );

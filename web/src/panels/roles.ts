@@ -2,7 +2,7 @@
 /// (or `*.role`), shown as its enum element. Robot-soccer behaviors assign roles dynamically
 /// (goalie, defender, supporter, striker); the field and the team strip label robots with it.
 import type { DescriptionIndex, OutputSymbol } from "../description";
-import type { AgentState } from "../protocol";
+import type { RobotState } from "../protocol";
 import type { Session } from "../session";
 import { formatValue } from "../ui";
 
@@ -22,8 +22,8 @@ export function roleSymbol(index: DescriptionIndex): OutputSymbol | null {
   return symbol;
 }
 
-export function roleOf(session: Session, agentId: number, state: AgentState | null): string | null {
-  const index = session.indexOf(agentId);
+export function roleOf(session: Session, robotId: number, state: RobotState | null): string | null {
+  const index = session.indexOf(robotId);
   if (!index || !state) return null;
   const symbol = roleSymbol(index);
   if (!symbol) return null;

@@ -1,6 +1,6 @@
-/// Symbols of the selected agent: inputs and outputs (and internal symbols) with their values,
+/// Symbols of the selected robot: inputs and outputs (and internal symbols) with their values,
 /// units, ranges and doc comments; search; pin any to the plot; override an input (and release).
-/// Rows are built once per hello and agent; a tick only changes value texts.
+/// Rows are built once per hello and robot; a tick only changes value texts.
 import type { Connection } from "../connection";
 import type { DescriptionIndex, InputSymbol, OutputSymbol } from "../description";
 import { rangeText } from "../description";
@@ -48,7 +48,7 @@ export class SymbolsPanel {
         if (kind === "input" && (symbol as InputSymbol).params.length) continue; // functions are not streamed
         const value = h("span.value");
         const pin = h("button.icon", { title: "Pin to the plot (P)", "aria-label": `pin ${symbol.name}` }, "plot");
-        pin.addEventListener("click", () => this.plot.toggle(this.session.selectedAgent, kind, symbol.id));
+        pin.addEventListener("click", () => this.plot.toggle(this.session.selectedRobot, kind, symbol.id));
         const facts = [symbol.type === "enum" ? `enum ${symbol.enum}` : symbol.type === "boolean" ? "bool" : "", rangeText(symbol.range, symbol.unit)].filter((x) => x).join(" · ");
         const override =
           kind === "input"
@@ -74,7 +74,7 @@ export class SymbolsPanel {
     add("Inputs", "input", index?.description.inputs ?? []);
     add("Outputs", "output", (index?.description.outputs ?? []).filter((s) => !(s as OutputSymbol).internal));
     add("Internal", "output", (index?.description.outputs ?? []).filter((s) => (s as OutputSymbol).internal));
-    if (!sections.length) sections.push(h("div.empty", {}, this.session.hello ? "No symbols: this agent has no XABSL behavior." : "Connecting…"));
+    if (!sections.length) sections.push(h("div.empty", {}, this.session.hello ? "No symbols: this robot has no XABSL behavior." : "Connecting…"));
     this.list.replaceChildren(...sections);
     this.filter();
   }
@@ -86,29 +86,29 @@ export class SymbolsPanel {
 
   render(changes: Set<SessionEvent>): void {
     const session = this.session;
-    const key = `${session.hello?.generation ?? -1}|${session.programOf(session.selectedAgent)}`;
-    const index = session.indexOf(session.selectedAgent);
+    const key = `${session.hello?.generation ?? -1}|${session.programOf(session.selectedRobot)}`;
+    const index = session.indexOf(session.selectedRobot);
     if (key !== this.key || changes.has("hello")) {
       this.key = key;
       this.build(index);
     }
-    const agent = session.agentInView();
-    const overrides = agent?.overrides ?? {};
+    const robot = session.robotInView();
+    const overrides = robot?.overrides ?? {};
     for (const row of this.rows) {
       if (row.el.hidden) continue;
-      const values = row.kind === "input" ? agent?.inputs : agent?.outputs;
+      const values = row.kind === "input" ? robot?.inputs : robot?.outputs;
       setText(row.value, formatValue(values?.[row.symbol.id], row.symbol.type, row.symbol.enum, index));
       const overridden = row.kind === "input" && String(row.symbol.id) in overrides;
       toggleClass(row.el, "overridden", overridden);
       if (row.release && row.release.hidden === overridden) row.release.hidden = !overridden;
-      toggleClass(row.pin, "on", this.plot.has(session.selectedAgent, row.kind, row.symbol.id));
+      toggleClass(row.pin, "on", this.plot.has(session.selectedRobot, row.kind, row.symbol.id));
     }
   }
 
-  /// Release the override of `symbol` on agent `agentId` (the selected one by default).
-  private releaseInput(symbol: InputSymbol | OutputSymbol, agentId = this.session.selectedAgent): void {
+  /// Release the override of `symbol` on robot `robotId` (the selected one by default).
+  private releaseInput(symbol: InputSymbol | OutputSymbol, robotId = this.session.selectedRobot): void {
     this.connection
-      .command("release_input", { agent: agentId, symbol: symbol.id })
+      .command("release_input", { robot: robotId, symbol: symbol.id })
       .then(() => toast(`${symbol.name} reads the world again`, "ok"))
       .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
   }
@@ -116,10 +116,10 @@ export class SymbolsPanel {
   /// The inline override editor of an input row: a typed control, Enter applies, Escape cancels.
   private editOverride(row: SymbolRow): void {
     const session = this.session;
-    const index = session.indexOf(session.selectedAgent);
+    const index = session.indexOf(session.selectedRobot);
     const symbol = row.symbol;
-    const agentId = session.selectedAgent;
-    const current = session.agentInView()?.inputs[symbol.id];
+    const robotId = session.selectedRobot;
+    const current = session.robotInView()?.inputs[symbol.id];
     let control: HTMLInputElement | HTMLSelectElement;
     if (symbol.type === "boolean") {
       control = h("select", {}, h("option", { value: "true" }, "true"), h("option", { value: "false" }, "false"));
@@ -150,13 +150,13 @@ export class SymbolsPanel {
         value = checked.value;
       }
       this.connection
-        .command("override_input", { agent: agentId, symbol: symbol.id, value })
-        .then(() => toast(`${symbol.name} overridden on ${session.agentInfo(agentId)?.name}`, "ok"))
+        .command("override_input", { robot: robotId, symbol: symbol.id, value })
+        .then(() => toast(`${symbol.name} overridden on ${session.robotInfo(robotId)?.name}`, "ok"))
         .catch((e: Error) => toast(`Override failed: ${e.message}`, "error"));
       editor.remove();
     };
     const release = (): void => {
-      this.releaseInput(symbol, agentId);
+      this.releaseInput(symbol, robotId);
       editor.remove();
     };
     const editor = h(

@@ -1,4 +1,4 @@
-/// The team strip: one chip per agent with its number, root option, root state and role; click
+/// The team strip: one chip per robot with its number, root option, root state and role; click
 /// (or press 1..9, 0) to select. Rows are built once per hello and only their texts change.
 import type { Session, SessionEvent } from "../session";
 import { h, setText, toggleClass } from "../ui";
@@ -25,9 +25,9 @@ export class TeamStrip {
     const teams = session.scene?.teams ?? [];
     this.element.replaceChildren();
     // the left region gives the strip room for every chip (style.css, .team-strip)
-    this.element.style.setProperty("--chips", String(session.agents.length));
-    this.chips = session.agents.map((agent, i) => {
-      const color = teams.find((t) => t.name === agent.team)?.color ?? "#888";
+    this.element.style.setProperty("--chips", String(session.robots.length));
+    this.chips = session.robots.map((robot, i) => {
+      const color = teams.find((t) => t.name === robot.team)?.color ?? "#888";
       const root = h("span.chip-root");
       const state = h("span.chip-state");
       const role = h("span.chip-role");
@@ -36,29 +36,29 @@ export class TeamStrip {
         "button.chip",
         {
           role: "option",
-          "data-agent": agent.id,
-          title: `${agent.name}${agent.program ? ` runs ${agent.program}` : " (no XABSL engine)"}${key ? ` — key ${key}` : ""}`,
-          onclick: () => session.selectAgent(agent.id),
+          "data-robot": robot.id,
+          title: `${robot.name}${robot.program ? ` runs ${robot.program}` : " (no XABSL engine)"}${key ? ` — key ${key}` : ""}`,
+          onclick: () => session.selectRobot(robot.id),
         },
-        h("span.chip-number", { style: `background:${color}` }, String(agent.number)),
-        h("span.chip-text", {}, h("span.chip-name", {}, agent.name), root, state),
+        h("span.chip-number", { style: `background:${color}` }, String(robot.number)),
+        h("span.chip-text", {}, h("span.chip-name", {}, robot.name), root, state),
         role,
       );
       this.element.append(el);
-      return { id: agent.id, el, root, state, role };
+      return { id: robot.id, el, root, state, role };
     });
   }
 
   render(changes: Set<SessionEvent>): void {
     const session = this.session;
-    if (changes.has("hello") || this.chips.length !== session.agents.length) this.build();
+    if (changes.has("hello") || this.chips.length !== session.robots.length) this.build();
     const tick = session.view;
     for (const chip of this.chips) {
-      toggleClass(chip.el, "selected", chip.id === session.selectedAgent);
-      chip.el.setAttribute("aria-selected", String(chip.id === session.selectedAgent));
-      const agent = tick?.agents.find((a) => a.id === chip.id) ?? null;
+      toggleClass(chip.el, "selected", chip.id === session.selectedRobot);
+      chip.el.setAttribute("aria-selected", String(chip.id === session.selectedRobot));
+      const robot = tick?.robots.find((a) => a.id === chip.id) ?? null;
       const index = session.indexOf(chip.id);
-      const root = agent?.path[0];
+      const root = robot?.path[0];
       let rootText = "–";
       let stateText = "";
       if (root?.kind === "option") {
@@ -68,12 +68,12 @@ export class TeamStrip {
       } else if (root?.kind === "behavior") {
         rootText = index?.behaviorById.get(root.behavior)?.name ?? String(root.behavior);
       }
-      if (agent?.fault) stateText = "fault";
+      if (robot?.fault) stateText = "fault";
       setText(chip.root, rootText);
       setText(chip.state, stateText);
-      setText(chip.role, roleOf(session, chip.id, agent) ?? "");
-      toggleClass(chip.el, "faulted", !!agent?.fault);
-      toggleClass(chip.el, "forced", !!agent?.forced);
+      setText(chip.role, roleOf(session, chip.id, robot) ?? "");
+      toggleClass(chip.el, "faulted", !!robot?.fault);
+      toggleClass(chip.el, "forced", !!robot?.forced);
     }
   }
 }

@@ -1,5 +1,5 @@
 /// The test panel: pick an option or basic behavior, fill a parameter form generated from its
-/// declaration (types, ranges, units, enum choices), run it as the root of the selected agent
+/// declaration (types, ranges, units, enum choices), run it as the root of the selected robot
 /// (`force_option` / `force_behavior`), watch it, release. The simulation controls (pause, step,
 /// speed, reset) sit in the top bar and work from here too.
 import type { Connection } from "../connection";
@@ -35,16 +35,16 @@ export class TesterPanel {
     this.element = h(
       "div.panel.tester-panel",
       {},
-      h("label.field-label", { for: "test-target" }, "Run as root of the selected agent"),
+      h("label.field-label", { for: "test-target" }, "Run as root of the selected robot"),
       this.picker,
       this.doc,
       this.form,
       h(
         "div.toolbar",
         {},
-        h("button.primary#test-run", { title: "Force it as the root (Ctrl+Enter)", onclick: () => this.run() }, "▶ Run on agent"),
-        h("button#test-release", { title: "Back to the agent's own root", onclick: () => this.release() }, "Release"),
-        h("button", { title: "Restart every option of this agent and clear a fault", onclick: () => this.resetAgent() }, "Reset agent"),
+        h("button.primary#test-run", { title: "Force it as the root (Ctrl+Enter)", onclick: () => this.run() }, "▶ Run on robot"),
+        h("button#test-release", { title: "Back to the robot's own root", onclick: () => this.release() }, "Release"),
+        h("button", { title: "Restart every option of this robot's XABSL agent and clear a fault", onclick: () => this.resetAgent() }, "Reset agent"),
       ),
       this.state,
     );
@@ -67,8 +67,8 @@ export class TesterPanel {
   }
 
   private fillPicker(): void {
-    const index = this.session.indexOf(this.session.selectedAgent);
-    const key = `${this.session.hello?.generation}|${this.session.programOf(this.session.selectedAgent)}`;
+    const index = this.session.indexOf(this.session.selectedRobot);
+    const key = `${this.session.hello?.generation}|${this.session.programOf(this.session.selectedRobot)}`;
     if (key === this.key) return;
     this.key = key;
     const previous = this.picker.value;
@@ -83,7 +83,7 @@ export class TesterPanel {
   }
 
   private buildForm(): void {
-    const index = this.session.indexOf(this.session.selectedAgent);
+    const index = this.session.indexOf(this.session.selectedRobot);
     const target = this.target();
     const decl = target?.kind === "option" ? index?.optionByName.get(target.name) : target ? index?.behaviorByName.get(target.name) : undefined;
     setText(this.doc, decl?.doc ?? "");
@@ -125,7 +125,7 @@ export class TesterPanel {
         ),
       );
     }
-    if (!rows.length) rows.push(h("div.muted", {}, target ? "No parameters." : "Nothing to run: the agent has no XABSL behavior."));
+    if (!rows.length) rows.push(h("div.muted", {}, target ? "No parameters." : "Nothing to run: the robot has no XABSL behavior."));
     this.form.replaceChildren(...rows);
   }
 
@@ -162,43 +162,45 @@ export class TesterPanel {
 
   run(): void {
     const target = this.target();
-    const agent = this.session.selectedAgent;
+    const robot = this.session.selectedRobot;
     if (!target) return;
     const params = this.params();
     if (!params) return;
-    const op = target.kind === "option" ? "force_option" : "force_behavior";
-    this.connection
-      .command(op, { agent, [target.kind]: target.name, params })
-      .then(() => toast(`${target.name} runs as the root of ${this.session.agentInfo(agent)?.name}`, "ok"))
+    const forced =
+      target.kind === "option"
+        ? this.connection.command("force_option", { robot, option: target.name, params })
+        : this.connection.command("force_behavior", { robot, behavior: target.name, params });
+    forced
+      .then(() => toast(`${target.name} runs as the root of ${this.session.robotInfo(robot)?.name}`, "ok"))
       .catch((e: Error) => toast(`Could not run ${target.name}: ${e.message}`, "error"));
   }
 
   release(): void {
-    const agent = this.session.selectedAgent;
+    const robot = this.session.selectedRobot;
     this.connection
-      .command("release", { agent })
-      .then(() => toast(`${this.session.agentInfo(agent)?.name} runs its own root again`, "ok"))
+      .command("release", { robot })
+      .then(() => toast(`${this.session.robotInfo(robot)?.name} runs its own root again`, "ok"))
       .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
   }
 
   private resetAgent(): void {
-    const agent = this.session.selectedAgent;
-    this.connection.command("reset_agent", { agent }).catch((e: Error) => toast(`Reset failed: ${e.message}`, "error"));
+    const robot = this.session.selectedRobot;
+    this.connection.command("reset_agent", { robot }).catch((e: Error) => toast(`Reset failed: ${e.message}`, "error"));
   }
 
   render(changes: Set<SessionEvent>): void {
     if (changes.has("hello") || changes.has("select") || !this.picker.options.length) this.fillPicker();
-    const agent = this.session.live?.agents.find((a) => a.id === this.session.selectedAgent);
-    const index = this.session.indexOf(this.session.selectedAgent);
-    const name = this.session.agentInfo(this.session.selectedAgent)?.name ?? "";
+    const robot = this.session.live?.robots.find((a) => a.id === this.session.selectedRobot);
+    const index = this.session.indexOf(this.session.selectedRobot);
+    const name = this.session.robotInfo(this.session.selectedRobot)?.name ?? "";
     let text = `${name}: runs its own root`;
-    if (agent?.forced) {
-      const [kind, id] = agent.forced;
+    if (robot?.forced) {
+      const [kind, id] = robot.forced;
       const forced = kind === 0 ? index?.optionById.get(id)?.name : index?.behaviorById.get(id)?.name;
       text = `${name}: forced to ${kind === 0 ? "option" : "basic behavior"} ${forced ?? id} — Release to go back`;
     }
-    if (agent?.fault) text += ` · fault: ${agent.fault.message}`;
+    if (robot?.fault) text += ` · fault: ${robot.fault.message}`;
     setText(this.state, text);
-    this.state.classList.toggle("forced", !!agent?.forced);
+    this.state.classList.toggle("forced", !!robot?.forced);
   }
 }

@@ -1,8 +1,8 @@
 /// The timeline: for the buffered history (live ticks plus the server's ring buffer), one row per
-/// agent (the team overview: root option and state) and one row per option of the selected agent,
+/// robot (the team overview: root option and state) and one row per option of the selected robot,
 /// coloured by state. Click or drag to scrub: every panel shows that moment. ←/→ step a tick
 /// (Shift: ten), Home goes to the oldest, End or L back to live.
-import { buildAgentTimeline, buildTeamTimeline, segmentHue, type TimelineRow } from "../timeline";
+import { buildRobotTimeline, buildTeamTimeline, segmentHue, type TimelineRow } from "../timeline";
 import type { Session, SessionEvent } from "../session";
 import { formatClock, formatMs, h } from "../ui";
 
@@ -90,7 +90,7 @@ export class TimelinePanel {
     if (!this.rows.length) top += OPTION_ROW;
     top += GAP;
     for (const row of this.team) {
-      if (y >= top && y < top + TEAM_ROW) return this.session.selectAgent(row.id);
+      if (y >= top && y < top + TEAM_ROW) return this.session.selectRobot(row.id);
       top += TEAM_ROW;
     }
   }
@@ -104,8 +104,8 @@ export class TimelinePanel {
     if (structural || (changes.has("tick") && session.isLive && now - this.builtAt > 250)) {
       this.builtAt = now;
       const ticks = session.buffer.all;
-      this.team = buildTeamTimeline(ticks, session.agents.filter((a) => a.program !== null), (id) => session.indexOf(id));
-      this.rows = buildAgentTimeline(ticks, session.selectedAgent, session.indexOf(session.selectedAgent));
+      this.team = buildTeamTimeline(ticks, session.robots.filter((a) => a.program !== null), (id) => session.indexOf(id));
+      this.rows = buildRobotTimeline(ticks, session.selectedRobot, session.indexOf(session.selectedRobot));
       this.t0 = session.buffer.oldest?.t ?? 0;
       this.t1 = Math.max(this.t0 + 1, session.buffer.newest?.t ?? 1);
       this.dirty = true;
@@ -173,7 +173,7 @@ export class TimelinePanel {
       }
     };
     ctx.fillStyle = fg;
-    ctx.fillText(`${session.agentInfo(session.selectedAgent)?.name ?? ""}: options and their states`, 4, top + GAP / 2);
+    ctx.fillText(`${session.robotInfo(session.selectedRobot)?.name ?? ""}: options and their states`, 4, top + GAP / 2);
     top += GAP;
     if (!this.rows.length) {
       ctx.fillStyle = muted;
@@ -189,7 +189,7 @@ export class TimelinePanel {
     ctx.fillText("Team (root option/state)", 4, top + GAP / 2);
     top += GAP;
     for (const row of this.team) {
-      drawRow(row, top, TEAM_ROW, row.label, 0, row.id === session.selectedAgent);
+      drawRow(row, top, TEAM_ROW, row.label, 0, row.id === session.selectedRobot);
       top += TEAM_ROW;
     }
     const cursor = session.cursor;

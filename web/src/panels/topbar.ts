@@ -1,4 +1,4 @@
-/// The top bar: agent picker, simulation controls (pause/resume, step, speed, reset), the game
+/// The top bar: robot picker, simulation controls (pause/resume, step, speed, reset), the game
 /// clock and score, the link-health indicator, the theme switch and the keyboard help.
 import type { Connection, LinkState } from "../connection";
 import type { Hello } from "../protocol";
@@ -10,7 +10,7 @@ const QUIET_MS = 1500;
 
 export class TopBar {
   readonly element: HTMLElement;
-  readonly agentPicker: HTMLSelectElement;
+  readonly robotPicker: HTMLSelectElement;
   private readonly pauseButton: HTMLButtonElement;
   private readonly speed: HTMLSelectElement;
   private readonly clock: HTMLElement;
@@ -32,8 +32,8 @@ export class TopBar {
     private readonly connection: Connection,
     actions: { toggleTheme(): void; help(): void },
   ) {
-    this.agentPicker = h("select#agent-picker", { "aria-label": "Agent", title: "Selected agent (1..9, 0)" });
-    this.agentPicker.addEventListener("change", () => session.selectAgent(Number(this.agentPicker.value)));
+    this.robotPicker = h("select#robot-picker", { "aria-label": "Robot", title: "Selected robot (1..9, 0)" });
+    this.robotPicker.addEventListener("change", () => session.selectRobot(Number(this.robotPicker.value)));
     this.pauseButton = h("button#pause", { title: "Pause / resume the simulation (Space)", onclick: () => this.togglePause() }, "❚❚ Pause");
     this.speed = h("select#speed", { "aria-label": "Speed", title: "Simulation speed" }, ...SPEEDS.map((s) => h("option", { value: s }, formatSpeed(s))));
     this.speed.value = "1";
@@ -54,7 +54,7 @@ export class TopBar {
       "header.topbar",
       {},
       h("span.brand", {}, "xabsl", h("b", {}, "studio")),
-      h("label.inline", {}, "Agent ", this.agentPicker),
+      h("label.inline", {}, "Robot ", this.robotPicker),
       h(
         "div.group",
         { role: "group", "aria-label": "Simulation" },
@@ -74,7 +74,7 @@ export class TopBar {
   togglePause(): void {
     const op = this.paused ? "resume" : "pause";
     this.connection
-      .command<{ paused: boolean }>(op)
+      .command(op)
       .then((r) => this.setPaused(r?.paused ?? op === "pause"))
       .catch((e: Error) => toast(`${op}: ${e.message}`, "error"));
   }
@@ -117,11 +117,11 @@ export class TopBar {
         this.setPaused(!!info.paused);
         this.setSpeed(info.speed);
       }
-      this.agentPicker.replaceChildren(
-        ...session.agents.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${a.program ? "" : " (no engine)"}`)),
+      this.robotPicker.replaceChildren(
+        ...session.robots.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${a.program ? "" : " (no engine)"}`)),
       );
     }
-    if (this.agentPicker.value !== String(session.selectedAgent)) this.agentPicker.value = String(session.selectedAgent);
+    if (this.robotPicker.value !== String(session.selectedRobot)) this.robotPicker.value = String(session.selectedRobot);
     const tick = session.live;
     const status = tick?.status;
     const parts: string[] = [];
@@ -149,8 +149,9 @@ export class TopBar {
     this.asking = true;
     this.askedAt = now;
     this.askedFrameAt = c.lastFrameAt;
-    c.command<{ paused: boolean; speed: number; finished?: boolean }>("status")
-      .then((status) => {
+    c.command("status")
+      .then((reply) => {
+        const status = reply as { paused?: boolean; speed: number; finished?: boolean };
         this.finished = !!status.finished;
         this.setPaused(!!status.paused);
         this.setSpeed(status.speed);
