@@ -68,6 +68,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -95,6 +96,18 @@ _MAX_INT_DIGITS = 400
 
 class ModelError(DynamicsError, ValueError):
     """A DD model file is invalid; the message names the file, the key and the problem."""
+
+
+class ModelSyntaxError(ModelError):
+    """A model text that is not UTF-8 or not JSON we read; ``pos`` is the offset in the text.
+
+    ``reason`` is the problem alone (``"not valid JSON: Expecting value"``), ``line`` and ``col``
+    are 1-based; the message adds the source and the place.
+    """
+
+    def __init__(self, source: str, reason: str, pos: int, line: int, col: int) -> None:
+        super().__init__(f"{source}: {reason} at line {line} column {col}")
+        self.reason, self.pos, self.line, self.col = reason, pos, line, col
 
 
 #: Evaluates features, targets and slow rates from (sensors, slow variables, activations).
@@ -266,19 +279,31 @@ def load_model(path: str | Path, dt: float | None = None) -> DDModel:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
         line, col = _line_col(raw, e.start)
-        raise ModelError(f"{p}: not UTF-8 text at line {line} column {col} (byte 0x{raw[e.start]:02x})") from None
+        raise ModelSyntaxError(str(p), f"not UTF-8 text (byte 0x{raw[e.start]:02x})", e.start, line, col) from None
+    data = parse_model_json(text, str(p))
+    return build_model(data, source=str(p), dt=dt)
+
+
+def parse_model_json(text: str, source: str = "<model>") -> Any:
+    """Parse a model file's text as JSON, within the limits every model reader keeps.
+
+    Nesting deeper than :data:`MAX_JSON_DEPTH` is refused before parsing (the json module would
+    recurse into a RecursionError), and integers of more than a few hundred digits are read as
+    floats (Python's int() refuses 4,300 digits; the builder then names the key of a non-finite one).
+
+    Raises:
+        ModelSyntaxError: not JSON, or nested too deeply; with the offset, line and column.
+    """
     deep = _too_deep(text, MAX_JSON_DEPTH)
     if deep is not None:
-        raise ModelError(
-            f"{p}: JSON nested too deeply (over {MAX_JSON_DEPTH} levels) at line {deep[0]} column {deep[1]}"
-        )
+        line, col = _line_col(text, deep)
+        raise ModelSyntaxError(source, f"JSON nested too deeply (over {MAX_JSON_DEPTH} levels)", deep, line, col)
     try:
-        data = json.loads(text, parse_int=_parse_int)
+        return json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as e:
-        raise ModelError(f"{p}: not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+        raise ModelSyntaxError(source, f"not valid JSON: {e.msg}", e.pos, e.lineno, e.colno) from None
     except RecursionError:  # _too_deep bounds the nesting; kept so no input can leak one
-        raise ModelError(f"{p}: JSON nested too deeply") from None
-    return build_model(data, source=str(p), dt=dt)
+        raise ModelSyntaxError(source, "JSON nested too deeply", 0, 1, 1) from None
 
 
 def _parse_int(digits: str) -> int | float:
@@ -293,8 +318,8 @@ def _line_col(data: bytes | str, offset: int) -> tuple[int, int]:
     return line, offset - start + 1
 
 
-def _too_deep(text: str, limit: int) -> tuple[int, int] | None:
-    """Line and column where JSON ``text`` nests deeper than ``limit``, or None (strings skipped)."""
+def _too_deep(text: str, limit: int) -> int | None:
+    """The offset where JSON ``text`` nests deeper than ``limit``, or None (strings skipped)."""
     if text.count("[") + text.count("{") <= limit:
         return None
     depth = 0
@@ -312,7 +337,7 @@ def _too_deep(text: str, limit: int) -> tuple[int, int] | None:
         elif ch in "[{":
             depth += 1
             if depth > limit:
-                return _line_col(text, i)
+                return i
         elif ch in "]}":
             depth -= 1
     return None
