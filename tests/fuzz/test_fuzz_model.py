@@ -35,3 +35,22 @@ def test_mutated_models_load_or_raise_model_error(rnd: random.Random) -> None:
             message = str(error)
             assert str(path) in message, message
             assert len(message) < 2000, f"message of {len(message)} characters"
+
+
+@fuzz_settings(80)
+@given(st.randoms(use_true_random=False))
+def test_mutated_model_texts_in_the_studio_give_diagnostics(rnd: random.Random) -> None:
+    from types import SimpleNamespace
+
+    from examples.errands import model_edit
+
+    if rnd.random() < 0.6:
+        text = splice_odd_value(DOCUMENT, rnd)
+    else:
+        text = mutate_many(RAW, rnd).decode("utf-8", "replace")
+    world = SimpleNamespace(model_name="model/errands_dd.json", dt=0.02)
+    with time_bound():
+        diagnostics, model = model_edit.check(world, text)  # type: ignore[arg-type]
+    assert (model is None) == bool(diagnostics)
+    for diagnostic in diagnostics:
+        assert diagnostic["span"]["line"] >= 1 and len(diagnostic["message"]) < 2000
