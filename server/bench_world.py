@@ -37,7 +37,7 @@ from engine.host import (
     behavior_source,
     common_root,
 )
-from engine.ir.model import Program
+from engine.ir.model import Program, short_name
 from engine.runtime import BasicBehavior, Engine
 from engine.trace.conformance import conformance_bindings
 from engine.types import Value
@@ -197,8 +197,8 @@ class _Skill(BasicBehavior):
         self.agent = agent
 
     def execute(self) -> None:
-        """Run the skill with the parameters by their short names."""
-        params = {name.rsplit(".", 1)[-1]: value for name, value in self.params.items()}
+        """Run the skill with the parameters by their declared names (the behavior's prefix stripped)."""
+        params = {short_name(name, self.name): value for name, value in self.params.items()}
         type(self).run(self.agent, params)
 
 

@@ -70,7 +70,7 @@ def _parse_error(path: str, error: Exception) -> UsageError:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Plan, print the layered plan; 0 with a plan, 1 without, 2 for unreadable or bad PDDL."""
+    """Parse, ground and plan; print the layered plan; 0 with a plan, 1 without, 2 for bad PDDL."""
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 

@@ -24,12 +24,13 @@ import math
 import os
 import sys
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from engine.cli import UsageError
 from engine.errors import CommandLineError
-from engine.files import read_regular, write_atomically
-from engine.ir.model import Program
+
+if TYPE_CHECKING:  # the IR is imported when a trace runs, not for `xabsl --help`
+    from engine.ir.model import Program
 
 _IC_SUFFIXES = (".ic", ".dat")
 
@@ -135,6 +136,8 @@ def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
         UsageError: naming the file, the line and the tick.
     """
     try:
+        from engine.files import read_regular
+
         data = read_regular(path, MAX_INPUT_BYTES)
     except OSError as error:
         raise UsageError(f"{path}: cannot read: {error.strerror or error}") from None
@@ -160,8 +163,9 @@ def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Trace the behavior over the input trace; the exit status as in the module docstring."""
+    """Run one tick per input line and write the trace; the exit status as in the module docstring."""
     from engine.errors import EngineError
+    from engine.files import write_atomically
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
     if not os.path.exists(args.inputs):

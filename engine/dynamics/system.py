@@ -28,11 +28,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from engine.dynamics.model import DDModel, ModelError
+
+
+class TickLists(NamedTuple):
+    """A tick's numbers as the Python lists the kernel made (shared with the record: read, never change)."""
+
+    features: list[float]
+    u: list[float]
+    T: list[float]
+    alpha: list[float]
+    d_relax: list[float]
+    d_noise: list[float]
+    pair_targets: list[float]
+    pair_contributions: list[float]
+    decay: list[float]
+    actuators: list[float]
+    slow: list[float]
+    d_oct: Mapping[str, list[float]]
 
 
 class TickRecord:
@@ -114,6 +131,11 @@ class TickRecord:
         cmat = np.zeros((m.n, len(m.actuators)))
         cmat[m.pair_behavior, m.pair_actuator] = self._contrib
         return cmat
+
+    def lists(self) -> TickLists:
+        """The tick's numbers without copies into arrays (for per-tick views such as the studio's)."""
+        return TickLists(self._features, self._u, self._T, self._alpha, self._d_relax, self._d_noise, self._tgt,
+                         self._contrib, self._decay, self._act, self._slow, self._d_oct)  # fmt: skip
 
     def dominant_index(self) -> int:
         """Index of the behavior with the largest activation (ties: first in model order)."""

@@ -21,7 +21,7 @@ import sys
 
 from engine.cli import UsageError
 from engine.files import write_atomically
-from examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, run_world, summary
+from examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, physics_rate, run_world, summary
 
 PERTURBATIONS = ("none", "teleport-mug", "remove-book", "block-cb")
 
@@ -52,6 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--dt", type=float, default=0.02, help="behavior tick in seconds (default 0.02)")
     parser.add_argument("--noise", type=float, default=1.0, help="multiplies the DD noise (0 = none)")
+    parser.add_argument("--record", metavar="FILE.mcap", help="record every tick to an MCAP file")
     parser.add_argument(
         "--perturb",
         choices=PERTURBATIONS,
@@ -107,7 +108,22 @@ def main(args: argparse.Namespace) -> int:
             write_atomically(args.render, text.encode("utf-8"))
         except OSError as error:
             raise UsageError(f"cannot write {args.render}: {error.strerror or error}") from None
-    stats = run_world(world, duration)
+    recorder = None
+    if args.record:
+        from engine.record import Recorder
+
+        hz = physics_rate(world.dt)
+        recorder = Recorder.for_world(
+            args.record,
+            world,
+            lambda _: AGENTS_PATH.parent.name,
+            example="errands",
+            behavior_hz=hz[0],
+            physics_hz=hz[1],
+        )
+    stats = run_world(world, duration, on_tick=recorder.on_tick if recorder is not None else None)
+    if recorder is not None:
+        recorder.close()
     out = summary(world)
     out["real_time_factor"] = round(stats.real_time_factor, 1)
     if args.json:

@@ -706,33 +706,34 @@ class ErrandsWorld:
         rows = _sparse_rows(m)
         prev = self._prev_tick
         # The record's own lists (no arrays: this runs for every sampled tick of the studio).
-        alpha0: list[float] = prev._alpha if prev is not None else m.alpha_init.tolist()
-        feats: list[float] = tick._features
+        now = tick.lists()
+        alpha0: list[float] = prev.lists().alpha if prev is not None else m.alpha_init.tolist()
+        feats = now.features
         n = m.n
         sensors = [sum(b * feats[j] for j, b in rows.b[i]) for i in range(n)]
         self_ex = [rows.w_self[i] * alpha0[i] for i in range(n)]
         others = [sum(w * alpha0[j] for j, w in rows.w_others[i]) for i in range(n)]
         plan = [0.0] * n
-        for d in tick._d_oct.values():
+        for d in now.d_oct.values():
             plan = [a + b for a, b in zip(plan, d, strict=True)]
         parts = {
-            "relax": tick._d_relax,
+            "relax": now.d_relax,
             "plan": plan,
-            "noise": tick._d_noise,
-            "T": tick._T,
-            "u": tick._u,
+            "noise": now.d_noise,
+            "T": now.T,
+            "u": now.u,
             "sensors": sensors,
             "self": self_ex,
             "others": others,
             "bias": rows.bias,
         }
         shares = [[0.0] * n for _ in m.actuators]
-        for p, c in enumerate(tick._contrib):
+        for p, c in enumerate(now.pair_contributions):
             shares[rows.pair_actuator[p]][rows.pair_behavior[p]] = c
         # One numpy rounding for all numbers (a hundred round() calls cost more than the rest).
         values = np.round(np.array(list(parts.values())), 5).tolist()
         fused = np.round(np.array(shares), 4).tolist()
-        decay, acts = np.round(np.array([tick._decay, tick._act]), 4).tolist()
+        decay, acts = np.round(np.array([now.decay, now.actuators]), 4).tolist()
         return {
             "terms": dict(zip(parts, values, strict=True)),
             "fusion": {a: {"value": acts[j], "decay": decay[j], "shares": fused[j]} for j, a in enumerate(m.actuators)},

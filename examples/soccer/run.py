@@ -34,7 +34,7 @@ from engine.cli import UsageError
 from engine.emit.dot import option_graph
 from engine.errors import HostError
 from engine.files import write_atomically
-from engine.host import DEFAULT_BEHAVIOR_HZ, run_headless
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
 from engine.ir.model import Program
 from engine.lang import compile_file
 from examples.soccer.bindings import XabslController
@@ -245,6 +245,8 @@ def play_match(
     players: int = 5,
     half_duration_s: float = 600.0,
     progress: Any = None,
+    record: str | None = None,
+    record_keys: tuple[str, str] = ("behavior", "chase"),
     **options: Any,
 ) -> MatchReport:
     """Play a whole match headless and report score, statistics and option activations.
@@ -256,6 +258,8 @@ def play_match(
         players: robots per team.
         half_duration_s: playing time per half (a match has two).
         progress: called as ``progress(time_ms, status)`` every simulated second, if given.
+        record: write the match to this MCAP file (``engine.record``).
+        record_keys: the names of the home and away programs in the recording.
         **options: further ``SoccerWorld`` arguments.
     """
     world = build_world(seed, home, away, players=players, half_duration_s=half_duration_s, record=True, **options)
@@ -271,8 +275,28 @@ def play_match(
             if ticks % DEFAULT_BEHAVIOR_HZ == 0:
                 progress(world.time_ms, world.game)
 
+    recorder = None
+    if record is not None:
+        from engine.record import Recorder
+
+        recorder = Recorder.for_world(
+            record,
+            world,
+            lambda agent: record_keys[agent.team_index],  # type: ignore[attr-defined]
+            example="soccer",
+            behavior_hz=DEFAULT_BEHAVIOR_HZ,
+            physics_hz=DEFAULT_PHYSICS_HZ,
+        )
+        watch = on_tick
+
+        def on_tick(now_ms: int) -> None:
+            watch(now_ms)
+            recorder.tick(now_ms)
+
     # Generous bound: the referee ends the match; pre-game and kick-off phases add a few seconds each.
     run = run_headless(world, duration_s=2 * half_duration_s + 600.0, on_tick=on_tick)
+    if recorder is not None:
+        recorder.close()
     stats.finish()
     digest = hashlib.blake2b(digest_size=16)
     activations: tuple[dict[str, int], dict[str, int]] = ({}, {})
@@ -325,6 +349,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--json", action="store_true", help="print one JSON object: score, per-team statistics, option activations"
     )
+    parser.add_argument("--record", metavar="FILE.mcap", help="record every tick of the match to an MCAP file")
     parser.add_argument(
         "--render", metavar="OUT.dot", help="write the home team's option graph as Graphviz DOT and exit"
     )
@@ -353,10 +378,11 @@ def main(args: argparse.Namespace) -> int:
         return 0
 
     half = args.duration / 2.0
+    record = {"record": args.record, "record_keys": _record_keys(args.home, args.away)} if args.record else {}
     if sys.stdout.isatty() and not args.json:
-        report = _play_with_progress(args.seed, home, away, args.players, half)
+        report = _play_with_progress(args.seed, home, away, args.players, half, **record)
     else:
-        report = play_match(args.seed, home, away, players=args.players, half_duration_s=half)
+        report = play_match(args.seed, home, away, players=args.players, half_duration_s=half, **record)
     if args.json:
         sys.stdout.buffer.write(orjson.dumps(report.as_dict()) + b"\n")
         return 0
@@ -377,7 +403,15 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
-def _play_with_progress(seed: int, home: Program, away: Program, players: int, half: float) -> MatchReport:
+def _record_keys(home: str, away: str) -> tuple[str, str]:
+    """The program keys of a recording: the team folders' names (``behavior``, ``chase``) if they differ."""
+    keys = (Path(home).resolve().name, Path(away).resolve().name)
+    return keys if keys[0] != keys[1] else ("home", "away")
+
+
+def _play_with_progress(
+    seed: int, home: Program, away: Program, players: int, half: float, **record: Any
+) -> MatchReport:
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     total_ms = 2 * half * 1000.0
@@ -399,4 +433,4 @@ def _play_with_progress(seed: int, home: Program, away: Program, players: int, h
                 description=f"half {game.half} {game.state.name.lower():<8}",
             )
 
-        return play_match(seed, home, away, players=players, half_duration_s=half, progress=progress)
+        return play_match(seed, home, away, players=players, half_duration_s=half, progress=progress, **record)

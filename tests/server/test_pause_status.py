@@ -15,13 +15,13 @@ import pytest
 from fastapi.testclient import TestClient
 
 from server.app import create_app
-from server.examples import DemoExample
+from server.bench_world import BenchExample
 from server.session import Session
 
 
 @pytest.fixture
 def api(demo_dir: Path) -> Iterator[TestClient]:
-    session = Session(DemoExample(demo_dir), seed=3, speed=5.0)
+    session = Session(BenchExample(demo_dir), seed=3, speed=5.0)
     with TestClient(create_app(session, web_dist=None), base_url="http://127.0.0.1") as client:
         yield client
 

@@ -1,0 +1,175 @@
+"""What does recording cost? The same headless 5 vs 5 match with and without ``--record``, in one run.
+
+Question (issue 12, "Cost"): recording should add under 10 % to a headless match's wall time, a
+10-minute 5 vs 5 match should be at most 50 MB, and sampling the engines (one mechanism for the
+studio and for recordings) should cost at most 0.2 ms per tick for 10 agents.
+
+Runs, alternating so that drift of a shared machine hits both sides alike (``--repeat`` pairs):
+``--seconds`` simulated seconds of the soccer example (example team vs chase team, seed
+``--seed``) without recording, then the same match recorded with ``engine.record.Recorder``
+(exactly what ``xabsl run examples/soccer --record FILE.mcap`` does). Printed: wall and CPU time
+of each, the overhead in percent, where the recorder's time goes (sampling the engines alone is
+measured in a third run that samples and discards), the file size and its extrapolation to 10
+simulated minutes, and how long seeking a random tick of the file takes. ``--full`` adds one
+recorded run of 600 simulated seconds and prints its real size and seek times.
+
+    .venv/bin/python benchmarks/record_cost.py [--seconds 120] [--repeat 2] [--full]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
+from engine.record import AgentSampler, Recorder, RecorderStats, Recording, engines_of
+from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
+
+TEN_MINUTES_TICKS = 600 * DEFAULT_BEHAVIOR_HZ
+MB = 1024 * 1024
+
+
+def plain(seconds: float, seed: int, programs: tuple[object, object]) -> tuple[float, float, object]:
+    world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
+    cpu = time.process_time()
+    wall = time.perf_counter()
+    run_headless(world, duration_s=seconds)
+    return time.perf_counter() - wall, time.process_time() - cpu, world.dynamic_scene()
+
+
+def recorded(
+    seconds: float, seed: int, programs: tuple[object, object], path: Path, background: bool
+) -> tuple[float, float, object, RecorderStats]:
+    world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
+    cpu = time.process_time()
+    wall = time.perf_counter()
+    recorder = Recorder.for_world(
+        path,
+        world,
+        lambda agent: ("behavior", "chase")[agent.team_index],  # type: ignore[attr-defined]
+        example="soccer",
+        behavior_hz=DEFAULT_BEHAVIOR_HZ,
+        physics_hz=DEFAULT_PHYSICS_HZ,
+        background=background,
+    )
+    run_headless(world, duration_s=seconds, on_tick=recorder.on_tick)
+    stats = recorder.close()
+    return time.perf_counter() - wall, time.process_time() - cpu, world.dynamic_scene(), stats
+
+
+def sampling_only(seconds: float, seed: int, programs: tuple[object, object]) -> tuple[float, int]:
+    """Seconds spent in ``AgentSampler.sample`` for all agents, and the number of ticks."""
+    world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
+    samplers = [AgentSampler(e) for e in engines_of(world) if e is not None]
+    spent = 0.0
+    ticks = 0
+
+    def on_tick(_now: int) -> None:
+        nonlocal spent, ticks
+        started = time.perf_counter()
+        for sampler in samplers:
+            sampler.sample()
+        spent += time.perf_counter() - started
+        ticks += 1
+
+    run_headless(world, duration_s=seconds, on_tick=on_tick)
+    return spent, ticks
+
+
+def seek_times(path: Path, n: int, seed: int) -> list[float]:
+    with Recording(path) as recording:
+        rng = random.Random(seed)
+        times = []
+        for _ in range(n):
+            seq = rng.randrange(len(recording))
+            started = time.perf_counter()
+            view = recording.tick(seq)
+            for agent in view.agents.values():
+                agent.tree()
+            times.append(time.perf_counter() - started)
+        return times
+
+
+def _spread(seconds: list[float]) -> str:
+    return f"median {1e3 * statistics.median(seconds):.1f} ms, max {1e3 * max(seconds):.1f} ms"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=120.0, help="simulated seconds per run (default 120)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--repeat", type=int, default=2, help="pairs of runs without/with recording (default 2)")
+    parser.add_argument("--full", action="store_true", help="also record 600 simulated seconds once")
+    parser.add_argument("--keep", metavar="DIR", help="keep the recordings in DIR")
+    args = parser.parse_args()
+
+    programs = (load_team(DEFAULT_HOME), load_team(DEFAULT_AWAY))
+    folder = Path(args.keep or tempfile.mkdtemp(prefix="record_cost_"))
+    folder.mkdir(parents=True, exist_ok=True)
+    plain(5.0, args.seed, programs)  # warm up: imports, code generation caches
+    runs: dict[str, list[tuple[float, float]]] = {
+        "without recording": [],
+        "recorded inline": [],
+        "recorded, writer process": [],
+    }
+    stats = None
+    path = folder / f"match_{args.seconds:.0f}s.mcap"
+    for _ in range(args.repeat):
+        wall, cpu, scene_plain = plain(args.seconds, args.seed, programs)
+        runs["without recording"].append((wall, cpu))
+        for label, background in (("recorded inline", False), ("recorded, writer process", True)):
+            wall, cpu, scene_recorded, stats = recorded(args.seconds, args.seed, programs, path, background)
+            runs[label].append((wall, cpu))
+            if scene_plain != scene_recorded:
+                raise SystemExit("recording changed the match: the final scenes differ")
+    assert stats is not None
+    ticks = stats.ticks
+    size = path.stat().st_size
+    sample_seconds, sample_ticks = sampling_only(args.seconds, args.seed, programs)
+
+    print(
+        f"soccer 5 vs 5, {args.seconds:.0f} simulated s ({ticks} ticks), seed {args.seed}, "
+        f"median of {args.repeat} runs each (cpu: this process only)"
+    )
+    base_wall = statistics.median(w for w, _ in runs["without recording"])
+    base_cpu = statistics.median(c for _, c in runs["without recording"])
+    for label, values in runs.items():
+        wall = statistics.median(w for w, _ in values)
+        cpu = statistics.median(c for _, c in values)
+        line = f"  {label:<25} {wall:7.2f} s wall {cpu:7.2f} s cpu  {1e3 * wall / ticks:.3f} ms/tick"
+        if label != "without recording":
+            line += f"  overhead {100 * (wall / base_wall - 1):4.0f} % wall, {100 * (cpu / base_cpu - 1):4.0f} % cpu"
+        print(line)
+    print("  (goal: overhead < 10 %)")
+    print(
+        f"  sampling the 10 engines alone (AgentSampler.sample): {1e3 * sample_seconds / sample_ticks:.3f} ms per tick "
+        "(goal <= 0.2 ms)"
+    )
+    per_tick = size / ticks
+    print(
+        f"  file: {size / MB:.2f} MB, {stats.messages} messages, {per_tick:.0f} B per tick; "
+        f"10 minutes extrapolated: {per_tick * TEN_MINUTES_TICKS / MB:.1f} MB (goal <= 50 MB)"
+    )
+    seeks = seek_times(path, 30, args.seed)
+    print(f"  seek a random tick + rebuild 10 trees: {_spread(seeks)}")
+
+    if args.full:
+        full = folder / "match_600s.mcap"
+        wall, cpu, _, stats = recorded(600.0, args.seed, programs, full, True)
+        size = full.stat().st_size
+        seeks = seek_times(full, 50, args.seed)
+        print(f"full 10 minutes recorded ({stats.ticks} ticks): {wall:.1f} s wall, {size / MB:.1f} MB (goal <= 50 MB)")
+        print(f"  seek a random tick + rebuild 10 trees: {_spread(seeks)} (goal < 100 ms)")
+    if not args.keep:
+        for file in folder.glob("*.mcap"):
+            file.unlink()
+        os.rmdir(folder)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,32 @@
+"""Recordings: every tick of a run kept in an MCAP file, readable by Foxglove and any MCAP reader.
+
+* :mod:`engine.record.schema`   topic names, JSON Schemas, timestamps (the format's one source)
+* :mod:`engine.record.sampler`  the cheap per-tick read of one engine (shared with the studio)
+* :mod:`engine.record.foxglove` the world as ``foxglove.SceneUpdate`` messages (2D field view)
+* :mod:`engine.record.encoder`  :class:`RecordingEncoder`: samples -> MCAP messages (no engine needed)
+* :mod:`engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder
+* :mod:`engine.record.reader`   :class:`Recording`: iterate ticks, seek, rebuild activation trees
+* :mod:`engine.record.fork`     re-simulate a recorded deterministic run to any tick, switch behavior
+
+Independent of the server: the studio records through the same :class:`Recorder`.
+"""
+
+from engine.record.encoder import RecordingEncoder
+from engine.record.reader import AgentTick, Recording, RecordingError, TickView
+from engine.record.sampler import AgentSample, AgentSampler, ProgramTables
+from engine.record.writer import Recorder, RecorderStats, RecordingFailed, engines_of
+
+__all__ = [
+    "AgentSample",
+    "AgentSampler",
+    "AgentTick",
+    "ProgramTables",
+    "Recorder",
+    "RecorderStats",
+    "Recording",
+    "RecordingEncoder",
+    "RecordingError",
+    "RecordingFailed",
+    "TickView",
+    "engines_of",
+]

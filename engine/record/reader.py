@@ -1,0 +1,448 @@
+"""Reading a recording: iterate its ticks, seek any tick fast, rebuild activation trees.
+
+:class:`Recording` opens a file written by :class:`~engine.record.writer.Recorder` with the
+``mcap`` package's seeking reader. On open it reads the header, every program generation, the
+static scenes and the events (a few messages); ticks are read on demand:
+
+* ``recording.tick(seq)`` seeks: the symbols of a tick are the last key frame (at most
+  ``key_every`` ticks earlier) plus the changes after it, so it reads the messages of that time
+  window only, through MCAP's chunk index (timestamps are ``seq`` times the tick period);
+* ``recording.ticks(start, stop)`` decodes a range in one pass (replay, tests, statistics).
+
+Each :class:`TickView` holds per agent an :class:`AgentTick`: the path, roots, assignment
+values, input and output values (XABSL names, enums as element names; ``raw_inputs()`` gives host
+values) and the fault; ``AgentTick.tree()`` rebuilds the engine's activation tree
+(:class:`~engine.runtime.OptionNode` / ``BehaviorNode`` / ``AssignmentNode``, equal to what
+``Engine.activation()`` returned live) from the recorded generation of the behavior.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any, BinaryIO
+
+import orjson
+from mcap.reader import SeekingReader, make_reader
+
+from engine.record import schema as S
+from engine.runtime import AssignmentNode, BehaviorNode, OptionNode, Root
+from engine.types import Kind, Value
+
+__all__ = ["AgentTick", "ProgramView", "Recording", "RecordingError", "TickView"]
+
+
+class RecordingError(Exception):
+    """The file is not a recording this reader understands (or a tick outside it was asked for)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ProgramView:
+    """One program generation as the reader needs it to rebuild trees (from its program JSON)."""
+
+    key: str
+    gen: int
+    seq: int
+    description: dict[str, Any]
+    tables: dict[str, Any]
+    changed_files: tuple[str, ...] = ()
+
+    def option(self, option_id: int) -> dict[str, Any]:
+        """The option JSON with IR id ``option_id``."""
+        return self._options[option_id]
+
+    @property
+    def _options(self) -> list[dict[str, Any]]:
+        return self.description["options"]  # type: ignore[no-any-return]
+
+
+@dataclass(slots=True)
+class AgentTick:
+    """One agent in one tick (values as recorded; see the module docstring)."""
+
+    name: str
+    program: ProgramView
+    gen: int
+    tick: int
+    path: list[list[Any]]
+    roots: tuple[Root, ...]
+    assignments: tuple[Value | None, ...]
+    inputs: dict[str, Value | None]
+    outputs: dict[str, Value | None]
+    fault: dict[str, Any] | None = None
+
+    def tree(self) -> list[OptionNode | BehaviorNode | AssignmentNode]:
+        """The activation tree of this tick, as ``Engine.activation()`` built it live."""
+        return _rebuild(self.program, self.path, self.assignments)
+
+    def option_names(self) -> list[str]:
+        """The options that ran this tick, in path order (names)."""
+        options = self.program.description["options"]
+        return [options[node[2]]["name"] for node in self.path if node[0] == 0]
+
+    def raw_inputs(self) -> dict[str, Value | None]:
+        """The input values with enums as host values (as the engine read them)."""
+        return _raw(self.inputs, self.program.description["inputs"], self.program.tables["enums"])
+
+    def raw_outputs(self) -> dict[str, Value | None]:
+        """The output values with enums as host values."""
+        return _raw(self.outputs, self.program.description["outputs"], self.program.tables["enums"])
+
+
+@dataclass(slots=True)
+class TickView:
+    """Everything recorded for one tick."""
+
+    seq: int
+    t: int
+    agents: dict[str, AgentTick]
+    scene: dict[str, Any] | None = None
+    status: dict[str, Any] | None = None
+    events: list[dict[str, Any]] = field(default_factory=list)
+
+
+def _raw(
+    values: dict[str, Value | None], symbols: list[dict[str, Any]], enums: dict[str, dict[str, str]]
+) -> dict[str, Value | None]:
+    out = dict(values)
+    for symbol in symbols:
+        enum = symbol.get("enum")
+        name = symbol["name"]
+        if symbol["type"] == "enum" and enum and name in out:
+            by_element = {element: int(v) for v, element in enums.get(enum, {}).items()}
+            value: Any = out[name]
+            if isinstance(value, str):
+                out[name] = by_element.get(value, value)  # type: ignore[arg-type]
+    return out
+
+
+def _flatten(tree: dict[str, Any], into: dict[str, Value | None], prefix: str = "") -> None:
+    for key, value in tree.items():
+        name = prefix[:-1] if key == "=" else prefix + key
+        if isinstance(value, dict):
+            _flatten(value, into, name + ".")
+        else:
+            into[name] = value
+
+
+class _AgentState:
+    """What the messages so far say about one agent (values carried between change messages)."""
+
+    __slots__ = ("assignments", "fault", "gen", "inputs", "outputs", "roots")
+
+    def __init__(self) -> None:
+        self.inputs: dict[str, Value | None] = {}
+        self.outputs: dict[str, Value | None] = {}
+        self.roots: tuple[Root, ...] = ()
+        self.assignments: tuple[Value | None, ...] = ()
+        self.fault: dict[str, Any] | None = None
+        self.gen = 0
+
+
+class Recording:
+    """An opened recording (see the module docstring). Use as a context manager or ``close()``.
+
+    Raises:
+        RecordingError: not an MCAP file, not a recording, or a newer format version.
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = os.fspath(path)
+        self._stream: BinaryIO = open(self.path, "rb")  # noqa: SIM115 -- closed in close()
+        try:
+            self._reader = make_reader(self._stream)
+            if not isinstance(self._reader, SeekingReader):  # pragma: no cover - files are seekable
+                raise RecordingError(f"{self.path}: not seekable")
+            summary = self._reader.get_summary()
+            if summary is None:
+                raise RecordingError(f"{self.path}: no MCAP summary (the recording was not closed)")
+            self._summary = summary
+            header = None
+            for _schema, _channel, message in self._reader.iter_messages(topics=[S.RECORDING]):
+                header = orjson.loads(message.data)
+                break
+        except RecordingError:
+            self._stream.close()
+            raise
+        except Exception as error:
+            self._stream.close()
+            raise RecordingError(f"{self.path}: not a readable MCAP file ({error})") from None
+        if header is None or header.get("format") != S.FORMAT:
+            self._stream.close()
+            raise RecordingError(f"{self.path}: not an xabsl recording")
+        if int(header.get("version", 0)) > S.VERSION:
+            self._stream.close()
+            raise RecordingError(f"{self.path}: format version {header['version']} is newer than {S.VERSION}")
+        self.header: dict[str, Any] = header
+        self.behavior_hz = int(header["behavior_hz"])
+        self.key_every = int(header["key_every"])
+        self.agents: list[str] = [a["name"] for a in header["agents"] if a["program"] is not None]
+        self._program_of = {a["name"]: a["program"] for a in header["agents"]}
+        self.programs: dict[tuple[str, int], ProgramView] = {}
+        self.events: list[dict[str, Any]] = []
+        self.static_scenes: list[dict[str, Any]] = []
+        tables = dict(header["tables"])
+        for _schema, channel, message in self._reader.iter_messages(
+            topics=[S.PROGRAM, S.EVENTS, S.WORLD_STATIC], log_time_order=False
+        ):
+            data = orjson.loads(message.data)
+            if channel.topic == S.PROGRAM:
+                view = ProgramView(
+                    data["key"],
+                    data["gen"],
+                    data["seq"],
+                    data["program"],
+                    tables[data["key"]],
+                    tuple(data.get("changed_files", ())),
+                )
+                self.programs[(view.key, view.gen)] = view
+            elif channel.topic == S.EVENTS:
+                self.events.append(data)
+                if data["kind"] == "reload" and data.get("data", {}).get("tables"):
+                    tables[data["data"]["key"]] = data["data"]["tables"]
+                    key = (data["data"]["key"], data["data"]["gen"])
+                    if key in self.programs:
+                        old = self.programs[key]
+                        self.programs[key] = ProgramView(
+                            old.key, old.gen, old.seq, old.description, tables[old.key], old.changed_files
+                        )
+            else:
+                self.static_scenes.append(data)
+        counts = summary.statistics.channel_message_counts if summary.statistics else {}
+        scene_channels = [c for c, ch in summary.channels.items() if ch.topic == S.WORLD_SCENE]
+        #: number of ticks recorded (seq runs 0 .. ticks - 1)
+        self.ticks_count = sum(counts.get(c, 0) for c in scene_channels)
+
+    # -- basics -------------------------------------------------------------------------------------
+
+    def __len__(self) -> int:
+        return self.ticks_count
+
+    def close(self) -> None:
+        """Close the file."""
+        self._stream.close()
+
+    def __enter__(self) -> Recording:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.close()
+
+    def time_ns(self, seq: int) -> int:
+        """The MCAP timestamp of tick ``seq``."""
+        return S.tick_time_ns(seq, self.behavior_hz)
+
+    def topics(self) -> dict[str, str]:
+        """Topic -> schema name of every channel in the file."""
+        schemas = self._summary.schemas
+        return {ch.topic: schemas[ch.schema_id].name for ch in self._summary.channels.values()}
+
+    def program(self, agent: str, gen: int) -> ProgramView:
+        """The program generation ``gen`` of ``agent``'s program key (the latest one at or before ``gen``)."""
+        key = self._program_of[agent]
+        best: ProgramView | None = None
+        for (k, g), view in self.programs.items():
+            if k == key and g <= gen and (best is None or g > best.gen):
+                best = view
+        if best is None:
+            raise RecordingError(f"no program {key!r} of generation {gen} in {self.path}")
+        return best
+
+    # -- ticks ----------------------------------------------------------------------------------------
+
+    def tick(self, seq: int) -> TickView:
+        """Tick ``seq`` (0-based), read from the last key frame at or before it.
+
+        Raises:
+            RecordingError: ``seq`` is outside the recording.
+        """
+        if not 0 <= seq < self.ticks_count:
+            raise RecordingError(f"tick {seq} is outside the recording (0..{self.ticks_count - 1})")
+        start = seq - seq % self.key_every
+        last = None
+        for last in self._decode(start, seq + 1):  # noqa: B007 -- only the last view is wanted
+            pass
+        assert last is not None and last.seq == seq
+        return last
+
+    def ticks(self, start: int = 0, stop: int | None = None) -> Iterator[TickView]:
+        """Ticks ``start`` .. ``stop - 1`` (default: to the end), decoded in one pass."""
+        stop = self.ticks_count if stop is None else min(stop, self.ticks_count)
+        if start >= stop:
+            return
+        key = start - start % self.key_every
+        for view in self._decode(key, stop):
+            if view.seq >= start:
+                yield view
+
+    def series(
+        self, agent: str, symbols: list[str], start: int = 0, stop: int | None = None, every: int = 1
+    ) -> dict[str, list[tuple[int, Value | str | None]]]:
+        """Per symbol its ``(seq, value)`` pairs over ticks ``start`` .. ``stop - 1`` (for plots).
+
+        Reads only ``agent``'s channel; ``every`` > 1 keeps every n-th tick. Values as recorded
+        (enums as element names); a symbol absent in a tick (not in this program generation)
+        has no pair there.
+
+        Raises:
+            RecordingError: ``agent`` is not a recorded XABSL agent.
+        """
+        if agent not in self.agents:
+            raise RecordingError(f"no agent {agent!r} in {self.path} (agents: {', '.join(self.agents)})")
+        stop = self.ticks_count if stop is None else min(stop, self.ticks_count)
+        out: dict[str, list[tuple[int, Value | str | None]]] = {name: [] for name in symbols}
+        if start >= stop:
+            return out
+        key = start - start % self.key_every
+        values: dict[str, Any] = {}
+        loads = orjson.loads
+        for _schema, _channel, message in self._reader.iter_messages(
+            topics=[S.agent_topic(agent)],
+            starting_at=self.time_ns(key),
+            ending_before=self.time_ns(stop - 1) + 1,
+            log_time_order=False,
+        ):
+            data = loads(message.data)
+            if data["key"]:
+                values = {}
+            _flatten(data["inputs"], values)
+            _flatten(data["outputs"], values)
+            seq = data["seq"]
+            if seq < start or (seq - start) % every:
+                continue
+            for name, pairs in out.items():
+                if name in values:
+                    pairs.append((seq, values[name]))
+        return out
+
+    def _decode(self, start: int, stop: int) -> Iterator[TickView]:
+        """Views of ticks ``start`` .. ``stop - 1``; ``start`` must be a key frame tick."""
+        states = {name: _AgentState() for name in self.agents}
+        agent_topics: dict[str, tuple[str, bool]] = {}
+        for name in self.agents:
+            agent_topics[S.agent_topic(name)] = (name, True)
+            agent_topics[S.fault_topic(name)] = (name, False)
+        events_by_seq: dict[int, list[dict[str, Any]]] = {}
+        for event in self.events:
+            events_by_seq.setdefault(event["seq"], []).append(event)
+        topics = [*agent_topics, S.WORLD_SCENE, S.WORLD_STATUS]
+        current: TickView | None = None
+        status: dict[str, Any] | None = None
+        loads = orjson.loads
+        for _schema, channel, message in self._reader.iter_messages(
+            topics=topics,
+            starting_at=self.time_ns(start),
+            ending_before=self.time_ns(stop - 1) + 1,
+            log_time_order=False,
+        ):
+            data = loads(message.data)
+            seq = data["seq"]
+            if current is not None and seq != current.seq:
+                yield current
+                current = None
+            if current is None:
+                current = TickView(seq, data["t"], {}, None, status, events_by_seq.get(seq, []))
+            topic = channel.topic
+            if topic == S.WORLD_SCENE:
+                current.scene = data["scene"]
+                continue
+            if topic == S.WORLD_STATUS:
+                status = current.status = data["status"]
+                continue
+            name, is_tick = agent_topics[topic]
+            state = states[name]
+            if not is_tick:
+                state.fault = data["fault"]
+                agent = current.agents.get(name)
+                if agent is not None:
+                    agent.fault = state.fault
+                continue
+            state.gen = data["gen"]
+            if "roots" in data:
+                state.roots = tuple(Root(kind, root) for kind, root in data["roots"])
+            if "assignments" in data:
+                state.assignments = tuple(data["assignments"])
+            if data["key"]:
+                state.inputs, state.outputs = {}, {}
+            else:  # a new dict per tick: views already yielded keep their values
+                state.inputs, state.outputs = dict(state.inputs), dict(state.outputs)
+            _flatten(data["inputs"], state.inputs)
+            _flatten(data["outputs"], state.outputs)
+            for unread in data.get("unread", ()):
+                target = state.outputs if unread in state.outputs else state.inputs
+                target[unread] = None
+            current.agents[name] = AgentTick(
+                name,
+                self.program(name, state.gen),
+                state.gen,
+                data["tick"],
+                data["path"],
+                state.roots,
+                state.assignments,
+                state.inputs,
+                state.outputs,
+                state.fault,
+            )
+        if current is not None:
+            yield current
+
+
+def _rebuild(program: ProgramView, path: list[list[Any]], assignments: tuple[Value | None, ...]) -> list[Any]:
+    """The activation tree of a recorded path (``engine.runtime.activation.build_tree``'s result)."""
+    description = program.description
+    options = description["options"]
+    behaviors = description["behaviors"]
+    behavior_params = program.tables["behavior_params"]
+    sites = {(s[0], s[1], s[2]): (k, s[3], Kind(s[4]), s[5]) for k, s in enumerate(program.tables["assignment_sites"])}
+    position = 0
+
+    def node_at(depth: int) -> Any:
+        nonlocal position
+        node = path[position]
+        position += 1
+        if node[0] == 1:
+            behavior = behaviors[node[2]]
+            declared = behavior_params.get(behavior["name"], [[p["name"], p["enum"]] for p in behavior["params"]])
+            params = {p[0]: v for p, v in zip(declared, node[4], strict=False)}
+            enums = {p[0]: p[1] for p in declared if p[1] is not None}
+            return BehaviorNode(behavior["name"], params, node[3], enums)
+        option = options[node[2]]
+        state = option["states"][node[3]]
+        sub: list[Any] = []
+        for k, action in enumerate(state["actions"]):
+            kind = action["type"]
+            if kind == "assign":
+                site = sites.get((option["id"], node[3], k))
+                if site is not None and site[0] < len(assignments):
+                    value = assignments[site[0]]
+                    if value is not None:
+                        sub.append(AssignmentNode(site[1], value, site[2], site[3]))
+                continue
+            if position < len(path) and path[position][1] == depth + 1:
+                child = path[position]
+                wanted = 0 if kind == "option" else 1
+                names = options if wanted == 0 else behaviors
+                if child[0] == wanted and names[child[2]]["name"] == action["name"]:
+                    sub.append(node_at(depth + 1))
+        params_declared = option["params"]
+        params = {p["name"]: v for p, v in zip(params_declared, node[8], strict=False)}
+        enums = {p["name"]: p["enum"] for p in params_declared if p["enum"] is not None}
+        return OptionNode(
+            option["name"],
+            state["name"],
+            node[4],
+            node[5],
+            params,
+            node[7],
+            option["states"][node[6]]["name"],
+            tuple(sub),
+            enums,
+        )
+
+    tree = []
+    while position < len(path):
+        if path[position][1] != 0:  # pragma: no cover - a well-formed path starts every root at depth 0
+            raise RecordingError(f"malformed path at node {position}: {path[position]}")
+        tree.append(node_at(0))
+    return tree
