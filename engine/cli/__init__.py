@@ -39,6 +39,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "engine.cli.compile",
         "check a behavior; write intermediate code (--ic) and a JSON description (--json)",
     ),
+    "docs": (
+        "engine.cli.docs",
+        "write HTML documentation of a behavior set (option graph, options, symbols, search)",
+    ),
     "trace": ("engine.cli.trace", "run a behavior under the conformance host: input trace in, activation trace out"),
     "plan": ("engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
 }
