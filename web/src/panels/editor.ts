@@ -3,6 +3,12 @@
 /// the server, nothing saved), go to definition (F12, Ctrl+click), find references (Shift+F12),
 /// save (Ctrl+S) = PUT with If-Match -> hot reload, conflicts shown, never overwritten silently,
 /// and a new option from a template.
+///
+/// Files are edited as they are: each buffer keeps its file's line separator (CodeMirror's
+/// `lineSeparator` facet, so Enter inserts it and `sliceDoc()` joins with it), so a file with CR
+/// or CRLF line ends opens unmodified and a save writes exactly the edited text. `doc.toString()`
+/// (always "\n", one unit per line break, like document positions) stays what the language
+/// features and the as-you-type linter read.
 import { autocompletion, closeBrackets, closeBracketsKeymap, completionKeymap } from "@codemirror/autocomplete";
 import { defaultKeymap, history, historyKeymap, indentWithTab } from "@codemirror/commands";
 import { bracketMatching, HighlightStyle, indentOnInput, syntaxHighlighting } from "@codemirror/language";
@@ -47,6 +53,16 @@ option ${name} {
   }
 }
 `;
+
+/// The line separator of a file's text: the most frequent of CRLF, CR and LF ("\n" for none).
+/// The others, if the file mixes them, stay in the text as characters and round-trip too.
+export function lineSeparatorOf(text: string): string {
+  const crlf = text.split("\r\n").length - 1;
+  const cr = text.split("\r").length - 1 - crlf;
+  const lf = text.split("\n").length - 1 - crlf;
+  if (crlf >= cr && crlf >= lf && crlf > 0) return "\r\n";
+  return cr > lf ? "\r" : "\n";
+}
 
 interface Buffer {
   path: string;
@@ -115,6 +131,7 @@ export class EditorPanel {
     return EditorState.create({
       doc,
       extensions: [
+        EditorState.lineSeparator.of(lineSeparatorOf(doc)),
         lineNumbers(),
         highlightActiveLineGutter(),
         history(),
@@ -167,7 +184,7 @@ export class EditorPanel {
   private isDirty(b: Buffer | null): boolean {
     if (!b) return false;
     const state = b === this.current ? this.view.state : b.state;
-    return state.doc.toString() !== b.saved;
+    return state.sliceDoc() !== b.saved;
   }
 
   private markDirty(): void {
@@ -330,16 +347,30 @@ export class EditorPanel {
     b.version = file.version;
     b.saved = file.text;
     b.conflict = null;
-    this.view.dispatch({ changes: { from: 0, to: this.view.state.doc.length, insert: file.text } });
+    this.replaceText(b, file.text);
     this.showBanner();
     this.markDirty();
+  }
+
+  /// Put a file's new text from disk into its buffer: as an undoable change when its line
+  /// separator is the buffer's, else as a fresh state (the separator is fixed per state).
+  private replaceText(b: Buffer, text: string): void {
+    const state = b === this.current ? this.view.state : b.state;
+    if (state.lineBreak === lineSeparatorOf(text)) {
+      const tr = state.update({ changes: { from: 0, to: state.doc.length, insert: text } });
+      if (b === this.current) this.view.dispatch(tr);
+      else b.state = tr.state;
+      return;
+    }
+    b.state = this.makeState(text, b.path);
+    if (b === this.current) this.view.setState(b.state);
   }
 
   /// Save the current file: PUT with If-Match; the server compiles and hot-reloads.
   async save(overwrite = false): Promise<void> {
     const b = this.current;
     if (!b) return;
-    const text = this.view.state.doc.toString();
+    const text = this.view.state.sliceDoc(); // joined with the file's own line separator
     const version = overwrite && b.conflict ? b.conflict.version : b.version;
     try {
       const { status, result, conflict } = await writeFile(b.path, text, version);
@@ -451,8 +482,7 @@ export class EditorPanel {
       void readFile(b.path).then((file) => {
         b.version = file.version;
         b.saved = file.text;
-        if (b === this.current) this.view.dispatch({ changes: { from: 0, to: this.view.state.doc.length, insert: file.text } });
-        else b.state = this.makeState(file.text, b.path);
+        this.replaceText(b, file.text);
         this.markDirty();
       });
     } else {
