@@ -101,6 +101,8 @@ class XabslLanguageServer(LanguageServer):
         self.fixed_agents = os.path.realpath(agents) if agents else None
         self.projects: dict[str, Project] = {}
         self.published: dict[str, list[lsp.Diagnostic]] = {}
+        #: the compiler's diagnostics last published per uri (converting all files per keystroke is costly)
+        self.raw: dict[str, tuple[int, list[Diagnostic]]] = {}
 
     # ------------------------------------------------------------------ projects
 
@@ -178,18 +180,27 @@ class XabslLanguageServer(LanguageServer):
             data=data or None,
         )
 
-    def publish(self, project: Project) -> Analysis:
-        """Analyze ``project`` and publish what changed (a file that is fixed gets an empty list)."""
+    def publish(self, project: Project, edited: str | None = None) -> Analysis:
+        """Analyze ``project`` and publish what changed (a file that is fixed gets an empty list).
+
+        The ``edited`` file (a real path) always gets its diagnostics, changed or not: the
+        editor learns that its latest text was checked.
+        """
         analysis = project.analyze()
         for state in analysis.files:
             uri = from_fs_path(state.real) or state.real
-            items = [self.diagnostic(analysis, state, d) for d in analysis.diagnostics.get(state.real, [])]
-            if self.published.get(uri) != items:
+            raw = analysis.diagnostics.get(state.real, [])
+            if state.real != edited and self.raw.get(uri) == (state.serial, raw):
+                continue
+            self.raw[uri] = (state.serial, raw)
+            items = [self.diagnostic(analysis, state, d) for d in raw]
+            if self.published.get(uri) != items or state.real == edited:
                 self.published[uri] = items
                 self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=items))
         for uri in [u for u in self.published if (to_fs_path(u) or u) not in analysis.by_real]:
             if not any(os.path.realpath(to_fs_path(uri) or uri) in p.analyze().by_real for p in self.projects.values()):
                 del self.published[uri]
+                self.raw.pop(uri, None)
                 self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[]))
         return analysis
 
@@ -292,7 +303,7 @@ def create_server(agents: str | None = None) -> XabslLanguageServer:
         project, real = ls.project_of(uri)
         document = ls.workspace.get_text_document(uri)
         project.set_text(real, document.source)
-        ls.publish(project)
+        ls.publish(project, real)
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: XabslLanguageServer, params: lsp.DidOpenTextDocumentParams) -> None:
