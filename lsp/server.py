@@ -96,9 +96,11 @@ def _param_line(p: ir.Parameter) -> str:
 class XabslLanguageServer(LanguageServer):
     """pygls' language server holding the behavior sets (projects) the editor has open."""
 
-    def __init__(self, agents: str | None = None) -> None:
+    def __init__(self, agents: str | None = None, root: str | None = None) -> None:
         super().__init__("xabsl-lsp", "0.1.0", text_document_sync_kind=lsp.TextDocumentSyncKind.Incremental)
         self.fixed_agents = os.path.realpath(agents) if agents else None
+        #: the behavior folder a browser client builds its document URIs on (``xabsl/root``)
+        self.root = os.path.realpath(root) if root else None
         self.projects: dict[str, Project] = {}
         self.published: dict[str, list[lsp.Diagnostic]] = {}
         #: the compiler's diagnostics last published per uri (converting all files per keystroke is costly)
@@ -289,9 +291,15 @@ class XabslLanguageServer(LanguageServer):
         return next((p for p in params if p.short_name == short), None)
 
 
-def create_server(agents: str | None = None) -> XabslLanguageServer:
+def create_server(agents: str | None = None, root: str | None = None) -> XabslLanguageServer:
     """A language server with every feature registered (one per connection)."""
-    server = XabslLanguageServer(agents)
+    server = XabslLanguageServer(agents, root)
+
+    @server.feature("xabsl/root")
+    def root_uri(ls: XabslLanguageServer, params: object) -> dict[str, str | None]:
+        """The behavior folder's URI: a browser client knows its files by paths relative to it."""
+        folder = ls.root or (to_fs_path(ls.workspace.root_uri) if ls.workspace.root_uri else None)
+        return {"uri": from_fs_path(folder) if folder else None}
 
     @server.feature(lsp.INITIALIZE)
     def initialize(ls: XabslLanguageServer, params: lsp.InitializeParams) -> None:
