@@ -141,6 +141,8 @@ class _OptionResult:
     diagnostics: list[Diagnostic]
     usage: set[tuple[str, str]]
     references: dict[int, tuple[Span, Key]]
+    #: unique per check, so the name index can tell a new result from the one it indexed
+    serial: int = 0
 
 
 @dataclass
@@ -322,6 +324,13 @@ class Project:
         self._interface: tuple[object, ...] | None = None
         self._checked: dict[str, tuple[int, _OptionResult]] = {}
         self._serial = 0
+        #: per file: (its serial and its option results' serials, its occurrences, its declarations)
+        self._indexed: dict[str, tuple[tuple[int, ...], list[Occurrence], list[tuple[Key, Occurrence]]]] = {}
+        #: when the files on disk were last looked at (overlay edits in between do not stat them)
+        self._disk_seen = -1.0
+        self._disk_dirty = True
+        self._look_at_disk = True
+        self._resolved: dict[tuple[str, str], str] = {}
         #: the last tree of each file that parsed without errors (completion while typing)
         self.good: dict[str, ast.SourceFile] = {}
         self._analysis: Analysis | None = None
@@ -344,6 +353,7 @@ class Project:
     def disk_changed(self) -> None:
         """Files on disk may have changed (the client said so): look again on the next analysis."""
         self._dirty = True
+        self._disk_dirty = True
 
     def contains(self, path: str) -> bool:
         """Whether ``path`` is in the include closure as last analyzed."""
@@ -352,13 +362,16 @@ class Project:
     # ------------------------------------------------------------------ loading
 
     def _source(self, real: str, diagnostics: Diagnostics) -> SourceState | None:
-        shown = display_path(real, self.base)
         cached = self.sources.get(real)
+        # the base folder never changes, so a cached file's display name stays right
+        shown = cached.shown if cached is not None else display_path(real, self.base)
         if real in self.overlays:
             text = self.overlays[real]
-            if cached is not None and cached.text == text and cached.shown == shown:
+            if cached is not None and cached.text == text:
                 return cached
             stamp = None
+        elif cached is not None and cached.stamp is not None and not self._look_at_disk:
+            return cached  # a keystroke elsewhere: the disk was looked at a moment ago
         else:
             try:
                 stat = os.stat(real)
@@ -367,7 +380,7 @@ class Project:
                 self.sources.pop(real, None)
                 return None
             stamp = (stat.st_size, stat.st_mtime_ns)
-            if cached is not None and cached.stamp == stamp and cached.shown == shown:
+            if cached is not None and cached.stamp == stamp:
                 return cached
             try:
                 with open(real, "rb") as handle:
@@ -384,6 +397,15 @@ class Project:
         state = SourceState(real, shown, text, tree, list(own.items), LineIndex(text), stamp, self._serial)
         self.sources[real] = state
         return state
+
+    def _resolve(self, real: str, include: str) -> str:
+        """The real path an include names (cached while the disk is trusted: symlinks may change)."""
+        key = (real, include)
+        target = self._resolved.get(key)
+        if target is None:
+            target = os.path.realpath(os.path.join(os.path.dirname(real), include))
+            self._resolved[key] = target
+        return target
 
     def _load(self, diagnostics: Diagnostics) -> tuple[ast.SourceFile | None, list[SourceState]]:
         """The include closure as :func:`engine.lang.loader.load` reads it, from the cache."""
@@ -403,14 +425,15 @@ class Project:
                         "missing-include-file", "unable to open file: the name contains a NUL byte", include.span
                     )
                     continue
-                target = os.path.realpath(os.path.join(os.path.dirname(real), include.path))
+                target = self._resolve(real, include.path)
                 if target in included_here:
                     diagnostics.add("include-twice", f"'{include.path}' is included twice from this file", include.span)
                     continue
                 included_here.add(target)
                 if target in seen:
                     continue
-                if not os.path.isfile(target) and target not in self.overlays:
+                known = target in self.overlays or (not self._look_at_disk and target in self.sources)
+                if not known and not os.path.isfile(target):
                     diagnostics.add("missing-include-file", f"unable to open file '{include.path}'", include.span)
                     continue
                 visit(target)
@@ -431,8 +454,16 @@ class Project:
         self._dirty = False
         return self._analysis
 
+    #: how long files on disk are trusted without a look while the editor only changes buffers
+    DISK_TRUST_SECONDS = 2.0
+
     def _analyze(self) -> Analysis:
         started = time.perf_counter()
+        self._look_at_disk = self._disk_dirty or started - self._disk_seen > self.DISK_TRUST_SECONDS
+        if self._look_at_disk:
+            self._resolved.clear()
+            self._disk_seen = started
+            self._disk_dirty = False
         diagnostics = Diagnostics()
         root, files = self._load(diagnostics)
         loaded = time.perf_counter()
@@ -458,7 +489,7 @@ class Project:
             key=lambda h: (h.decl.name.text.lower(), h.decl.name.text),
         )
         options: dict[str, ir.Option] = {}
-        references: dict[str, list[tuple[Span, Key]]] = {}
+        results: dict[str, list[_OptionResult]] = {}
         rechecked = 0
         live: set[str] = set()
         index = 0
@@ -474,9 +505,11 @@ class Project:
                 result = cached[1]
             else:
                 result = self._check(table, header, -1 if is_broken else index)
+                self._serial += 1
+                result.serial = self._serial
                 self._checked[cache_key] = (source.serial, result)
                 rechecked += 1
-            references.setdefault(real, []).extend(result.references.values())
+            results.setdefault(real, []).append(result)
             if is_broken:
                 continue  # checked for navigation only: the compiler reports nothing for it
             index += 1
@@ -517,7 +550,7 @@ class Project:
             else:
                 per_file[state.real].append(d)
 
-        occurrences, declarations = self._index(files, references)
+        occurrences, declarations = self._index(files, results)
         indexed = time.perf_counter()
         return Analysis(
             files=files,
@@ -572,22 +605,40 @@ class Project:
             agents.append(ir.Agent(decl.name.text, decl.title, decl.root.text, decl.doc, decl.name.span))
         return agents
 
-    @staticmethod
     def _index(
-        files: list[SourceState], references: dict[str, list[tuple[Span, Key]]]
+        self, files: list[SourceState], results: dict[str, list[_OptionResult]]
     ) -> tuple[dict[str, list[Occurrence]], dict[Key, tuple[str, Occurrence]]]:
+        """The name index; a file whose tree and option results are unchanged keeps its entries."""
         occurrences: dict[str, list[Occurrence]] = {}
         declarations: dict[Key, tuple[str, Occurrence]] = {}
+        indexed: dict[str, tuple[tuple[int, ...], list[Occurrence], list[tuple[Key, Occurrence]]]] = {}
         for f in files:
-            found: dict[int, Occurrence] = {}
-            for span, key, is_declaration in _declared(f.tree):
-                occurrence = Occurrence(span.start, span.end, key, is_declaration, f.text[span.start : span.end])
-                found[span.start] = occurrence
-                if is_declaration:
-                    declarations.setdefault(key, (f.real, occurrence))
-            for span, key in references.get(f.real, []):
+            own = results.get(f.real, [])
+            signature = (f.serial, *(r.serial for r in own))
+            cached = self._indexed.get(f.real)
+            if cached is None or cached[0] != signature:
+                cached = (signature, *self._index_file(f, own))
+            indexed[f.real] = cached
+            occurrences[f.real] = cached[1]
+            for key, occurrence in cached[2]:
+                declarations.setdefault(key, (f.real, occurrence))
+        self._indexed = indexed
+        return occurrences, declarations
+
+    @staticmethod
+    def _index_file(
+        f: SourceState, results: list[_OptionResult]
+    ) -> tuple[list[Occurrence], list[tuple[Key, Occurrence]]]:
+        found: dict[int, Occurrence] = {}
+        declared: list[tuple[Key, Occurrence]] = []
+        for span, key, is_declaration in _declared(f.tree):
+            occurrence = Occurrence(span.start, span.end, key, is_declaration, f.text[span.start : span.end])
+            found[span.start] = occurrence
+            if is_declaration:
+                declared.append((key, occurrence))
+        for result in results:
+            for span, key in result.references.values():
                 found.setdefault(
                     span.start, Occurrence(span.start, span.end, key, False, f.text[span.start : span.end])
                 )
-            occurrences[f.real] = sorted(found.values(), key=lambda o: o.start)
-        return occurrences, declarations
+        return sorted(found.values(), key=lambda o: o.start), declared

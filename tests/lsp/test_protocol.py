@@ -332,3 +332,65 @@ def test_a_new_file_joins_when_included(client: LspClient, tmp_path: Path) -> No
     client.wait_diagnostics(agents)
     client.change(agents, text.replace('include "options/search_ball.xabsl";', 'include "options/nope.xabsl";'))
     assert any(d["code"] == "missing-include-file" for d in client.wait_diagnostics(agents))
+
+
+def test_every_files_diagnostics_are_the_compilers(client: LspClient, tmp_path: Path) -> None:
+    soccer = tmp_path / "behavior"
+    shutil.copytree(ROOT / "examples" / "soccer" / "behavior", soccer)
+    # a few mistakes in several files, so there is something to compare
+    kick = soccer / "options" / "face_ball.xabsl"
+    kick.write_text(kick.read_text().replace("goto facing;", "goto facin;"))
+    symbols = sorted((soccer / "symbols").glob("*.xabsl"))[0]
+    symbols.write_text(symbols.read_text() + "\n")
+    client.initialize(soccer)
+    agents = soccer / "agents.xabsl"
+    client.open(agents)
+    compiled = compile_file(str(agents), base=str(soccer))
+    by_file: dict[str, list[tuple[str, int, int, str]]] = {}
+    for d in compiled.diagnostics:
+        assert d.span is not None
+        by_file.setdefault(uri(soccer / d.span.file), []).append((d.code, d.span.line - 1, d.span.col - 1, d.message))
+    client.wait_diagnostics(agents)
+    # every file of the closure is published once at open; wait for the last one
+    files = [uri(soccer / f) for f in compiled.files]
+    deadline = 0
+    while not all(f in client.diagnostics for f in files) and deadline < 200:
+        client.request("workspace/symbol", {"query": "zzz"})
+        deadline += 1
+    assert compiled.errors, "the broken copy has errors"
+    for f in files:
+        got = sorted(
+            (d["code"], d["range"]["start"]["line"], d["range"]["start"]["character"], d["message"])
+            for d in client.diagnostics[f]
+        )
+        assert got == sorted(by_file.get(f, [])), f
+
+
+def test_a_file_changed_on_disk_is_read_again(client: LspClient, demo: Path) -> None:
+    client.initialize(demo)
+    play = demo / "options" / "play.xabsl"
+    search = demo / "options" / "search_ball.xabsl"
+    client.open(play)
+    client.wait_diagnostics(play)
+    search.write_text(search.read_text().replace("option search_ball", "option search_balls"))
+    client.notify("workspace/didChangeWatchedFiles", {"changes": [{"uri": uri(search), "type": 2}]})
+    diagnostics = client.wait_diagnostics(play)
+    assert any(d["code"] == "no-matching-symbol" and "search_ball" in d["message"] for d in diagnostics)
+
+
+def test_rename_refuses_a_keyword_and_a_file_outside_a_set_compiles_alone(client: LspClient, tmp_path: Path) -> None:
+    lone = tmp_path / "lone.xabsl"
+    lone.write_text('namespace lone("x") {\n  float input a;\n  float input b;\n  float input a;\n}\n')
+    client.initialize(tmp_path)
+    client.open(lone)
+    assert [d["code"] for d in client.wait_diagnostics(lone)] == ["duplicate-definition"]
+    doc = {"uri": uri(lone)}
+    at = {"line": 1, "character": 15}
+    try:
+        client.request("textDocument/rename", {"textDocument": doc, "position": at, "newName": "state"})
+    except RuntimeError as error:
+        assert "no valid XABSL name" in str(error)
+    else:
+        raise AssertionError("a keyword was accepted as a new name")
+    edit = client.request("textDocument/rename", {"textDocument": doc, "position": at, "newName": "c"})
+    assert edit["changes"][uri(lone)][0]["newText"] == "c"
