@@ -490,7 +490,7 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
 
     @server.feature(
         lsp.TEXT_DOCUMENT_COMPLETION,
-        lsp.CompletionOptions(trigger_characters=["@", ".", "(", ",", " ", "="]),
+        lsp.CompletionOptions(trigger_characters=["@", ".", "(", ",", " ", "="], resolve_provider=True),
     )
     def completion(ls: XabslLanguageServer, params: lsp.CompletionParams) -> lsp.CompletionList | None:
         found = at(ls, params.text_document, params.position)
@@ -498,7 +498,24 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
             return None
         analysis, state, offset = found
         project, _ = ls.project_of(params.text_document.uri)
-        return lsp.CompletionList(is_incomplete=False, items=_complete(ls, project, analysis, state, offset))
+        items = _complete(ls, project, analysis, state, offset)
+        uri = params.text_document.uri
+        for i in items:
+            if i.data is not None:
+                key = tuple(i.data)
+                i.data = {"uri": uri, "key": i.data}
+                if len(items) <= EAGER_DOCUMENTATION:
+                    i.documentation = lsp.MarkupContent(lsp.MarkupKind.Markdown, ls.describe(analysis, key))
+        return lsp.CompletionList(is_incomplete=False, items=items)
+
+    @server.feature(lsp.COMPLETION_ITEM_RESOLVE)
+    def resolve(ls: XabslLanguageServer, item: lsp.CompletionItem) -> lsp.CompletionItem:
+        data = item.data
+        if isinstance(data, dict) and isinstance(data.get("uri"), str) and isinstance(data.get("key"), list):
+            project, _ = ls.project_of(data["uri"])
+            key = tuple(str(k) for k in data["key"])
+            item.documentation = lsp.MarkupContent(lsp.MarkupKind.Markdown, ls.describe(project.analyze(), key))
+        return item
 
     return server
 
@@ -721,7 +738,7 @@ def _item(
     label: str,
     kind: lsp.CompletionItemKind,
     detail: str,
-    doc: str | None,
+    key: Key | None,
     replace: lsp.Range,
     insert: str | None = None,
     sort: str = "5",
@@ -730,11 +747,16 @@ def _item(
         label=label,
         kind=kind,
         detail=detail,
-        documentation=lsp.MarkupContent(lsp.MarkupKind.Markdown, doc) if doc else None,
         text_edit=lsp.TextEdit(replace, insert if insert is not None else label),
         filter_text=label,
         sort_text=f"{sort}{label.lower()}",
+        # the documentation: filled in right away for short lists, else by completionItem/resolve
+        data=list(key) if key else None,
     )
+
+
+#: a completion list up to this long carries its documentation; longer ones get it on resolve
+EAGER_DOCUMENTATION = 60
 
 
 def _complete(
@@ -772,7 +794,7 @@ def _complete(
         insert: str | None = None,
         sort: str = "5",
     ) -> lsp.CompletionItem:
-        return _item(label, kind, detail, ls.describe(analysis, key) if key else None, replace, insert, sort)
+        return _item(label, kind, detail, key, replace, insert, sort)
 
     def states() -> list[lsp.CompletionItem]:
         # the states as typed, and those an edit in progress hid from the parser

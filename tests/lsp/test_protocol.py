@@ -136,7 +136,10 @@ def test_completion(client: LspClient, demo: Path) -> None:
     items = complete(edited, position(edited, "ball.d <", 6))
     distance = next(i for i in items if i["label"] == "ball.distance")
     assert "input float" in distance["detail"] and "mm" in distance["detail"]
-    assert "Distance from the robot to the ball" in distance["documentation"]["value"]
+    # a short list carries the documentation; a long one gets it on resolve
+    assert len(items) <= 60 and "Distance from the robot to the ball" in distance["documentation"]["value"]
+    resolved = client.request("completionItem/resolve", {**distance, "documentation": None})
+    assert "Distance from the robot to the ball" in resolved["documentation"]["value"]
     assert {"walk", "approach_ball", "kick_distance", "state_time"} <= {i["label"] for i in items}
     # an enum value after '=' to an enum output: its elements first
     edited = text.replace("activity = approaching;", "activity = ;")
@@ -394,3 +397,18 @@ def test_rename_refuses_a_keyword_and_a_file_outside_a_set_compiles_alone(client
         raise AssertionError("a keyword was accepted as a new name")
     edit = client.request("textDocument/rename", {"textDocument": doc, "position": at, "newName": "c"})
     assert edit["changes"][uri(lone)][0]["newText"] == "c"
+
+
+def test_a_long_completion_list_resolves_its_documentation(client: LspClient) -> None:
+    soccer = ROOT / "examples" / "soccer" / "behavior"
+    client.initialize(soccer)
+    face = soccer / "options" / "face_ball.xabsl"
+    text = client.open(face)
+    client.wait_diagnostics(face)
+    at = position(text, "if (abs", len("if (a"))
+    items = client.request("textDocument/completion", {"textDocument": {"uri": uri(face)}, "position": at})["items"]
+    assert len(items) > 60
+    angle = next(i for i in items if i["label"] == "abs")
+    assert not angle.get("documentation")
+    resolved = client.request("completionItem/resolve", angle)
+    assert "**input symbol**" in resolved["documentation"]["value"] and "abs" in resolved["documentation"]["value"]

@@ -124,3 +124,25 @@ describe("LspClient", () => {
     expect(changed.doc.toString()).toBe("ball.range < 3;");
   });
 });
+
+describe("lazy documentation", () => {
+  it("asks completionItem/resolve for the documentation of a bare item", async () => {
+    const server = fakeServer((method, params) => {
+      expect(method).toBe("completionItem/resolve");
+      return { ...params, documentation: { kind: "markdown", value: "**input symbol** the ball's angle" } };
+    });
+    const client = new LspClient(server.transport);
+    const result = toCompletionResult(Text.of(["x"]), 1, [{ label: "ball.angle", data: { key: ["input", "ball.angle"] } }], (item) => client.resolveCompletion(item));
+    const info = result?.options[0]?.info;
+    expect(typeof info).toBe("function");
+    expect(server.sent.some((m) => m.method === "completionItem/resolve")).toBe(false);
+    // shown: resolved then (a minimal DOM for the node test environment)
+    (globalThis as any).document = { createElement: () => ({ style: {}, textContent: "" }) };
+    try {
+      const dom = (await (info as (c: unknown) => Promise<{ textContent: string } | null>)(result?.options[0])) ?? null;
+      expect(dom?.textContent).toBe("input symbol the ball's angle");
+    } finally {
+      delete (globalThis as any).document;
+    }
+  });
+});

@@ -41,13 +41,30 @@ function documentation(item: LspCompletionItem): string | undefined {
 }
 
 /// LSP completion items -> a CodeMirror result (`from` is where the server's edit starts).
-export function toCompletionResult(doc: Text, pos: number, items: readonly LspCompletionItem[]): CompletionResult | null {
+/// An item without documentation gets it from `resolve` when shown (long lists come bare).
+export function toCompletionResult(
+  doc: Text,
+  pos: number,
+  items: readonly LspCompletionItem[],
+  resolve?: (item: LspCompletionItem) => Promise<LspCompletionItem>,
+): CompletionResult | null {
   if (!items.length) return null;
   let from = pos;
   const options: Completion[] = items.map((item, index) => {
     const edit = item.textEdit;
     if (edit) from = Math.min(from, fromPosition(doc, edit.range.start));
-    const info = documentation(item);
+    const info: Completion["info"] =
+      documentation(item) ??
+      (resolve && item.data
+        ? async () => {
+            const text = documentation(await resolve(item));
+            if (!text) return null;
+            const dom = document.createElement("div");
+            dom.style.whiteSpace = "pre-wrap";
+            dom.textContent = text;
+            return dom;
+          }
+        : undefined);
     return {
       label: item.label,
       ...(edit && edit.newText !== item.label ? { apply: edit.newText } : {}),
@@ -74,7 +91,7 @@ export function lspCompletionSource(client: LspClient, path: () => string | null
       const result = await client.completion(p, toPosition(doc, context.pos));
       const items = Array.isArray(result) ? result : (result?.items ?? []);
       if (context.aborted) return null;
-      return toCompletionResult(doc, context.pos, items);
+      return toCompletionResult(doc, context.pos, items, (item) => client.resolveCompletion(item));
     } catch {
       return null;
     }

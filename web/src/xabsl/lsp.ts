@@ -39,6 +39,7 @@ export interface LspCompletionItem {
   textEdit?: LspTextEdit;
   insertText?: string;
   sortText?: string;
+  data?: unknown;
 }
 export interface LspHover {
   contents: { kind: string; value: string } | string;
@@ -194,6 +195,9 @@ export class LspClient {
 
   completion(path: string, position: LspPosition): Promise<{ items: LspCompletionItem[] } | LspCompletionItem[] | null> {
     return this.at("textDocument/completion", path, position);
+  }
+  async resolveCompletion(item: LspCompletionItem): Promise<LspCompletionItem> {
+    return ((await this.request("completionItem/resolve", item)) as LspCompletionItem | null) ?? item;
   }
   hover(path: string, position: LspPosition): Promise<LspHover | null> {
     return this.at("textDocument/hover", path, position);
