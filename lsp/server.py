@@ -420,6 +420,10 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
             text = _renamed(key, o, bare, analysis.table.elements.get(key[1]) if key[0] == "element" else None)
             uri = from_fs_path(real) or real
             changes.setdefault(uri, []).append(lsp.TextEdit(ls.range_of(analysis.by_real[real], o.start, o.end), text))
+        # names qualified by the renamed one: 'Enum.element', 'option.parameter'
+        for real, o, text in _qualified_by(analysis, key, bare):
+            uri = from_fs_path(real) or real
+            changes.setdefault(uri, []).append(lsp.TextEdit(ls.range_of(analysis.by_real[real], o.start, o.end), text))
         return lsp.WorkspaceEdit(changes=changes)
 
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
@@ -533,6 +537,21 @@ _SYMBOL_KIND = {
     "agent": lsp.SymbolKind.Object,
     "namespace": lsp.SymbolKind.Namespace,
 }
+
+
+def _qualified_by(analysis: Analysis, key: Key, new: str) -> Iterable[tuple[str, Occurrence, str]]:
+    """Occurrences written with the renamed enumeration or option as their qualifier, rewritten."""
+    if key[0] not in ("enum", "option"):
+        return
+    old = key[1]
+    for f in analysis.files:
+        for o in analysis.occurrences.get(f.real, []):
+            k = o.key
+            if key[0] == "enum" and k[0] == "element" and analysis.table.elements.get(k[1]) == old:
+                if o.text == k[1] and o.text.startswith(old + "."):
+                    yield f.real, o, new + o.text[len(old) :]
+            elif key[0] == "option" and k[:3] == ("param", "option", old) and o.text == f"{old}.{k[3]}":
+                yield f.real, o, f"{new}.{k[3]}"
 
 
 def _renamed(key: Key, occurrence: Occurrence, new: str, enum: str | None) -> str:

@@ -412,3 +412,25 @@ def test_a_long_completion_list_resolves_its_documentation(client: LspClient) ->
     assert not angle.get("documentation")
     resolved = client.request("completionItem/resolve", angle)
     assert "**input symbol**" in resolved["documentation"]["value"] and "abs" in resolved["documentation"]["value"]
+
+
+def test_renaming_an_enumeration_renames_its_qualified_elements(client: LspClient, demo: Path) -> None:
+    play = demo / "options" / "play.xabsl"
+    play.write_text(play.read_text().replace("game.state != playing", "game.state != game.state.playing"))
+    symbols = demo / "symbols.xabsl"
+    text = symbols.read_text()
+    client.initialize(demo)
+    client.open(symbols)
+    client.wait_diagnostics(symbols)
+    at = position(text, "enum game.state input", len("enum g"))
+    edit = client.request(
+        "textDocument/rename", {"textDocument": {"uri": uri(symbols)}, "position": at, "newName": "game.phase"}
+    )
+    overrides = {
+        str(Path(u.removeprefix("file://"))): apply_edits(Path(u.removeprefix("file://")).read_text(), e)
+        for u, e in edit["changes"].items()
+    }
+    assert "game.state != game.phase.playing" in overrides[str(play)]
+    assert "enum game.phase { init" in overrides[str(symbols)] and "input game.state;" in overrides[str(symbols)]
+    compiled = compile_file(str(demo / "agents.xabsl"), base=str(demo), overrides=overrides)
+    assert [d.format() for d in compiled.errors] == []
