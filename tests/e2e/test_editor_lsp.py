@@ -58,3 +58,55 @@ def test_editor_completes_states_and_shows_the_servers_diagnostic(page: Any, stu
     content = page.locator(".editor-host .cm-content").inner_text()
     assert "goto turning;" in content and "goto turnin;" not in content
     assert page.locator(".editor-host .cm-lintRange-error").count() == 0
+
+
+def test_editor_hover_definition_and_rename_come_from_the_server(page: Any, studio: StudioServer) -> None:
+    original = (studio.example / FACE).read_text()
+    lines = original.split("\n")
+    open_file(page, FACE, "face_ball")
+
+    # hover: the symbol's type, range, unit and doc comment
+    box = page.evaluate(
+        """(needle) => {
+          const content = document.querySelector('.editor-host .cm-content');
+          const walker = document.createTreeWalker(content, NodeFilter.SHOW_TEXT);
+          for (let node = walker.nextNode(); node; node = walker.nextNode()) {
+            // the call 'turn(': a token of its own, or followed by its '(' in the same text
+            const text = node.textContent;
+            const at = text === needle ? 0 : text.indexOf(needle + "(");
+            if (at < 0) continue;
+            const range = document.createRange();
+            range.setStart(node, at + 1);
+            range.setEnd(node, at + 2);
+            const r = range.getBoundingClientRect();
+            return { x: r.x + r.width / 2, y: r.y + r.height / 2 };
+          }
+          return null;
+        }""",
+        "turn",
+    )
+    assert box is not None
+    page.mouse.move(box["x"], box["y"])
+    hover = page.locator(".cm-xabsl-hover")
+    hover.wait_for(timeout=15000)
+    assert "basic behavior" in hover.inner_text() and "rate" in hover.inner_text()
+
+    # rename a state: every occurrence, the buffer stays unsaved and compiles
+    put_cursor_at_line_end(page, next(n for n, t in enumerate(lines) if "initial state turning" in t))
+    page.keyboard.press("ArrowLeft")
+    page.keyboard.press("ArrowLeft")  # inside 'turning'
+    page.once("dialog", lambda dialog: dialog.accept("spinning"))
+    page.keyboard.press("F2")
+    page.locator(".toast.ok", has_text="Renamed in 1 file").wait_for(timeout=15000)
+    content = page.locator(".editor-host .cm-content").inner_text()
+    assert "initial state spinning" in content and "goto spinning;" in content and "turning" not in content
+    page.locator(".editor-status.ok").wait_for(timeout=15000)
+    assert (studio.example / FACE).read_text() == original  # not saved
+
+    # go to definition: F12 on a basic behavior call opens its declaration
+    put_cursor_at_line_end(page, next(n for n, t in enumerate(lines) if "turn(rate" in t))
+    page.keyboard.press("Home")
+    page.keyboard.press("ArrowRight")
+    page.keyboard.press("F12")
+    page.locator(".file-title", has_text="behavior/basic_behaviors.xabsl").wait_for(timeout=15000)
+    page.locator(".editor-host .cm-activeLine", has_text="behavior turn").wait_for(timeout=15000)

@@ -17,7 +17,7 @@ import type { Span } from "../description";
 import type { CompileEvent, FileEvent } from "../protocol";
 import type { Session, SessionEvent } from "../session";
 import { h, toast } from "../ui";
-import { xabslCompletion } from "../xabsl/complete";
+import { toPosition, xabslCompletion } from "../xabsl/complete";
 import { xabsl } from "../xabsl/language";
 import { samePath, type ServerDiagnostic, xabslLinter } from "../xabsl/lint";
 import { LspClient, lspUrl, websocketTransport } from "../xabsl/lsp";
@@ -388,9 +388,14 @@ export class EditorPanel {
     if (!path) return;
     const state = this.view.state;
     const head = state.selection.main.head;
-    const word = state.wordAt(head);
-    const newName = window.prompt("New name:", word ? state.sliceDoc(word.from, word.to) : "");
-    if (!newName) return;
+    await this.lsp.sync(path, state.doc.toString());
+    const prepared = await this.lsp.prepareRename(path, toPosition(state.doc, head)).catch(() => null);
+    if (!prepared) {
+      toast("Nothing to rename here", "info");
+      return;
+    }
+    const newName = window.prompt(`Rename ${prepared.placeholder} to:`, prepared.placeholder);
+    if (!newName || newName === prepared.placeholder) return;
     let edits;
     try {
       edits = await renameAt(this.lsp, path, state, head, newName);

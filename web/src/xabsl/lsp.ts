@@ -208,6 +208,10 @@ export class LspClient {
   references(path: string, position: LspPosition): Promise<LspLocation[] | null> {
     return this.at("textDocument/references", path, position, { context: { includeDeclaration: true } });
   }
+  /// The range and current spelling of a renameable name at `position` (null: nothing to rename).
+  prepareRename(path: string, position: LspPosition): Promise<{ range: LspRange; placeholder: string } | null> {
+    return this.at("textDocument/prepareRename", path, position);
+  }
   rename(path: string, position: LspPosition, newName: string): Promise<{ changes?: Record<string, LspTextEdit[]> } | null> {
     return this.at("textDocument/rename", path, position, { newName });
   }
