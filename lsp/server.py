@@ -22,9 +22,9 @@ from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
 from engine import ir
-from engine.lang import ast
-from engine.lang.diagnostics import Diagnostic, Severity
-from engine.lang.tokens import KEYWORDS, Token, TokenType
+from engine.lang import ast, deep_recursion
+from engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
+from engine.lang.tokens import KEYWORDS, Token, TokenType, decode_source, tokenize
 from engine.types import Kind, Span
 from lsp.project import Analysis, Key, Occurrence, Project, SourceState
 
@@ -77,6 +77,29 @@ _WHAT = {
 }
 
 
+def _agents_files(folder: str) -> list[str]:
+    """The agents files of ``folder``: ``agents.xabsl`` first, then other files declaring agents."""
+    found: list[str] = []
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError:
+        return found
+    if AGENTS_FILE in names:
+        found.append(os.path.realpath(os.path.join(folder, AGENTS_FILE)))
+    for name in names:
+        if not name.endswith(".xabsl") or name == AGENTS_FILE:
+            continue
+        path = os.path.join(folder, name)
+        try:
+            with open(path, "rb") as handle:
+                text = decode_source(handle.read(1_000_000))
+        except OSError:
+            continue
+        if "agent" in text and any(t.is_kw("agent") for t in tokenize(text, name, Diagnostics())):
+            found.append(os.path.realpath(path))
+    return found
+
+
 def type_text(kind: Kind, enum: str | None) -> str:
     """How XABSL writes a type: ``float``, ``bool``, ``enum name``."""
     return {Kind.DECIMAL: "float", Kind.BOOLEAN: "bool"}.get(kind, f"enum {enum}")
@@ -102,6 +125,8 @@ class XabslLanguageServer(LanguageServer):
         #: the behavior folder a browser client builds its document URIs on (``xabsl/root``)
         self.root = os.path.realpath(root) if root else None
         self.projects: dict[str, Project] = {}
+        #: files compiled on their own (no agents file includes them), asked again on each change
+        self.standalone: set[str] = set()
         self.published: dict[str, list[lsp.Diagnostic]] = {}
         #: the compiler's diagnostics last published per uri (converting all files per keystroke is costly)
         self.raw: dict[str, tuple[int, list[Diagnostic]]] = {}
@@ -113,22 +138,26 @@ class XabslLanguageServer(LanguageServer):
         return str(self.workspace.position_encoding or "utf-16")
 
     def agents_for(self, path: str) -> str:
-        """The agents file whose behavior set ``path`` belongs to."""
+        """The agents file whose behavior set ``path`` belongs to.
+
+        The first behavior set already open that includes it; else the nearest agents file
+        above it that includes it (``agents.xabsl``, or another file there that declares
+        agents); else the file alone.
+        """
         real = os.path.realpath(path)
         if self.fixed_agents:
             return self.fixed_agents
         for agents, project in self.projects.items():
-            if real == agents or real in project.analyze().by_real:
+            if agents not in self.standalone and (real == agents or real in project.analyze().by_real):
                 return agents
         folder = os.path.dirname(real)
         while True:
-            candidate = os.path.join(folder, AGENTS_FILE)
-            if os.path.isfile(candidate):
-                agents = os.path.realpath(candidate)
-                if agents == real or real in self.project(agents).analyze().by_real:
-                    return agents
+            for candidate in _agents_files(folder):
+                if candidate == real or real in self.project(candidate).analyze().by_real:
+                    return candidate
             parent = os.path.dirname(folder)
             if parent == folder:
+                self.standalone.add(real)
                 return real
             folder = parent
 
@@ -470,7 +499,8 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
     def folding(ls: XabslLanguageServer, params: lsp.FoldingRangeParams) -> list[lsp.FoldingRange]:
         project, real = ls.project_of(params.text_document.uri)
         state = project.analyze().by_real.get(real)
-        return _folds(state) if state else []
+        with deep_recursion():  # long 'else if' chains nest
+            return _folds(state) if state else []
 
     @server.feature(
         lsp.TEXT_DOCUMENT_CODE_ACTION, lsp.CodeActionOptions(code_action_kinds=[lsp.CodeActionKind.QuickFix])

@@ -434,3 +434,17 @@ def test_renaming_an_enumeration_renames_its_qualified_elements(client: LspClien
     assert "enum game.phase { init" in overrides[str(symbols)] and "input game.state;" in overrides[str(symbols)]
     compiled = compile_file(str(demo / "agents.xabsl"), base=str(demo), overrides=overrides)
     assert [d.format() for d in compiled.errors] == []
+
+
+def test_an_agents_file_of_another_name_is_found(client: LspClient, demo: Path) -> None:
+    (demo / "agents.xabsl").rename(demo / "robot.xabsl")
+    client.initialize(demo)
+    play = demo / "options" / "play.xabsl"
+    text = client.open(play)
+    # in the set: the symbols resolve (alone, the option would not know 'ball.seen')
+    assert [d for d in client.wait_diagnostics(play) if d["severity"] == 1] == []
+    found = client.request(
+        "textDocument/definition",
+        {"textDocument": {"uri": uri(play)}, "position": position(text, "ball.seen", 1)},
+    )
+    assert found[0]["uri"] == uri(demo / "symbols.xabsl")
