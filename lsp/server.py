@@ -135,7 +135,11 @@ class XabslLanguageServer(LanguageServer):
 
     @property
     def encoding(self) -> str:
-        return str(self.workspace.position_encoding or "utf-16")
+        """The negotiated position encoding: "utf-16" (LSP's default), "utf-8" or "utf-32"."""
+        chosen = self.workspace.position_encoding
+        # an lsprotocol enum member; its str() is its name, its value the protocol's spelling
+        value = getattr(chosen, "value", chosen) or "utf-16"
+        return str(value)
 
     def agents_for(self, path: str) -> str:
         """The agents file whose behavior set ``path`` belongs to.

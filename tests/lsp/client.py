@@ -91,13 +91,16 @@ class LspClient:
     def notify(self, method: str, params: Any) -> None:
         self._send({"jsonrpc": "2.0", "method": method, "params": params})
 
-    def initialize(self, root: str | Path, **options: Any) -> Any:
+    def initialize(self, root: str | Path, encodings: list[str] | None = None, **options: Any) -> Any:
+        capabilities: dict[str, Any] = {"textDocument": {"rename": {"prepareSupport": True}}}
+        if encodings:
+            capabilities["general"] = {"positionEncodings": encodings}
         result = self.request(
             "initialize",
             {
                 "processId": os.getpid(),
                 "rootUri": uri(root),
-                "capabilities": {"textDocument": {"rename": {"prepareSupport": True}}},
+                "capabilities": capabilities,
                 "initializationOptions": options or None,
             },
         )

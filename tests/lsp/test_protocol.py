@@ -448,3 +448,70 @@ def test_an_agents_file_of_another_name_is_found(client: LspClient, demo: Path) 
         {"textDocument": {"uri": uri(play)}, "position": position(text, "ball.seen", 1)},
     )
     assert found[0]["uri"] == uri(demo / "symbols.xabsl")
+
+
+def test_incremental_changes_and_positions_after_non_ascii_text(client: LspClient, demo: Path) -> None:
+    client.initialize(demo)
+    play = demo / "options" / "play.xabsl"
+    text = play.read_text()
+    # a comment with characters of two and four UTF-16... and UTF-8 widths, on the line of a name
+    text = text.replace("else goto search;", "/* é😀 */ else goto search;", 1)
+    play.write_text(text)
+    client.open(play, text)
+    client.wait_diagnostics(play)
+    line = position(text, "/* é😀 */ else goto search;")["line"]
+    column = text.split("\n")[line].index("search") + 1  # code points: '😀' is one, UTF-16 counts two
+    at = {"line": line, "character": column + 1}
+    found = client.request("textDocument/definition", {"textDocument": {"uri": uri(play)}, "position": at})
+    assert found[0]["range"]["start"] == position(text, "search {")
+    refs = client.request(
+        "textDocument/references",
+        {"textDocument": {"uri": uri(play)}, "position": at, "context": {"includeDeclaration": False}},
+    )
+    assert {"line": line, "character": column} in [r["range"]["start"] for r in refs]
+    # a ranged (incremental) change: 'search' -> 'serch' on that line, in UTF-16 units
+    client.notify(
+        "textDocument/didChange",
+        {
+            "textDocument": {"uri": uri(play), "version": 2},
+            "contentChanges": [
+                {
+                    "range": {
+                        "start": {"line": line, "character": column + 2},
+                        "end": {"line": line, "character": column + 3},
+                    },
+                    "text": "",
+                }
+            ],
+        },
+    )
+    diagnostics = client.wait_diagnostics(play)
+    unknown = [d for d in diagnostics if d["code"] == "unknown-state"]
+    assert unknown and "'serch'" in unknown[0]["message"]
+    assert unknown[0]["range"]["start"] == {"line": line, "character": column}
+
+
+def test_a_client_may_count_in_code_points_or_bytes(demo: Path) -> None:
+    play = demo / "options" / "play.xabsl"
+    text = play.read_text().replace("else goto search;", "/* é😀 */ else goto search;", 1)
+    play.write_text(text)
+    line = position(text, "/* é😀 */ else goto search;")["line"]
+    points = text.split("\n")[line].index("search")
+    for encoding, column in (("utf-32", points), ("utf-8", points + 1 + 3)):  # é: 2 bytes, 😀: 4
+        client = LspClient()
+        try:
+            result = client.initialize(demo, encodings=[encoding])
+            assert result["capabilities"]["positionEncoding"] == encoding
+            client.open(play, text)
+            client.wait_diagnostics(play)
+            refs = client.request(
+                "textDocument/references",
+                {
+                    "textDocument": {"uri": uri(play)},
+                    "position": {"line": line, "character": column},
+                    "context": {"includeDeclaration": False},
+                },
+            )
+            assert {"line": line, "character": column} in [r["range"]["start"] for r in refs], encoding
+        finally:
+            client.close()
