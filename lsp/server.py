@@ -457,6 +457,10 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
         for real, o, text in _qualified_by(analysis, key, bare):
             uri = from_fs_path(real) or real
             changes.setdefault(uri, []).append(lsp.TextEdit(ls.range_of(analysis.by_real[real], o.start, o.end), text))
+        if key[0] == "option" and _can_rename_files(ls):
+            moved = _option_file_rename(ls, analysis, key[1], bare, changes)
+            if moved is not None:
+                return moved
         return lsp.WorkspaceEdit(changes=changes)
 
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
@@ -571,6 +575,51 @@ _SYMBOL_KIND = {
     "agent": lsp.SymbolKind.Object,
     "namespace": lsp.SymbolKind.Namespace,
 }
+
+
+def _can_rename_files(ls: XabslLanguageServer) -> bool:
+    workspace = ls.client_capabilities.workspace
+    edit = workspace.workspace_edit if workspace else None
+    operations = (edit.resource_operations or []) if edit else []
+    return bool(edit and edit.document_changes and lsp.ResourceOperationKind.Rename in operations)
+
+
+def _option_file_rename(
+    ls: XabslLanguageServer, analysis: Analysis, old: str, new: str, changes: dict[str, list[lsp.TextEdit]]
+) -> lsp.WorkspaceEdit | None:
+    """The rename of an option whose file is named like it: the file follows, and the includes.
+
+    An option named differently from its file draws a ``naming`` warning, so renaming the
+    option alone would add one. None when the file is named otherwise or the new name is taken.
+    """
+    real = analysis.declarations[("option", old)][0]
+    folder, name = os.path.split(real)
+    stem, extension = os.path.splitext(name)
+    target = os.path.join(folder, new + extension)
+    if stem != old or os.path.exists(target):
+        return None
+    edits = {uri: list(e) for uri, e in changes.items()}
+    for f in analysis.files:
+        strings = [t for t in f.tokens if t.type is TokenType.STRING]
+        for include in f.tree.includes:
+            if os.path.realpath(os.path.join(os.path.dirname(f.real), include.path)) != real:
+                continue
+            if os.path.basename(include.path) != name:
+                continue  # reached through a link of another name: leave it
+            token = next((t for t in strings if include.span.start <= t.span.start < include.span.end), None)
+            if token is None:
+                continue
+            renamed = include.path[: len(include.path) - len(name)] + new + extension
+            uri = from_fs_path(f.real) or f.real
+            edits.setdefault(uri, []).append(
+                lsp.TextEdit(ls.range_of(f, token.span.start, token.span.end), f'"{renamed}"')
+            )
+    document_changes: list[lsp.TextDocumentEdit | lsp.CreateFile | lsp.RenameFile | lsp.DeleteFile] = [
+        lsp.TextDocumentEdit(lsp.OptionalVersionedTextDocumentIdentifier(uri=uri, version=None), list(e))
+        for uri, e in edits.items()
+    ]
+    document_changes.append(lsp.RenameFile(old_uri=from_fs_path(real) or real, new_uri=from_fs_path(target) or target))
+    return lsp.WorkspaceEdit(document_changes=document_changes)
 
 
 def _qualified_by(analysis: Analysis, key: Key, new: str) -> Iterable[tuple[str, Occurrence, str]]:

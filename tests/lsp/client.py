@@ -91,8 +91,14 @@ class LspClient:
     def notify(self, method: str, params: Any) -> None:
         self._send({"jsonrpc": "2.0", "method": method, "params": params})
 
-    def initialize(self, root: str | Path, encodings: list[str] | None = None, **options: Any) -> Any:
+    def initialize(
+        self, root: str | Path, encodings: list[str] | None = None, file_renames: bool = False, **options: Any
+    ) -> Any:
         capabilities: dict[str, Any] = {"textDocument": {"rename": {"prepareSupport": True}}}
+        if file_renames:
+            capabilities["workspace"] = {
+                "workspaceEdit": {"documentChanges": True, "resourceOperations": ["create", "rename", "delete"]}
+            }
         if encodings:
             capabilities["general"] = {"positionEncodings": encodings}
         result = self.request(

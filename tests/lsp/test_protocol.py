@@ -515,3 +515,35 @@ def test_a_client_may_count_in_code_points_or_bytes(demo: Path) -> None:
             assert {"line": line, "character": column} in [r["range"]["start"] for r in refs], encoding
         finally:
             client.close()
+
+
+def test_renaming_an_option_moves_its_file_when_the_client_can(client: LspClient, demo: Path) -> None:
+    client.initialize(demo, file_renames=True)
+    approach = demo / "options" / "approach_ball.xabsl"
+    text = client.open(approach)
+    client.wait_diagnostics(approach)
+    at = position(text, "option approach_ball", len("option a"))
+    edit = client.request(
+        "textDocument/rename", {"textDocument": {"uri": uri(approach)}, "position": at, "newName": "go_to_ball"}
+    )
+    assert "changes" not in edit or not edit["changes"]
+    operations = edit["documentChanges"]
+    assert operations[-1] == {
+        "kind": "rename",
+        "oldUri": uri(approach),
+        "newUri": uri(demo / "options" / "go_to_ball.xabsl"),
+    }
+    texts = {
+        Path(u.removeprefix("file://")): Path(u.removeprefix("file://")).read_text()
+        for u in [o["textDocument"]["uri"] for o in operations[:-1]]
+    }
+    for o in operations[:-1]:
+        path = Path(o["textDocument"]["uri"].removeprefix("file://"))
+        texts[path] = apply_edits(texts[path], o["edits"])
+    agents = texts[demo / "agents.xabsl"]
+    assert 'include "options/go_to_ball.xabsl";' in agents
+    overrides = {str(p): t for p, t in texts.items() if p != approach}
+    overrides[str(demo / "options" / "go_to_ball.xabsl")] = texts[approach]
+    approach.unlink()
+    compiled = compile_file(str(demo / "agents.xabsl"), base=str(demo), overrides=overrides)
+    assert [d.format() for d in compiled.diagnostics if d.is_error or d.code == "naming"] == []
