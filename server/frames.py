@@ -636,3 +636,28 @@ def _merge(into: dict[str, Any], delta: dict[str, Any]) -> None:
     into["robots"] = merged
     if "status" not in delta and status is not None:
         into["status"] = status
+
+
+def recorded_ticks(ring: Ring, seq: int) -> Iterator[tuple[Entry, list[dict[str, Any]]]]:
+    """The ticks of ``seq``'s generation up to ``seq``, decoded: ``(entry, robots)`` oldest first.
+
+    ``robots`` are the frame's robot objects with every value merged in (``inputs``/``outputs``
+    by symbol id as a string). Decoding starts at the generation's oldest key frame in the ring.
+    Nothing is yielded when ``seq`` has left the ring.
+    """
+    entries = ring.snapshot()
+    target = next((e for e in reversed(entries) if e.seq == seq), None)
+    if target is None:
+        return
+    gen = target.gen
+    state: dict[str, Any] | None = None
+    for entry in entries:
+        if entry.gen is not gen or entry.seq > seq:
+            continue
+        if state is None:
+            if entry.full is None:
+                continue
+            state = orjson.loads(entry.full)
+        else:
+            _merge(state, orjson.loads(entry.delta))
+        yield entry, state["robots"]

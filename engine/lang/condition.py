@@ -157,6 +157,7 @@ def _moved(diagnostic: Diagnostic, text: str) -> Diagnostic:
 
 def _rebase(expression: ir.Expression, text: str) -> ir.Expression:
     """``expression`` with every span moved into the condition's text (for operand display)."""
+
     def visit(node: ir.Expression) -> ir.Expression:
         changes: dict[str, Any] = {}
         if node.span is not None:
