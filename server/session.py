@@ -173,6 +173,8 @@ class Session:
         #: called on the asyncio loop when a breakpoint hit (after the sample of its tick)
         self.on_breakpoint: Callable[[Hit], None] = lambda hit: None
         self.breakpoint_store = BreakpointStore(state_dir)
+        #: per (robot, option id): where the last live ``explain`` scan of the ring stopped
+        self._scans: dict[tuple[int, int], Scan] = {}
         #: per behavior key: its breakpoints by id (stored per agents file)
         self.breakpoints: dict[str, dict[int, Breakpoint]] = {
             key: {p.id: p for p in self.breakpoint_store.load(state.source.agents_file)}
@@ -556,12 +558,21 @@ class Session:
         else:
             seq = command.seq
         option_id = live["option"] if live is not None else self._option_id(command.robot, command.option)
-        found = await asyncio.to_thread(_recorded, self.ring, seq, command.robot, option_id)
+        if live is not None:
+            # Live: continue the last scan of this robot and option (a full decode only the first time).
+            cache_key = (command.robot, option_id)
+            found = await asyncio.to_thread(
+                _recorded, self.ring, seq, command.robot, option_id, self._scans.get(cache_key)
+            )
+            if found is not None:
+                self._scans[cache_key] = found[3]
+        else:
+            found = await asyncio.to_thread(_recorded, self.ring, seq, command.robot, option_id)
         if found is None:
             if live is not None:
                 return {**live, "last_transition": None}
             raise CommandError(f"tick {seq} is not in the ring buffer (or option {command.option} did not run in it)")
-        generation, at, transition = found
+        generation, at, transition, _ = found
         if live is not None:
             if transition is None:
                 return {**live, "last_transition": None}
@@ -677,13 +688,31 @@ def _option_name(session: Session, option: int, robot: int) -> str:
 _NODE = 9
 
 
-def _recorded(ring: frames.Ring, seq: int, robot: int, option: int) -> tuple[int, tuple[Any, ...], Any] | None:
-    """For tick ``seq``: its generation, the option's recorded decision and the last transition up to it."""
+#: Where a scan of the ring stopped: (seq, decoded frame, generation, last transition tick or None,
+#: the option's tick at seq).
+Scan = tuple[int, dict[str, Any], int, tuple[Any, ...] | None, tuple[Any, ...]]
+
+
+def _recorded(
+    ring: frames.Ring, seq: int, robot: int, option: int, resume: Scan | None = None
+) -> tuple[int, tuple[Any, ...], Any, Scan] | None:
+    """For tick ``seq``: generation, the option's decision, the last transition up to it, the scan's end.
+
+    The scan's end continues a later scan (``resume``) from where this one stopped.
+    """
+    if resume is not None and resume[0] == seq:
+        return resume[2], resume[4], resume[3], resume
     at: tuple[Any, ...] | None = None
-    transition: tuple[Any, ...] | None = None
-    generation = None
-    for entry, robots in frames.recorded_ticks(ring, seq):
+    transition: tuple[Any, ...] | None = resume[3] if resume is not None else None
+    generation = resume[2] if resume is not None else None
+    frame: dict[str, Any] | None = None
+    last_seq = -1
+    resumed = (resume[0], resume[1]) if resume is not None else None
+    for entry, robots in frames.recorded_ticks(ring, seq, resumed):
+        if generation is not None and entry.gen.number != generation:
+            transition = None
         generation = entry.gen.number
+        frame, last_seq = frames.decoded_frame(robots), entry.seq
         if robot >= len(robots):
             return None
         state = robots[robot]
@@ -708,9 +737,9 @@ def _recorded(ring: frames.Ring, seq: int, robot: int, option: int) -> tuple[int
             transition = tick
         if entry.seq == seq:
             at = tick
-    if at is None or generation is None:
+    if at is None or generation is None or frame is None:
         return None
-    return generation, at, transition
+    return generation, at, transition, (last_seq, frame, generation, transition, at)
 
 
 def _transition(result: dict[str, Any]) -> dict[str, Any]:

@@ -224,9 +224,15 @@ class EngineBreakpoints:
     previous: dict[int, bool] = field(default_factory=dict)
 
     @classmethod
-    def build(cls, loaded: LoadedProgram, robot: int, points: Iterable[Breakpoint]) -> EngineBreakpoints:
-        """Compile ``points`` (those enabled and for ``robot`` or any robot) for ``loaded``."""
-        compiled = cls(loaded, robot)
+    def build(
+        cls, loaded: LoadedProgram, robot: int, points: Iterable[Breakpoint], previous: dict[int, bool] | None = None
+    ) -> EngineBreakpoints:
+        """Compile ``points`` (those enabled and for ``robot`` or any robot) for ``loaded``.
+
+        ``previous`` (the conditions' last values, by id) is shared, so that a recompile (a hot
+        reload, another breakpoint set) does not make a condition that stayed true hit again.
+        """
+        compiled = cls(loaded, robot, previous={} if previous is None else previous)
         for point in points:
             if not point.enabled or (point.robot is not None and point.robot != robot):
                 continue
@@ -272,15 +278,24 @@ class BreakpointSet:
         self.points: dict[str, dict[int, Breakpoint]] = {}  # behavior key -> id -> breakpoint
         self.armed = False
         self._compiled: dict[int, EngineBreakpoints] = {}  # robot -> compiled for its engine
+        self._previous: dict[int, dict[int, bool]] = {}  # robot -> condition id -> last value
 
     def replace(self, key: str, points: Iterable[Breakpoint]) -> None:
-        """Set the breakpoints of behavior ``key`` (all at once, as loaded from its file)."""
-        self.points[key] = {p.id: p for p in points}
+        """Set the breakpoints of behavior ``key`` (all at once); a changed or new condition starts afresh."""
+        old = self.points.get(key, {})
+        new = {p.id: p for p in points}
+        for ident, point in new.items():
+            if old.get(ident) is None or old[ident].condition != point.condition or old[ident].kind != point.kind:
+                for previous in self._previous.values():
+                    previous.pop(ident, None)
+        self.points[key] = new
         self._changed()
 
     def put(self, key: str, point: Breakpoint) -> None:
-        """Add or replace one breakpoint of behavior ``key``."""
+        """Add or replace one breakpoint of behavior ``key`` (a replaced condition starts afresh)."""
         self.points.setdefault(key, {})[point.id] = point
+        for previous in self._previous.values():
+            previous.pop(point.id, None)
         self._changed()
 
     def remove(self, key: str, ident: int) -> Breakpoint:
@@ -339,9 +354,8 @@ class BreakpointSet:
             loaded = engine.loaded
             compiled = compiled_by_robot.get(robot)
             if compiled is None or compiled.loaded is not loaded:
-                previous = compiled.previous if compiled is not None else {}
-                compiled = EngineBreakpoints.build(loaded, robot, points.values())
-                compiled.previous.update(previous)
+                previous = self._previous.setdefault(robot, {})
+                compiled = EngineBreakpoints.build(loaded, robot, points.values(), previous)
                 compiled_by_robot[robot] = compiled
             tick = engine.tick
             for ident in compiled.hits(tick):

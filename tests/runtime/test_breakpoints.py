@@ -200,3 +200,20 @@ def test_round_trip_through_json_fields() -> None:
     point = Breakpoint(4, "leaf", option="main", state="near", leaf=0, robot=2, enabled=False)
     assert Breakpoint.from_dict(point.as_dict()) == point
     assert point.describe() == "main.near leaf 0"
+
+
+def test_a_condition_that_stays_true_does_not_hit_again_when_breakpoints_change(program: Program) -> None:
+    bindings, values = conformance_bindings(program)
+    engine = Engine(bindings, program)
+    breakpoints = BreakpointSet()
+    breakpoints.put("b", Breakpoint(1, "condition", condition="ball.seen"))
+    found = []
+    for k, (seen, distance) in enumerate(SCRIPT):
+        values["ball.seen"], values["ball.distance"] = seen, distance
+        engine.execute(k * 100)
+        found += [(hit.id, hit.tick) for hit in breakpoints.check([(0, "b", engine)])]
+        if k == 2:  # another breakpoint set while ball.seen stays true: no second hit of 1
+            breakpoints.put("b", Breakpoint(2, "enter_option", option="child"))
+        if k == 3:  # a hot reload: the engine loads the program again
+            engine.reload(program)
+    assert found == [(1, 2), (2, 6)]

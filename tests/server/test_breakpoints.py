@@ -117,6 +117,11 @@ def test_why_at_a_past_tick_uses_that_ticks_values(server: LiveServer, client_fo
     client.command("pause")
     live = client.command("explain", robot=0, option="play")["result"]
     assert live["recorded"] is False and "tree" in live
+    # the live why continues its scan of the ring: the same last transition when nothing ran since
+    again = client.command("explain", robot=0, option="play")["result"]
+    assert again["last_transition"] == live["last_transition"]
+    if live["last_transition"] is not None:
+        assert live["last_transition"]["target_name"] != live["last_transition"]["decided_in_name"]
     past = frame["seq"] - 40
     why = client.command("explain", robot=0, option="play", seq=past)["result"]
     assert why["seq"] == past and why["recorded"] is True

@@ -129,7 +129,10 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
-  optionView.breakpoints.onHitsChanged = () => timeline.markHits(optionView.breakpoints.hits);
+  optionView.breakpoints.onHitsChanged = () => {
+    timeline.markHits(optionView.breakpoints.hits);
+    pending.add("cursor"); // paused: no tick follows that would redraw
+  };
   // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
   const dynamics = new DynamicsPanel(session, connection);
   const plan = new PlanPanel(session, connection);
