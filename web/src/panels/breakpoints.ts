@@ -38,10 +38,11 @@ export class BreakpointsPanel {
   private readonly condition: HTMLInputElement;
   private readonly diagnostics: HTMLElement;
   private readonly robot: HTMLSelectElement;
-  private items: BreakpointInfo[] = [];
   private program = "";
   private checkTimer = 0;
   private checked = "";
+  private batch: { seq: number; t: number; robots: number[]; descriptions: string[] } | null = null;
+  private toastTimer = 0;
 
   constructor(
     private readonly session: Session,
@@ -191,7 +192,6 @@ export class BreakpointsPanel {
 
   private show(program: string, items: BreakpointInfo[]): void {
     this.program = program;
-    this.items = items;
     const robotName = (id: number | null): string => (id === null ? "any robot" : (this.session.robotInfo(id)?.name ?? `robot ${id}`));
     this.list.replaceChildren(
       ...(items.length
@@ -232,15 +232,22 @@ export class BreakpointsPanel {
     }
   }
 
-  /// A hit: select the robot, go to its tick, remember it for the timeline.
+  /// A hit: select the robot, go to its tick, remember it for the timeline. Hits of one tick
+  /// (several robots, several breakpoints) are told in one message; the selected robot stays
+  /// selected when it is among them, else the first robot that hit is selected.
   onHit(event: BreakpointEvent): void {
     this.hits.push({ t: event.t, seq: event.seq, robot: event.robot, description: event.description });
     if (this.hits.length > 200) this.hits.shift();
-    this.session.selectRobot(event.robot);
+    const batch = this.batch && this.batch.seq === event.seq ? this.batch : (this.batch = { seq: event.seq, t: event.t, robots: [], descriptions: [] });
+    if (!batch.robots.includes(event.robot)) batch.robots.push(event.robot);
+    if (!batch.descriptions.includes(event.description)) batch.descriptions.push(event.description);
+    if (!batch.robots.includes(this.session.selectedRobot) || batch.robots.length === 1) this.session.selectRobot(batch.robots[0] as number);
     this.session.setCursor(event.t);
-    const name = this.session.robotInfo(event.robot)?.name ?? `robot ${event.robot}`;
-    toast(`Breakpoint: ${event.description} on ${name} at ${formatClock(event.t)} (paused)`, "info", 6000);
+    clearTimeout(this.toastTimer);
+    this.toastTimer = window.setTimeout(() => {
+      const names = batch.robots.map((r) => this.session.robotInfo(r)?.name ?? `robot ${r}`).join(", ");
+      toast(`Breakpoint: ${batch.descriptions.join("; ")} on ${names} at ${formatClock(batch.t)} (paused)`, "info", 6000);
+    }, 30);
     this.onHitsChanged();
-    void this.items;
   }
 }
