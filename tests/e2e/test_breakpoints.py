@@ -199,3 +199,45 @@ def test_why_at_a_past_tick_shows_operand_values(page: Any, studio: StudioServer
     page.keyboard.press("End")
     screenshot(page, "why-recorded")
     time.sleep(0.2)
+
+
+def test_new_option_dialog_creates_the_file_and_the_include(page: Any, studio: StudioServer) -> None:
+    page.keyboard.press("e")
+    page.click("button:has-text('New option…')")
+    dialog = page.locator("dialog.new-option")
+    dialog.wait_for(state="visible")
+    page.fill("input[aria-label='Option name']", "2bad")
+    page.wait_for_selector(".new-option-problems li:has-text('name: starts with a letter')")
+    assert dialog.locator("button:has-text('Create')").is_disabled()
+    page.fill("input[aria-label='Option name']", "turn_to_goal")
+    page.fill("input[aria-label='Option doc']", "Turns on the spot until the goal is ahead.")
+    dialog.locator("button:has-text('+ parameter')").click()
+    page.fill("input[aria-label='Parameter name']", "tolerance")
+    page.fill("input[aria-label='Range from']", "30")
+    page.fill("input[aria-label='Range to']", "5")
+    page.wait_for_selector(".new-option-problems li:has-text('the range 30..5 is empty')")
+    page.fill("input[aria-label='Range from']", "0")
+    page.fill("input[aria-label='Range to']", "45")
+    page.fill("input[aria-label='Unit']", "deg")
+    assert page.input_value("select[aria-label='Agents file']") == "behavior/agents.xabsl"
+    # the diff of the agents file is shown before anything is written
+    added = dialog.locator(".new-option-diff .diff-add")
+    assert added.count() == 1 and 'include "options/turn_to_goal.xabsl";' in added.inner_text()
+    assert 'float @tolerance [0..45] "deg";' in dialog.locator(".new-option-source").inner_text()
+    before = get(studio, "api/files/behavior/agents.xabsl")
+    assert b"turn_to_goal" not in before
+    dialog.locator("button:has-text('Create')").click()
+    dialog.wait_for(state="hidden")
+    agents = json.loads(get(studio, "api/files/behavior/agents.xabsl"))["text"]
+    assert agents.count('include "options/turn_to_goal.xabsl";') == 1
+    created = json.loads(get(studio, "api/files/behavior/options/turn_to_goal.xabsl"))["text"]
+    assert created.startswith("/** Turns on the spot until the goal is ahead. */\noption turn_to_goal {")
+    page.wait_for_function("() => document.querySelector('.cm-content').textContent.includes('option turn_to_goal')")
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        program = json.loads(get(studio, "api/status"))["programs"]["behavior"]
+        if "turn_to_goal.xabsl" in " ".join(program["files"]):
+            break
+        time.sleep(0.3)
+    assert program["ok"] is True and any(f.endswith("turn_to_goal.xabsl") for f in program["files"])
+    screenshot(page, "new-option")
