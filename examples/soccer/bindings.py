@@ -406,20 +406,23 @@ class ActivationRecorder:
     ``bytearray`` and feeds both to a hash; the counts are summed (numpy) on request.
     """
 
-    __slots__ = ("_active", "_engine", "hash", "option_names")
+    __slots__ = ("_active", "_engine", "_states", "hash", "option_names")
 
     def __init__(self, engine: Engine) -> None:
         self._engine = engine
         self.option_names: list[str] = list(engine.option_names)
         self._active = bytearray()
+        self._states = bytearray()
         self.hash = hashlib.blake2b(digest_size=16)
 
     def record(self) -> None:
         engine = self._engine
         active = engine.ran_options()
+        states = bytes(engine.active_states())
         self._active += active
+        self._states += states
         self.hash.update(active)
-        self.hash.update(bytes(engine.active_states()))
+        self.hash.update(states)
 
     def counts(self) -> dict[str, int]:
         """Ticks each option was active (options that never ran are left out)."""
@@ -428,6 +431,27 @@ class ActivationRecorder:
             return {}
         totals = np.frombuffer(bytes(self._active), dtype=np.uint8).reshape(-1, n).sum(axis=0, dtype=np.int64)
         return {name: int(c) for name, c in zip(self.option_names, totals, strict=True) if c}
+
+    def state_counts(self) -> dict[tuple[str, int], tuple[int, int]]:
+        """Per ``(option, state index)`` that ran: ticks active in it and how often it was entered.
+
+        A state is *entered* in a tick where its option ran in it after running in another state
+        (or not running) the tick before: the decisions the option took, as counts.
+        """
+        n = len(self.option_names)
+        if not self._active:
+            return {}
+        ran = np.frombuffer(bytes(self._active), dtype=np.uint8).reshape(-1, n).astype(bool)
+        states = np.frombuffer(bytes(self._states), dtype=np.uint8).reshape(-1, n).astype(np.int64)
+        previous = np.vstack([np.full((1, n), -1, dtype=np.int64), np.where(ran, states, -1)[:-1]])
+        entered = ran & (states != previous)
+        width = int(states.max()) + 1
+        keys = np.arange(n, dtype=np.int64)[None, :] * width + states
+        ticks = np.bincount(keys[ran], minlength=n * width)
+        entries = np.bincount(keys[entered], minlength=n * width)
+        return {
+            (self.option_names[k // width], k % width): (int(ticks[k]), int(entries[k])) for k in np.flatnonzero(ticks)
+        }
 
 
 class XabslController:

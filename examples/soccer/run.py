@@ -210,6 +210,9 @@ class MatchReport:
     wall_seconds: float
     phases: dict[str, float] = field(default_factory=dict)
     faults: list[str] = field(default_factory=list)
+    #: per team, ``(option, state index) -> (ticks active, entries)`` summed over its robots
+    #: (``ActivationRecorder.state_counts``); not part of :meth:`as_dict`
+    states: tuple[dict[tuple[str, int], tuple[int, int]], ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         possession = [t.possession_ticks for t in self.teams]
@@ -276,6 +279,7 @@ def play_match(
     stats.finish()
     digest = hashlib.blake2b(digest_size=16)
     activations: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    states: tuple[dict[tuple[str, int], tuple[int, int]], ...] = ({}, {})
     faults = []
     for agent in world.agents:
         controller = agent.controller
@@ -284,6 +288,10 @@ def play_match(
         counts = activations[agent.team_index]
         for name, ticks in controller.recorder.counts().items():
             counts[name] = counts.get(name, 0) + ticks
+        team_states = states[agent.team_index]
+        for key, (ticks, entries) in controller.recorder.state_counts().items():
+            had = team_states.get(key, (0, 0))
+            team_states[key] = (had[0] + ticks, had[1] + entries)
         if controller.fault is not None:
             faults.append(f"{agent.name}: {controller.fault}")
     return MatchReport(
@@ -296,6 +304,7 @@ def play_match(
         wall_seconds=run.wall_seconds,
         phases=run.phases.shares(),
         faults=faults,
+        states=states,
     )
 
 
