@@ -123,7 +123,7 @@ def main(args: argparse.Namespace) -> int:
 
         try:
             if args.ray:
-                runners.run_ray(specs, programs, args.ray, args.jobs, collect)
+                jobs = runners.run_ray(specs, programs, args.ray, args.jobs, collect)
             else:
                 runners.run_local(specs, programs, jobs, collect)
         except KeyboardInterrupt:
@@ -135,7 +135,7 @@ def main(args: argparse.Namespace) -> int:
         away=args.away,
         planned=len(specs),
         wall_seconds=wall,
-        jobs=args.jobs or (jobs if not args.ray else 0),
+        jobs=jobs,
         backend=backend,
         interrupted=interrupted,
     )

@@ -113,8 +113,8 @@ def run_ray(
     address: str,
     jobs: int | None,
     on_result: OnResult,
-) -> None:
-    """Play ``specs`` as Ray tasks (one CPU each).
+) -> int:
+    """Play ``specs`` as Ray tasks (one CPU each); returns the CPUs of the cluster.
 
     Args:
         specs: the matches.
@@ -144,6 +144,7 @@ def run_ray(
             raise UsageError(f"--ray {address}: {error}") from error
     refs: dict[Any, MatchSpec] = {}
     try:
+        cpus = int(ray.cluster_resources().get("CPU", 0))
         remote_play = ray.remote(num_cpus=1, max_retries=0)(play)
         home, away = (ray.put(p) for p in programs)
         refs = {remote_play.remote(spec, home, away): spec for spec in specs}
@@ -155,6 +156,7 @@ def run_ray(
                     on_result(ray.get(ref))
                 except Exception as error:  # the task's worker died, or Ray itself failed
                     on_result(_failure(refs[ref], f"{type(error).__name__}: {error}"))
+        return cpus
     except KeyboardInterrupt:
         for ref in refs:
             ray.cancel(ref, force=True)
