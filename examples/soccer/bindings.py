@@ -399,30 +399,36 @@ def make_bindings(perception: WorldModel, motion: MotionRequest) -> tuple[Bindin
 
 
 class ActivationRecorder:
-    """Counts, per option, the ticks it was active, and hashes the activation trace.
+    """Counts, per option, the ticks it was active and in which state, and hashes the activation trace.
 
-    After each tick it takes the engine's cheap per-tick views (``Engine.ran_options()``, one
-    ``bytes`` of active flags, and ``Engine.active_states()``), appends the flags to one
-    ``bytearray`` and feeds both to a hash; the counts are summed (numpy) on request.
+    After each tick it appends the engine's cheap per-tick views (``Engine.ran_options()``, one
+    ``bytes`` of active flags, and ``Engine.active_states()``) to two ``bytearray`` buffers; counts
+    (numpy) and the trace hash are computed from them on request, so a tick costs two appends.
     """
 
-    __slots__ = ("_active", "_engine", "_states", "hash", "option_names")
+    __slots__ = ("_active", "_engine", "_states", "option_names")
 
     def __init__(self, engine: Engine) -> None:
         self._engine = engine
         self.option_names: list[str] = list(engine.option_names)
         self._active = bytearray()
         self._states = bytearray()
-        self.hash = hashlib.blake2b(digest_size=16)
 
     def record(self) -> None:
         engine = self._engine
-        active = engine.ran_options()
-        states = bytes(engine.active_states())
-        self._active += active
-        self._states += states
-        self.hash.update(active)
-        self.hash.update(states)
+        self._active += engine.ran_options()
+        self._states += bytes(engine.active_states())
+
+    @property
+    def hash(self) -> hashlib._Hash:
+        """BLAKE2b (16 bytes) of the trace: per tick the active flags, then the active states."""
+        digest = hashlib.blake2b(digest_size=16)
+        n = len(self.option_names)
+        if self._active and n:
+            active = np.frombuffer(bytes(self._active), dtype=np.uint8).reshape(-1, n)
+            states = np.frombuffer(bytes(self._states), dtype=np.uint8).reshape(-1, n)
+            digest.update(np.hstack([active, states]).tobytes())
+        return digest
 
     def counts(self) -> dict[str, int]:
         """Ticks each option was active (options that never ran are left out)."""

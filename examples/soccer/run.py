@@ -143,26 +143,26 @@ class MatchStats:
         self.world = world
         self.teams = (TeamStats(), TeamStats())
         self._last_kick: list[int | None] = [a.robot.last_kick_ms for a in world.agents]
+        self._agents = [(a.index, a.team_index, a.robot) for a in world.agents]
 
     def on_tick(self, now_ms: int) -> None:
         world = self.world
-        game = world.game
-        if game.state != GameState.PLAYING:
+        if world.game.state != GameState.PLAYING:
             return
-        physics = world.physics
-        bx, by = physics.ball_position()
+        # The poses the world reads for the next tick's perception anyway (read once per step).
+        snap = world._refresh_snapshot()
+        bx, by, xs, ys = snap.ball_x, snap.ball_y, snap.x, snap.y
         best, best_team = POSSESSION_DISTANCE, -1
-        agents = world.agents
-        for i, agent in enumerate(agents):
-            body = physics.robots[agent.index]
-            x, y = body.position
-            d = math.hypot(x - bx, y - by)
+        last_kick = self._last_kick
+        hypot = math.hypot
+        for i, (index, team, robot) in enumerate(self._agents):
+            d = hypot(xs[index] - bx, ys[index] - by)
             if d < best:
-                best, best_team = d, agent.team_index
-            kicked = agent.robot.last_kick_ms
-            if kicked != self._last_kick[i]:
-                self._last_kick[i] = kicked
-                self._count_kick(agent.team_index, agent.index, bx, by)
+                best, best_team = d, team
+            kicked = robot.last_kick_ms
+            if kicked != last_kick[i]:
+                last_kick[i] = kicked
+                self._count_kick(team, index, bx, by)
         if best_team >= 0:
             self.teams[best_team].possession_ticks += 1
 

@@ -131,7 +131,10 @@ def run_ray(
     import logging
 
     if address == "local":
-        ray.init(num_cpus=jobs, include_dashboard=False, logging_level=logging.WARNING, log_to_driver=False)
+        # address="local": always a new instance, never a cluster an earlier `ray start` left behind
+        ray.init(
+            address="local", num_cpus=jobs, include_dashboard=False, logging_level=logging.WARNING, log_to_driver=False
+        )
     else:
         try:
             ray.init(
