@@ -150,7 +150,7 @@ class MatchStats:
         if world.game.state != GameState.PLAYING:
             return
         # The poses the world reads for the next tick's perception anyway (read once per step).
-        snap = world._refresh_snapshot()
+        snap = world.pose_snapshot()
         bx, by, xs, ys = snap.ball_x, snap.ball_y, snap.x, snap.y
         best, best_team = POSSESSION_DISTANCE, -1
         last_kick = self._last_kick
