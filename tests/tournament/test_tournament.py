@@ -167,7 +167,7 @@ def test_ctrl_c_keeps_the_finished_matches(monkeypatch, capsys):
 
     monkeypatch.setattr(cli._progress, "update", interrupt_after_the_first)
     start = time.perf_counter()
-    code = run_cli(str(DEFAULT_HOME), str(DEFAULT_AWAY), "-n", "12", "--duration", "300", "-j", "2", "--json")
+    code = run_cli(str(DEFAULT_HOME), str(DEFAULT_AWAY), "-n", "12", "--duration", "90", "-j", "2", "--json")
     elapsed = time.perf_counter() - start
     summary = orjson.loads(capsys.readouterr().out)
     assert code == 130
@@ -175,5 +175,20 @@ def test_ctrl_c_keeps_the_finished_matches(monkeypatch, capsys):
     assert 1 <= summary["played"] < 12 and summary["played"] == len(seen)
     assert summary["failed"] == []  # the matches running at Ctrl+C are neither results nor failures
     assert summary["results"]["wins"] + summary["results"]["draws"] + summary["results"]["losses"] == summary["played"]
-    # The running matches stop within a simulated second instead of playing 300 s to the end.
+    # The running matches stop within a simulated second instead of playing to the end, and the
+    # ten matches not started are not played.
     assert elapsed < 60
+
+
+def test_a_version_against_itself_is_exactly_even(capsys):
+    # Each seed is played once each way round, so two equal versions get exactly the same totals:
+    # a wrong colour mapping would give HOME the blue team's results twice.
+    code = run_cli(str(DEFAULT_HOME), str(DEFAULT_HOME), "-n", "2", "--duration", "40", "-j", "2", "--json")
+    summary = orjson.loads(capsys.readouterr().out)
+    assert code == 0 and summary["played"] == 2
+    assert summary["results"]["wins"] == summary["results"]["losses"]
+    assert summary["goals"]["home"] == summary["goals"]["away"]
+    assert summary["teams"]["home"] == summary["teams"]["away"]
+    assert all(row["difference"] == 0.0 for row in summary["activations"] + summary["states"])
+    first, second = summary["matches"]
+    assert first["score"] == {"home": second["score"]["away"], "away": second["score"]["home"]}
