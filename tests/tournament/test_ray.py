@@ -5,6 +5,7 @@ Needs the ``ray`` extra (``make test`` installs it).
 
 from __future__ import annotations
 
+import socket
 import sys
 
 import orjson
@@ -31,3 +32,11 @@ def test_without_ray_the_message_says_how_to_install_it(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
     with pytest.raises(UsageError, match=r"pip install 'xabsl-studio\[ray\]'"):
         run_cli(str(DEFAULT_HOME), str(DEFAULT_AWAY), "-n", "1", "--duration", "4", "--ray", "local")
+
+
+def test_an_address_where_no_cluster_runs_is_a_clear_error_at_once():
+    with socket.socket() as probe:  # a port nothing listens on once closed
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    with pytest.raises(UsageError, match=f"no Ray cluster answers at 127.0.0.1:{port}"):
+        run_cli(str(DEFAULT_HOME), str(DEFAULT_AWAY), "-n", "1", "--duration", "4", "--ray", f"127.0.0.1:{port}")

@@ -15,7 +15,9 @@ Ray is an optional extra (``pip install 'xabsl-studio[ray]'``), imported only by
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
+import socket
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
@@ -107,6 +109,38 @@ def _code_modules() -> list[str]:
     return [str(Path(engine.__file__).parent), str(Path(examples.__file__).parent)]
 
 
+#: Where ``ray start`` notes the address of the cluster it started on this machine.
+RAY_CURRENT_CLUSTER = Path("/tmp/ray/ray_current_cluster")
+
+
+def _check_reachable(address: str) -> None:
+    """Fail fast when no Ray cluster answers at ``address`` (``auto`` or ``HOST:PORT``).
+
+    Ray itself retries for minutes before it gives up on an address nothing listens at.
+
+    Raises:
+        UsageError: no cluster address is known, or nothing listens there.
+    """
+    if address.startswith("ray://"):
+        return  # a Ray client server: Ray reports that one itself
+    if address == "auto":
+        found = os.environ.get("RAY_ADDRESS", "")
+        if not found and RAY_CURRENT_CLUSTER.is_file():
+            found = RAY_CURRENT_CLUSTER.read_text(encoding="utf-8").strip()
+        if not found:
+            raise UsageError("--ray auto: no Ray cluster started on this machine (start one: ray start --head)")
+        address = found
+    host, colon, port = address.rpartition(":")
+    if not colon or not port.isdigit():
+        raise UsageError(f"--ray {address}: expected HOST:PORT, auto or local")
+    try:
+        socket.create_connection((host, int(port)), timeout=3.0).close()
+    except OSError as error:
+        raise UsageError(
+            f"--ray: no Ray cluster answers at {address} ({error.strerror or error}); start one: ray start --head"
+        ) from None
+
+
 def run_ray(
     specs: Sequence[MatchSpec],
     programs: tuple[Program, Program],
@@ -129,6 +163,9 @@ def run_ray(
     """
     ray = _import_ray()
     import logging
+
+    if address != "local":
+        _check_reachable(address)
 
     if address == "local":
         # address="local": always a new instance, never a cluster an earlier `ray start` left behind
