@@ -47,6 +47,7 @@ def _positive(kind: type, what: str) -> Any:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add ``xabsl tournament`` to the command line."""
     parser = subparsers.add_parser(
         "tournament",
         help="play N seeded soccer matches between two behavior versions (folders or git:REV:PATH)",
