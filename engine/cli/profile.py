@@ -30,9 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         ),
     )
     parser.add_argument("recording", metavar="RECORDING", help="an .mcap recording")
-    parser.add_argument(
-        "--agent", action="append", metavar="NAME", help="profile only this agent (robot); repeatable"
-    )
+    parser.add_argument("--agent", action="append", metavar="NAME", help="profile only this agent (robot); repeatable")
     parser.add_argument("--html", metavar="OUT", help="also write the HTML report (one self-contained file)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON (docs/profile.md)")
     parser.add_argument(

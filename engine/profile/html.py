@@ -69,7 +69,8 @@ def _option_graph_dot(description: dict[str, Any], team: dict[str, Any]) -> str:
             tip = f"{name}: {100 * s['share']:.1f} % of the time, {s['activations']} activations"
         lines.append(
             f"  {quote('o:' + name)} [id={quote('option_' + str(option['id']))}, label={quote(name)}, shape=box, "
-            f"style={style}, fillcolor={quote(fill)}, fontcolor={quote('#222' if s else '#888')}, tooltip={quote(tip)}];"
+            f"style={style}, fillcolor={quote(fill)}, fontcolor={quote('#222' if s else '#888')}, "
+            f"tooltip={quote(tip)}];"
         )
         called: list[tuple[str, str]] = []
         for state in option["states"]:
@@ -199,7 +200,9 @@ def _options_html(section: dict[str, Any], description: dict[str, Any]) -> str:
         for state in option["states"]:
             t = s["states"].get(state["name"])
             if t is None:
-                rows.append(f'<tr class="state never"><td>{_e(state["name"])}</td><td colspan="5">never active</td></tr>')
+                rows.append(
+                    f'<tr class="state never"><td>{_e(state["name"])}</td><td colspan="5">never active</td></tr>'
+                )
                 continue
             rows.append(
                 f'<tr class="state"><td>{_e(state["name"])}</td><td>{100 * t["share"]:.1f} %</td>'

@@ -144,9 +144,7 @@ def _section(c: AgentCounts, description: dict[str, Any], tick_ms: float, per_ag
     }
 
 
-def profile(
-    recording: Recording, agents: list[str] | None = None, oscillation_ms: float = 1000.0
-) -> dict[str, Any]:
+def profile(recording: Recording, agents: list[str] | None = None, oscillation_ms: float = 1000.0) -> dict[str, Any]:
     """The profile of ``agents`` (default: every XABSL agent) of ``recording`` (docs/profile.md).
 
     Raises:
