@@ -9,6 +9,6 @@ Profiler read logs of the option activation path:
 * :mod:`engine.profile.html`      the report as one self-contained HTML file with SVG plots
 """
 
-from engine.profile.report import FORMAT, ProfileError, profile
+from engine.profile.report import FORMAT, ProfileError, build_report, profile
 
-__all__ = ["FORMAT", "ProfileError", "profile"]
+__all__ = ["FORMAT", "ProfileError", "build_report", "profile"]

@@ -20,12 +20,14 @@ Rules (docs/profile.md):
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
 from engine.record import Recording
 
-__all__ = ["AgentCounts", "Oscillation", "count_recording"]
+__all__ = ["AgentCounts", "Oscillation", "count_paths", "count_recording"]
 
 
 @dataclass(slots=True)
@@ -143,7 +145,7 @@ class _Counter:
             del history[:32]
 
     def tick(self, seq: int, path: list[list[Any]]) -> None:
-        """Count one tick's path."""
+        """Count one tick's path (the hot loop: the common case, same option in the same state, first)."""
         self.ticks += 1
         prev = self.prev
         cur: dict[int, list[Any]] = {}
@@ -168,21 +170,22 @@ class _Counter:
                 self._close_state(oid, before[3], seq)
                 self._enter_state(oid, sid, seq)
             leaf = node[7]
-            if leaf >= 0:
-                decided = node[6]
-                key = (oid, decided, leaf)
-                count = leaves.get(key)
-                if count is None:
-                    leaves[key] = 1
-                    self.decided.add((oid, decided))
-                else:
-                    leaves[key] = count + 1
-                if decided != sid:
-                    tkey = (oid, decided, sid, leaf)
-                    self.transitions[tkey] = self.transitions.get(tkey, 0) + 1
-        for oid, node in prev.items():
-            if oid not in cur:
-                self._close_option(oid, node[3], seq)
+            if leaf < 0:
+                continue
+            decided = node[6]
+            key = (oid, decided, leaf)
+            try:
+                leaves[key] += 1
+            except KeyError:
+                leaves[key] = 1
+                self.decided.add((oid, decided))
+            if decided != sid:
+                tkey = (oid, decided, sid, leaf)
+                self.transitions[tkey] = self.transitions.get(tkey, 0) + 1
+        if len(prev) != len(cur) or any(oid not in cur for oid in prev):
+            for oid, node in prev.items():
+                if oid not in cur:
+                    self._close_option(oid, node[3], seq)
         self.prev = cur
 
     def finish(self, seq: int) -> None:
@@ -221,22 +224,28 @@ class _Counter:
         return out
 
 
-def count_recording(
-    recording: Recording, agents: list[str] | None = None, oscillation_ms: float = 1000.0
+def count_paths(
+    rows: Iterable[tuple[int, int, str, int, list[list[Any]]]],
+    names: list[str],
+    program_of: Callable[[str, int], tuple[str, dict[str, Any]]],
+    tick_ms: float,
+    oscillation_ms: float = 1000.0,
 ) -> tuple[list[AgentCounts], list[int]]:
-    """Count every tick of ``agents`` (default: all) in one pass.
+    """Count ``(seq, t, agent, gen, path)`` rows (per agent in seq order) in one pass.
+
+    ``program_of(agent, gen)`` gives the program key and description that the ids of that
+    generation index. A recording gives the rows through ``Recording.paths``; the studio from its
+    ring buffer.
 
     Returns:
-        the counts per agent and program generation (in agent order), and per seq the world's
+        the counts per agent and program generation (in ``names`` order), and per seq the world's
         engine clock ``t`` in ms (for the times of oscillations).
     """
-    tick_ms = 1000.0 / recording.behavior_hz
-    threshold = max(1, int(-(-oscillation_ms // tick_ms)))  # away for fewer ticks than this
-    names = recording.agents if agents is None else agents
+    threshold = max(1, math.ceil(oscillation_ms / tick_ms))  # away for fewer ticks than this
     counters: dict[tuple[str, int], _Counter] = {}
     current: dict[str, tuple[int, _Counter, int]] = {}  # agent -> (gen, counter, last seq)
     times: list[int] = []
-    for seq, t, agent, gen, path in recording.paths(agents=names):
+    for seq, t, agent, gen, path in rows:
         if seq >= len(times):
             times.extend([t] * (seq + 1 - len(times)))
         entry = current.get(agent)
@@ -254,6 +263,19 @@ def count_recording(
     result = []
     order = {name: i for i, name in enumerate(names)}
     for (agent, gen), counter in sorted(counters.items(), key=lambda item: (order[item[0][0]], item[0][1])):
-        program = recording.program(agent, gen)
-        result.append(counter.named(agent, program.key, gen, program.description))
+        key, description = program_of(agent, gen)
+        result.append(counter.named(agent, key, gen, description))
     return result, times
+
+
+def count_recording(
+    recording: Recording, agents: list[str] | None = None, oscillation_ms: float = 1000.0
+) -> tuple[list[AgentCounts], list[int]]:
+    """:func:`count_paths` over every tick of ``agents`` (default: all) of ``recording``."""
+    names = recording.agents if agents is None else agents
+
+    def program_of(agent: str, gen: int) -> tuple[str, dict[str, Any]]:
+        program = recording.program(agent, gen)
+        return program.key, program.description
+
+    return count_paths(recording.paths(agents=names), names, program_of, 1000.0 / recording.behavior_hz, oscillation_ms)

@@ -15,7 +15,7 @@ from typing import Any
 from engine.profile.analysis import AgentCounts, count_recording
 from engine.record import Recording, RecordingError
 
-__all__ = ["FORMAT", "ProfileError", "profile"]
+__all__ = ["FORMAT", "ProfileError", "build_report", "profile"]
 
 #: ``format`` of the report document (docs/profile.md).
 FORMAT = "xabsl-profile/1"
@@ -159,12 +159,35 @@ def profile(recording: Recording, agents: list[str] | None = None, oscillation_m
             raise ProfileError(f"no agent {name!r} in the recording (agents: {', '.join(recording.agents)})")
     tick_ms = 1000.0 / recording.behavior_hz
     counts, times = count_recording(recording, names, oscillation_ms)
-    by_agent: dict[str, list[AgentCounts]] = {}
-    for c in counts:
-        by_agent.setdefault(c.agent, []).append(c)
     latest: dict[str, dict[str, Any]] = {}
     for c in counts:  # the latest generation of each program key is what coverage counts against
         latest[c.key] = recording.program(c.agent, c.gen).description
+    meta = {
+        "recording": recording.path,
+        "example": recording.header.get("example"),
+        "seed": recording.header.get("seed"),
+        "ticks": len(recording),
+    }
+    return build_report(counts, times, names, latest, tick_ms, oscillation_ms, meta)
+
+
+def build_report(
+    counts: list[AgentCounts],
+    times: list[int],
+    names: list[str],
+    latest: dict[str, dict[str, Any]],
+    tick_ms: float,
+    oscillation_ms: float,
+    meta: dict[str, Any],
+) -> dict[str, Any]:
+    """The report document of ``counts`` (:func:`~engine.profile.analysis.count_paths`).
+
+    ``latest``: per program key the description coverage counts against; ``meta``: ``recording``,
+    ``example``, ``seed`` and ``ticks`` (the report's header fields).
+    """
+    by_agent: dict[str, list[AgentCounts]] = {}
+    for c in counts:
+        by_agent.setdefault(c.agent, []).append(c)
     agents_out: dict[str, Any] = {}
     merged: dict[str, AgentCounts] = {}
     for name in names:
@@ -207,12 +230,12 @@ def profile(recording: Recording, agents: list[str] | None = None, oscillation_m
     )
     return {
         "format": FORMAT,
-        "recording": recording.path,
-        "example": recording.header.get("example"),
-        "seed": recording.header.get("seed"),
-        "ticks": len(recording),
+        "recording": meta.get("recording"),
+        "example": meta.get("example"),
+        "seed": meta.get("seed"),
+        "ticks": meta["ticks"],
         "tick_ms": tick_ms,
-        "duration_ms": round(len(recording) * tick_ms, 3),
+        "duration_ms": round(meta["ticks"] * tick_ms, 3),
         "oscillation_ms": oscillation_ms,
         "cpu": None,
         "cpu_note": CPU_NOTE,
