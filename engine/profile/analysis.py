@@ -230,7 +230,7 @@ def count_paths(
     program_of: Callable[[str, int], tuple[str, dict[str, Any]]],
     tick_ms: float,
     oscillation_ms: float = 1000.0,
-) -> tuple[list[AgentCounts], list[int]]:
+) -> tuple[list[AgentCounts], dict[int, int]]:
     """Count ``(seq, t, agent, gen, path)`` rows (per agent in seq order) in one pass.
 
     ``program_of(agent, gen)`` gives the program key and description that the ids of that
@@ -239,15 +239,14 @@ def count_paths(
 
     Returns:
         the counts per agent and program generation (in ``names`` order), and per seq the world's
-        engine clock ``t`` in ms (for the times of oscillations).
+        engine clock ``t`` in ms (seq -> t, for the times of oscillations).
     """
     threshold = max(1, math.ceil(oscillation_ms / tick_ms))  # away for fewer ticks than this
     counters: dict[tuple[str, int], _Counter] = {}
     current: dict[str, tuple[int, _Counter, int]] = {}  # agent -> (gen, counter, last seq)
-    times: list[int] = []
+    times: dict[int, int] = {}
     for seq, t, agent, gen, path in rows:
-        if seq >= len(times):
-            times.extend([t] * (seq + 1 - len(times)))
+        times[seq] = t
         entry = current.get(agent)
         if entry is None or entry[0] != gen:
             if entry is not None:
@@ -270,7 +269,7 @@ def count_paths(
 
 def count_recording(
     recording: Recording, agents: list[str] | None = None, oscillation_ms: float = 1000.0
-) -> tuple[list[AgentCounts], list[int]]:
+) -> tuple[list[AgentCounts], dict[int, int]]:
     """:func:`count_paths` over every tick of ``agents`` (default: all) of ``recording``."""
     names = recording.agents if agents is None else agents
 

@@ -173,7 +173,7 @@ def profile(recording: Recording, agents: list[str] | None = None, oscillation_m
 
 def build_report(
     counts: list[AgentCounts],
-    times: list[int],
+    times: dict[int, int],
     names: list[str],
     latest: dict[str, dict[str, Any]],
     tick_ms: float,
@@ -204,8 +204,10 @@ def build_report(
         section["agents"] = [m.agent for m in members]
         teams[key] = section
 
+    last_t = times[max(times)] if times else 0
+
     def when(seq: int) -> int:
-        return times[seq] if seq < len(times) else (times[-1] if times else 0)
+        return times.get(seq, last_t)
 
     oscillations = sorted(
         (
@@ -234,6 +236,7 @@ def build_report(
         "example": meta.get("example"),
         "seed": meta.get("seed"),
         "ticks": meta["ticks"],
+        "first_seq": min(times, default=0),
         "tick_ms": tick_ms,
         "duration_ms": round(meta["ticks"] * tick_ms, 3),
         "oscillation_ms": oscillation_ms,
