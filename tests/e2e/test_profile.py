@@ -2,7 +2,8 @@
 
 The report must open from disk with no request leaving the file, show its graphs laid out and
 switch the activity plot between agents; in the studio, the Coverage tab must count the session
-(GET /api/profile), dim never-active options in the option graph with counts on hover, and move
+(GET /api/profile), dim never-active options in the option graph and never-entered states and never-taken
+transitions in the state-machine view, with counts on hover, and move
 the timeline cursor to an oscillation when it is clicked.
 """
 
@@ -78,6 +79,23 @@ def test_studio_coverage_dims_the_graph_and_jumps_to_an_oscillation(page: Any) -
     never = page.locator(".graph-panel svg g.never[id^=option_]").first
     assert "never active" in never.locator("title").first.text_content()
     screenshot(page, "profile-coverage")
+    # the state machine of play_soccer: "finished" is never entered before the match ends
+    page.evaluate(
+        """() => {
+            const s = window.xabslStudio.session;
+            const o = s.indexOf(s.selectedRobot).optionByName.get("play_soccer");
+            s.openOptionById(o.id);
+        }"""
+    )
+    page.click("[data-tab=option]")
+    page.wait_for_function(
+        "() => document.querySelectorAll('.option-panel svg .never[id^=state_]').length >= 1", timeout=15000
+    )
+    never_states = page.locator(".option-panel svg .never[id^=state_] > title").all_text_contents()
+    assert "finished: never active" in never_states
+    assert page.locator(".option-panel svg .never[id^=leaf_]").count() >= 1
+    entered = page.locator(".option-panel svg [id^=state_]:not(.never) title").first.text_content()
+    assert "% of the time" in entered
     # with a threshold of ten minutes any re-entered state is an oscillation: one soon turns up
     page.fill(".coverage-panel input[type=number]", "600000")
     for _ in range(60):

@@ -126,7 +126,7 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
-  const coverage = new CoveragePanel(session, graph);
+  const coverage = new CoveragePanel(session, graph, () => ({ option: optionView.current(), element: optionView.element }));
   // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
   const dynamics = new DynamicsPanel(session, connection);
   const plan = new PlanPanel(session, connection);

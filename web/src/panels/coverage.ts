@@ -7,6 +7,7 @@
 import { token } from "../api";
 import type { Session, SessionEvent } from "../session";
 import { h } from "../ui";
+import type { Option } from "../description";
 import type { GraphPanel } from "./graph";
 
 interface Duration { share: number; activations: number; mean_ms: number; longest_ms: number }
@@ -28,8 +29,9 @@ export interface Oscillation {
 export interface Profile { ticks: number; agents: Record<string, AgentProfile>; oscillations: Oscillation[] }
 
 const STYLE = `
-.graph-panel svg .never { opacity: 0.35; }
-.graph-panel svg .never polygon, .graph-panel svg .never path { stroke-dasharray: 4 3; }
+.graph-panel svg .never, .option-panel svg .never { opacity: 0.35; }
+.graph-panel svg .never polygon, .graph-panel svg .never path,
+.option-panel svg .never polygon, .option-panel svg .never path, .option-panel svg .never ellipse { stroke-dasharray: 4 3; }
 .coverage-panel { display: flex; flex-direction: column; gap: 6px; padding: 6px; overflow: auto; }
 .coverage-panel .figures span { margin-right: 12px; }
 .coverage-panel ol { margin: 0; padding-left: 20px; }
@@ -54,8 +56,14 @@ export class CoveragePanel {
   private robot: string | null = null;
   private last = 0;
   private busy = false;
+  private overlaid: { svg: Element | null; profile: Profile | null; checked: boolean } = { svg: null, profile: null, checked: true };
 
-  constructor(private readonly session: Session, private readonly graph: GraphPanel) {
+  /// `shownOption`: the option the state-machine view (panels/optionview.ts) shows, and its element.
+  constructor(
+    private readonly session: Session,
+    private readonly graph: GraphPanel,
+    private readonly shownOption: () => { option: Option | null; element: HTMLElement },
+  ) {
     document.head.append(h("style", {}, STYLE));
     this.overlay.addEventListener("change", () => this.applyOverlay());
     this.threshold.addEventListener("change", () => void this.refresh());
@@ -151,7 +159,45 @@ export class CoveragePanel {
     this.graph.overlay("never", never, titles);
   }
 
+  /// Dim never-entered states and never-taken transitions in the state-machine view; counts on
+  /// hover. The view draws its SVG itself; this marks it again whenever a new one is shown.
+  private overlayStateMachine(): void {
+    const { option, element } = this.shownOption();
+    const svg = element.querySelector("svg");
+    const checked = this.overlay.checked && this.robot === this.robotName();
+    const o = this.overlaid;
+    if (svg === o.svg && this.profile === o.profile && checked === o.checked) return;
+    this.overlaid = { svg, profile: this.profile, checked };
+    if (!svg || !option) return;
+    for (const el of svg.querySelectorAll(".never")) el.classList.remove("never");
+    const agent = this.robot ? this.profile?.agents[this.robot] : undefined;
+    if (!agent || !checked) return;
+    const p = agent.options[option.name];
+    const title = (el: Element, text: string): void => {
+      let t = el.querySelector(":scope > title");
+      if (!t) el.prepend((t = document.createElementNS("http://www.w3.org/2000/svg", "title")));
+      t.textContent = text;
+    };
+    for (const state of option.states) {
+      const el = svg.querySelector(`[id="state_${state.id}"]`);
+      if (!el) continue;
+      const d = p?.states[state.name];
+      el.classList.toggle("never", !d);
+      title(el, d ? `${state.name}: ${(100 * d.share).toFixed(1)} % of the time, ${d.activations} activations, mean ${d.mean_ms.toFixed(0)} ms` : `${state.name}: never active`);
+    }
+    const ids = new Map(option.states.map((st) => [st.name, st.id]));
+    for (const t of option.transitions) {
+      if (t.stay || t.to === t.from) continue;
+      const el = svg.querySelector(`[id="leaf_${ids.get(t.from) ?? -1}_${t.leaf}"]`);
+      if (!el) continue;
+      const n = p?.transitions.filter((x) => x.from === t.from && x.leaf === t.leaf).reduce((a, x) => a + x.count, 0) ?? 0;
+      el.classList.toggle("never", n === 0);
+      title(el, `${t.from} → ${t.to} (leaf ${t.leaf}): ${n === 0 ? "never taken" : `taken ${n} times`}`);
+    }
+  }
+
   render(changes: Set<SessionEvent>): void {
+    this.overlayStateMachine();
     if (changes.has("select") && this.robotName() !== this.robot) void this.refresh();
     else if (performance.now() - this.last > 5000 && this.session.isLive) void this.refresh();
   }
