@@ -8,6 +8,8 @@ static scenes and the events (a few messages); ticks are read on demand:
   ``key_every`` ticks earlier) plus the changes after it, so it reads the messages of that time
   window only, through MCAP's chunk index (timestamps are ``seq`` times the tick period);
 * ``recording.ticks(start, stop)`` decodes a range in one pass (replay, tests, statistics).
+* ``recording.paths(start, stop, agents)`` yields only the activation paths, scanning the MCAP
+  chunks directly (the profiler's pass over a whole recording).
 
 Each :class:`TickView` holds per agent an :class:`AgentTick`: the path, roots, assignment
 values, input and output values (XABSL names, enums as element names; ``raw_inputs()`` gives host
