@@ -14,6 +14,7 @@ import orjson
 import pytest
 
 from examples.soccer.studio import SoccerExample
+from examples.testing.cli import main as xabsl_test
 from examples.testing.runner import run_case
 from examples.testing.spec import load_suite
 from server.session import Session
@@ -95,6 +96,9 @@ def test_a_draft_from_a_hit_parses_and_passes(soccer: LiveServer, client_for: An
     assert case.setup["game_state"] == "playing"
     result = run_case(case)
     assert result.ok, result.report()
+
+    # both files through `xabsl test` (the command line): exit 0, both passed
+    assert xabsl_test([str(soccer.session.example.root / "tests"), "--no-recordings", "-q"]) == 0
 
     # a removed breakpoint, a tick the history no longer has
     assert client.command("remove_breakpoint", breakpoint=event["breakpoint"])["ok"]
