@@ -485,6 +485,14 @@ class TestForce(BaseModel):
     params: dict[str, JsonValue] = Field(default_factory=dict)
 
 
+class TestHit(BaseModel):
+    """A breakpoint hit to reproduce: breakpoint ``breakpoint`` of behavior ``program`` after tick ``seq``."""
+
+    program: str = Field(min_length=1, max_length=500)
+    breakpoint: int = Field(ge=1, le=2**31)
+    seq: int = Field(ge=0)
+
+
 class TestDraftBody(BaseModel):
     """Save as test: the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
 
@@ -495,6 +503,7 @@ class TestDraftBody(BaseModel):
     active: list[tuple[str, str]] = Field(default_factory=list, max_length=500)
     behaviors: list[str] = Field(default_factory=list, max_length=500)
     duration: float = Field(5.0, gt=0, le=3600)
+    hit: TestHit | None = None
     save: bool = False
 
 
@@ -504,6 +513,8 @@ async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
 
     The setup comes from the world's latest scene when the world plug-in can turn a scene into a
     setup (``setup_from_scene``); the file goes to the example folder's ``tests/`` (409 if it exists).
+    With ``hit``, the scene is the hit's tick and the assertions are the breakpoint's (409 when the
+    breakpoint was removed or the tick left the history).
     """
     from engine.files import write_atomically
     from examples.testing.save import DraftError, draft_file_name, draft_test
@@ -512,6 +523,15 @@ async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
     session = studio.session
     plugin = session.example
     latest = session.ring.latest
+    hit = None
+    if body.hit is not None:
+        point = session.breakpoints.get(body.hit.program, {}).get(body.hit.breakpoint)
+        if point is None:
+            raise HTTPException(409, f"no breakpoint {body.hit.breakpoint} in {body.hit.program!r} (removed?)")
+        latest = session.ring.get(body.hit.seq)
+        if latest is None or not latest.scene:  # the ring keeps scenes of its newest ticks only
+            raise HTTPException(409, f"the world at tick {body.hit.seq} is no longer kept; save from a recent hit")
+        hit = (point, body.robot, body.hit.seq, latest.t)
     scene = orjson.loads(latest.scene) if latest is not None else {}
     status = orjson.loads(latest.status) if latest is not None else {}
     gen = session.generation
@@ -543,6 +563,7 @@ async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
             active=body.active,
             behaviors=body.behaviors,
             duration=body.duration,
+            hit=hit,
         )
     except (DraftError, ValueError) as error:
         raise HTTPException(422, str(error)) from None

@@ -5,8 +5,11 @@
 describe it as a setup (a plug-in's optional ``setup_from_scene(scene, status)``; the soccer
 world gives robots, ball, game state), the forced option or basic behavior with its parameters,
 the input overrides (from t = 0), and one ``eventually`` assertion per option state and basic
-behavior that was active, as a starting point. The studio serves it as ``POST /api/tests/draft``
-(docs/tests.md "Save as test"); ``save`` writes it into the example's ``tests/`` folder.
+behavior that was active, as a starting point. From a breakpoint hit (``hit``), the setup is the
+scene at the hit's tick and the assertions say what the breakpoint waited for
+(:func:`hit_expects`), with a comment for what the format cannot express. The studio serves it
+as ``POST /api/tests/draft`` (docs/tests.md "Save as test"); ``save`` writes it into the
+example's ``tests/`` folder.
 """
 
 from __future__ import annotations
@@ -18,9 +21,19 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from engine.runtime.breakpoints import Breakpoint
 from examples.testing.spec import SUFFIX, parse_suite
 
-__all__ = ["DraftError", "draft_file_name", "draft_test", "toml_value"]
+__all__ = ["DraftError", "draft_file_name", "draft_test", "hit_expects", "toml_value"]
+
+#: ``SYMBOL OP VALUE`` of a condition breakpoint: what a ``symbol`` assertion can say.
+_COMPARISON = re.compile(
+    r"\s*(?P<symbol>[A-Za-z_][\w.]*)\s*(?P<op><=|>=|==|!=|<|>)\s*"
+    r"(?P<value>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|true|false|[A-Za-z_][\w.]*)\s*"
+)
+_BOOLEAN = re.compile(r"\s*(?P<neg>!?)\s*(?P<symbol>[A-Za-z_][\w.]*)\s*")
+#: A closed range bound for ``<=`` / ``>=`` (the format has ``between``, not ``at most``).
+_FAR = 1e300
 
 
 class DraftError(ValueError):
@@ -66,6 +79,81 @@ def _key(key: str) -> str:
     return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else toml_value(key)
 
 
+def _comparison(clause: str) -> dict[str, Any] | None:
+    """The ``symbol`` predicate of one comparison clause, or None when it is not one."""
+    match = _COMPARISON.fullmatch(clause)
+    if match is None:
+        boolean = _BOOLEAN.fullmatch(clause)
+        if boolean is None or boolean["symbol"] in ("true", "false"):
+            return None
+        return {"symbol": boolean["symbol"], "equals": not boolean["neg"]}
+    raw = match["value"]
+    value: Any
+    if raw in ("true", "false"):
+        value = raw == "true"
+    else:
+        try:
+            value = float(raw)
+            value = int(value) if value.is_integer() and abs(value) < 2**53 else value
+        except ValueError:
+            value = raw  # an enum element (or a constant: the runner then says it is unknown)
+    op, symbol = match["op"], match["symbol"]
+    numeric = isinstance(value, int | float) and not isinstance(value, bool)
+    if op == "==":
+        return {"symbol": symbol, "equals": value}
+    if op == "!=":
+        return {"symbol": symbol, "not_equals": value}
+    if not numeric:
+        return None
+    if op == "<":
+        return {"symbol": symbol, "below": value}
+    if op == ">":
+        return {"symbol": symbol, "above": value}
+    return {"symbol": symbol, "between": [-_FAR, value] if op == "<=" else [value, _FAR]}
+
+
+def hit_expects(point: Breakpoint, within: float) -> tuple[list[dict[str, Any]], list[str]]:
+    """What breakpoint ``point`` waited for as ``within`` assertions, and comments for the rest.
+
+    ``enter_option`` / ``enter_state`` become "option (in state) active within"; a ``leaf`` the
+    option in its state (the format has no leaf predicate); a ``condition`` one ``symbol``
+    assertion per ``&&`` clause of the form ``SYMBOL OP VALUE`` (or a bare boolean symbol).
+    Leaving an option or state, ``||``, arithmetic and function calls have no assertion: the
+    comments say so, and the caller keeps the active states as the starting point.
+    """
+    where = f"within {within:g} s"
+    if point.kind == "enter_option":
+        return [{"within": within, "option": point.option}], []
+    if point.kind == "enter_state":
+        return [{"within": within, "option": point.option, "state": point.state}], []
+    if point.kind == "leaf":
+        return [{"within": within, "option": point.option, "state": point.state}], [
+            f"the breakpoint waited for decision leaf {point.leaf} of {point.option}.{point.state}; a test cannot",
+            "assert a decision leaf, so this asserts its state (its coverage report lists the leaves reached)",
+        ]
+    if point.kind in ("leave_option", "leave_state"):
+        target = point.option if point.kind == "leave_option" else f"{point.option}.{point.state}"
+        return [], [
+            f'the breakpoint waited for leaving {target}; a test cannot assert "stops being active"',
+            "(only never/always/eventually of being active): the assertions below are what was active at the hit",
+        ]
+    condition = " ".join((point.condition or "").split())
+    clauses = condition.split("&&")
+    predicates = [_comparison(c) for c in clauses] if "||" not in condition and "(" not in condition else [None]
+    if not condition or any(p is None for p in predicates):
+        return [], [
+            f"the breakpoint waited for `{condition}`; only comparisons of a symbol with a value",
+            "(joined by &&) become assertions, so the assertions below are what was active at the hit",
+        ]
+    comments = []
+    if len(predicates) > 1:
+        comments = [
+            f"the breakpoint waited for `{condition}`: each clause is asserted {where} on its own;",
+            "a test cannot say that they hold in the same tick",
+        ]
+    return [{"within": within, **p} for p in predicates if p is not None], comments
+
+
 def draft_test(
     *,
     name: str,
@@ -81,6 +169,7 @@ def draft_test(
     active: Sequence[tuple[str, str]],
     behaviors: Sequence[str],
     duration: float = 5.0,
+    hit: tuple[Breakpoint, str, int, int] | None = None,
 ) -> str:
     """The text of a test file (see the module docstring); it parses as a suite (checked).
 
@@ -98,6 +187,9 @@ def draft_test(
         active: ``(option, state)`` pairs that were active, in path order.
         behaviors: basic behaviors that were called.
         duration: seconds the test runs.
+        hit: ``(breakpoint, robot name, seq, t in ms)`` of a breakpoint hit the draft reproduces
+            (``setup`` is then the scene at that tick); its assertions replace ``active`` and
+            ``behaviors`` when the breakpoint can be expressed (:func:`hit_expects`).
 
     Raises:
         DraftError: a bad name or value.
@@ -107,9 +199,21 @@ def draft_test(
     if not (0 < duration <= 3600):
         raise DraftError(f"duration must be in (0, 3600] s, got {duration!r}")
     path = Path(os.path.relpath(example_path, tests_folder)).as_posix()
-    lines = [
-        f"# Saved from the studio's tester: {name}. Edit the assertions to say what must happen",
+    hit_blocks: list[dict[str, Any]] = []
+    notes: list[str] = []
+    if hit is None:
+        lines = [f"# Saved from the studio's tester: {name}. Edit the assertions to say what must happen"]
+    else:
+        point, hit_robot, seq, t = hit
+        hit_blocks, notes = hit_expects(point, float(duration))
+        lines = [
+            f"# Saved from breakpoint `{point.describe()}` that hit on {hit_robot} after tick {seq}"
+            f" (t = {t / 1000:g} s): {name}.",
+            "# The setup is the world at that tick (the engine starts afresh there). Edit the assertions",
+        ]
+    lines += [
         "# (docs/tests.md); run it with `xabsl test` on this file.",
+        *(f"# {note}" for note in notes),
         "",
         "[suite]",
         f"path = {toml_value(path)}",
@@ -129,7 +233,12 @@ def draft_test(
         lines.append(f"force = {toml_value({kind: target, 'params': dict(params)})}")
     if overrides:
         lines.append(f"inputs = [{{ t = 0, set = {toml_value(dict(overrides))} }}]")
-    expects = []
+    expects = [
+        "[[test.expect]]\n" + "\n".join(f"{_key(k)} = {toml_value(v)}" for k, v in block.items())
+        for block in hit_blocks
+    ]
+    if hit_blocks:
+        active, behaviors = [], []  # the hit says what happened
     for option, state in active:
         expects.append(
             f"[[test.expect]]\nwithin = {toml_value(float(duration))}\n"

@@ -11,9 +11,10 @@ from pathlib import Path
 import httpx
 import pytest
 
+from engine.runtime.breakpoints import Breakpoint
 from examples.soccer.studio import SoccerExample
 from examples.testing.runner import run_case
-from examples.testing.save import DraftError, draft_file_name, draft_test, toml_value
+from examples.testing.save import DraftError, draft_file_name, draft_test, hit_expects, toml_value
 from examples.testing.spec import load_suite
 from server.session import Session
 from tests.server.conftest import LiveServer
@@ -100,3 +101,54 @@ def test_endpoint_saves_a_test_that_passes(soccer_server: LiveServer) -> None:
     assert case.force is not None and case.force[1] == "go_to_position"
     result = run_case(case)
     assert result.ok, result.report()
+
+
+def test_a_breakpoint_becomes_what_the_format_can_assert() -> None:
+    def expects(**fields: object) -> tuple[list[dict[str, object]], list[str]]:
+        return hit_expects(Breakpoint(id=1, **fields), 4.0)  # type: ignore[arg-type]
+
+    assert expects(kind="enter_option", option="striker") == ([{"within": 4.0, "option": "striker"}], [])
+    assert expects(kind="enter_state", option="striker", state="kick")[0] == [
+        {"within": 4.0, "option": "striker", "state": "kick"}
+    ]
+    blocks, notes = expects(kind="leaf", option="striker", state="kick", leaf=2)
+    assert blocks == [{"within": 4.0, "option": "striker", "state": "kick"}] and "leaf 2" in notes[0]
+    blocks, notes = expects(kind="leave_state", option="striker", state="kick")
+    assert blocks == [] and "leaving striker.kick" in notes[0]
+    assert expects(kind="condition", condition="ball.distance <= 300")[0] == [
+        {"within": 4.0, "symbol": "ball.distance", "between": [-1e300, 300]}
+    ]
+    assert expects(kind="condition", condition="!ball.seen")[0] == [
+        {"within": 4.0, "symbol": "ball.seen", "equals": False}
+    ]
+    blocks, notes = expects(kind="condition", condition="role == role.striker && ball.x > -1.5")
+    assert blocks == [
+        {"within": 4.0, "symbol": "role", "equals": "role.striker"},
+        {"within": 4.0, "symbol": "ball.x", "above": -1.5},
+    ]
+    assert "same tick" in notes[1]
+    for condition in ("ball.x + ball.y > 3", "a > 1 || b > 1", "(a > 1)", "role < role.striker"):
+        blocks, notes = expects(kind="condition", condition=condition)
+        assert blocks == [] and condition.split()[0] in notes[0], condition
+
+
+def test_a_draft_from_a_hit_says_what_it_cannot_assert(tmp_path: Path) -> None:
+    point = Breakpoint(id=3, kind="leave_option", option="helper")
+    text = draft_test(
+        name="helper stops",
+        robot="robot1",
+        tests_folder=tmp_path,
+        example_path=REPO / "tests" / "behaviortest" / "behavior",
+        world=None,
+        options={},
+        seed=1,
+        setup=None,
+        force=None,
+        overrides={},
+        active=[("helper", "turning")],
+        behaviors=[],
+        hit=(point, "robot1", 120, 1200),
+    )
+    assert text.startswith("# Saved from breakpoint `leave helper` that hit on robot1 after tick 120 (t = 1.2 s)")
+    assert '# the breakpoint waited for leaving helper; a test cannot assert "stops being active"' in text
+    assert 'option = "helper"\nstate = "turning"' in text  # what was active stays the starting point

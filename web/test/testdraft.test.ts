@@ -1,6 +1,6 @@
 import { describe, expect, it } from "vitest";
 import { type BehaviorDescription, indexDescription } from "../src/description";
-import { testDraftBody } from "../src/panels/testdraft";
+import { hitDraftBody, testDraftBody } from "../src/panels/testdraft";
 import type { RobotState } from "../src/protocol";
 import demo from "./fixtures/demo.json";
 
@@ -36,5 +36,15 @@ describe("Save as test: the draft's body", () => {
     expect(body.force).toBeNull();
     expect(body.active).toEqual([["play", "chase"]]);
     expect(body.overrides).toEqual({});
+  });
+
+  it("from a breakpoint hit: names the hit for the server and the test after the breakpoint", () => {
+    const state = robot({ path: [{ kind: "option", depth: 0, option: 1, state: 1, optionTime: 0, stateTime: 0, decidedIn: 1, leaf: 0, params: [] }] });
+    const hit = { program: "demo", breakpoint: 2, seq: 120 };
+    const body = hitDraftBody("robot2", state, index, hit, "enter play.chase");
+    expect(body.hit).toEqual(hit);
+    expect(body.name).toBe("robot2 enter play.chase");
+    expect(body.active).toEqual([["play", "chase"]]);
+    expect(testDraftBody("robot2", state, index).hit).toBeUndefined();
   });
 });

@@ -1,12 +1,15 @@
 /// Breakpoints: the list of the selected robot's behavior set (enable, disable, remove), a form to
 /// add one (enter/leave an option or state, a decision leaf, a condition over symbols with the
 /// compiler's diagnostics as you type), and the hits (`event` `breakpoint`): a hit pauses the
-/// match on the server; here it selects the robot, goes to the tick and marks it in the timeline.
+/// match on the server; here it selects the robot, goes to the tick and marks it in the timeline,
+/// and lists the hits of that tick, each with "Save as test" (a test file that starts from the
+/// world at the hit's tick and asserts what the breakpoint waited for, docs/tests.md).
 /// Breakpoints live on the server (stored per agents file); this panel only shows and edits them.
 import type { Connection } from "../connection";
 import type { BreakpointEvent, BreakpointInfo } from "../messages.gen";
 import type { Session } from "../session";
 import { formatClock, h, toast } from "../ui";
+import { hitDraftBody, saveDraft } from "./testdraft";
 
 export type BreakpointKind = "enter_option" | "leave_option" | "enter_state" | "leave_state" | "leaf" | "condition";
 
@@ -24,6 +27,8 @@ export interface Hit {
   seq: number;
   robot: number;
   description: string;
+  program: string;
+  breakpoint: number;
 }
 
 export class BreakpointsPanel {
@@ -32,6 +37,7 @@ export class BreakpointsPanel {
   readonly hits: Hit[] = [];
   onHitsChanged: () => void = () => undefined;
   private readonly list: HTMLElement;
+  private readonly hitList: HTMLElement;
   private readonly kind: HTMLSelectElement;
   private readonly state: HTMLSelectElement;
   private readonly leaf: HTMLInputElement;
@@ -51,6 +57,7 @@ export class BreakpointsPanel {
     private readonly option: () => { name: string; states: Array<{ name: string }> } | null,
   ) {
     this.list = h("ul.breakpoint-list");
+    this.hitList = h("ul.breakpoint-hits", { "aria-label": "Breakpoint hits" });
     this.kind = h(
       "select",
       { "aria-label": "Breakpoint kind", onchange: () => this.formChanged() },
@@ -81,7 +88,7 @@ export class BreakpointsPanel {
       h("button", { onclick: () => void this.add(), title: "Add the breakpoint (it pauses the match when it hits)" }, "Add"),
       this.diagnostics,
     );
-    this.element = h("div.breakpoints", {}, h("div.section-title", {}, "Breakpoints"), this.list, form);
+    this.element = h("div.breakpoints", {}, h("div.section-title", {}, "Breakpoints"), this.list, this.hitList, form);
     this.formChanged();
   }
 
@@ -236,7 +243,8 @@ export class BreakpointsPanel {
   /// (several robots, several breakpoints) are told in one message; the selected robot stays
   /// selected when it is among them, else the first robot that hit is selected.
   onHit(event: BreakpointEvent): void {
-    this.hits.push({ t: event.t, seq: event.seq, robot: event.robot, description: event.description });
+    const hit = { t: event.t, seq: event.seq, robot: event.robot, description: event.description, program: event.program, breakpoint: event.breakpoint };
+    this.hits.push(hit);
     if (this.hits.length > 200) this.hits.shift();
     const batch = this.batch && this.batch.seq === event.seq ? this.batch : (this.batch = { seq: event.seq, t: event.t, robots: [], descriptions: [] });
     if (!batch.robots.includes(event.robot)) batch.robots.push(event.robot);
@@ -248,6 +256,37 @@ export class BreakpointsPanel {
       const names = batch.robots.map((r) => this.session.robotInfo(r)?.name ?? `robot ${r}`).join(", ");
       toast(`Breakpoint: ${batch.descriptions.join("; ")} on ${names} at ${formatClock(batch.t)} (paused)`, "info", 6000);
     }, 30);
+    this.showHits(event.seq);
     this.onHitsChanged();
+  }
+
+  /// The hits of tick `seq` (the newest), each with its "Save as test" button; the selected
+  /// robot's first, at most 8.
+  private showHits(seq: number): void {
+    const selected = this.session.selectedRobot;
+    const hits = this.hits.filter((x) => x.seq === seq).sort((a, b) => Number(b.robot === selected) - Number(a.robot === selected)).slice(0, 8);
+    this.hitList.replaceChildren(
+      ...hits.map((x) => {
+        const name = this.session.robotInfo(x.robot)?.name ?? `robot ${x.robot}`;
+        return h(
+          "li.breakpoint-hit",
+          { "data-breakpoint": x.breakpoint },
+          h("span", {}, `Hit: `, h("code", {}, x.description), ` on ${name} at ${formatClock(x.t)}`),
+          h("button", { title: "Write a test that starts from the world at this tick and asserts what the breakpoint waited for", onclick: () => void this.saveAsTest(x) }, "Save as test"),
+        );
+      }),
+    );
+  }
+
+  /// "Save as test" of hit `hit`: the robot at the hit's tick, the breakpoint named for the server.
+  async saveAsTest(hit: Hit): Promise<void> {
+    this.session.selectRobot(hit.robot);
+    this.session.setCursor(hit.t);
+    const state = this.session.robotInView();
+    const index = this.session.indexOf(hit.robot);
+    const name = this.session.robotInfo(hit.robot)?.name;
+    if (!state || !index || !name) return toast("Nothing to save: the robot has no XABSL behavior at the hit's tick", "error");
+    const body = hitDraftBody(name, state, index, { program: hit.program, breakpoint: hit.breakpoint, seq: hit.seq }, hit.description);
+    await saveDraft(body);
   }
 }

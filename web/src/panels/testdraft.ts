@@ -1,9 +1,20 @@
 /// What "Save as test" sends to `POST /api/tests/draft`: the selected robot's situation in the tick
 /// in view — the forced root with its parameters, the input overrides (enum values by element
-/// name) and the option states and basic behaviors that were active (docs/tests.md).
+/// name) and the option states and basic behaviors that were active (docs/tests.md). From a
+/// breakpoint hit, the body names the hit (`hit`): the server takes the world at its tick and the
+/// breakpoint's assertion. `saveDraft` asks for a name, saves and offers the file as a download.
+import { ApiError, draftTest } from "../api";
 import type { DescriptionIndex, Parameter } from "../description";
 import type { RobotState } from "../protocol";
 import type { WireValue } from "../messages.gen";
+import { h, toast } from "../ui";
+
+/// A breakpoint hit the draft reproduces: breakpoint `breakpoint` of behavior `program` after tick `seq`.
+export interface DraftHit {
+  program: string;
+  breakpoint: number;
+  seq: number;
+}
 
 export interface TestDraftBody {
   name: string;
@@ -13,6 +24,7 @@ export interface TestDraftBody {
   active: Array<[string, string]>;
   behaviors: string[];
   duration: number;
+  hit?: DraftHit;
 }
 
 function named(index: DescriptionIndex, param: { type: string; enum: string | null }, value: WireValue): WireValue | string {
@@ -65,4 +77,34 @@ export function testDraftBody(robotName: string, state: RobotState, index: Descr
   }
   const what = force ? force.name : (active[0]?.[0] ?? "agent");
   return { name: `${robotName} ${what}`, robot: robotName, force, overrides, active, behaviors, duration };
+}
+
+/// The draft's body for breakpoint hit `hit` (`state`: the robot at the hit's tick), named after it.
+export function hitDraftBody(robotName: string, state: RobotState, index: DescriptionIndex, hit: DraftHit, description: string): TestDraftBody {
+  return { ...testDraftBody(robotName, state, index), name: `${robotName} ${description}`, hit };
+}
+
+function download(path: string, text: string): void {
+  const link = h("a", { href: URL.createObjectURL(new Blob([text], { type: "application/toml" })), download: path.split("/").pop() ?? "test.xabsl-test.toml" });
+  link.click();
+  URL.revokeObjectURL(link.href);
+}
+
+/// "Save as test": ask for the test's name, let the server write tests/NAME.xabsl-test.toml in the
+/// example folder and offer the file as a download (when the name is taken, only the download).
+export async function saveDraft(body: TestDraftBody): Promise<void> {
+  const title = globalThis.prompt?.("Name of the test", body.name);
+  if (!title) return;
+  const named = { ...body, name: title };
+  try {
+    const draft = await draftTest({ ...named, save: true });
+    download(draft.path, draft.text);
+    toast(`Saved ${draft.path}: edit its assertions, run it with xabsl test`, "ok");
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 409) {
+      const draft = await draftTest({ ...named, save: false }).catch(() => null);
+      if (draft) download(draft.path, draft.text);
+    }
+    toast(`Could not save the test: ${(e as Error).message}`, "error");
+  }
 }

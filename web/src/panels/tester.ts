@@ -2,13 +2,12 @@
 /// declaration (types, ranges, units, enum choices), run it as the root of the selected robot
 /// (`force_option` / `force_behavior`), watch it, release. The simulation controls (pause, step,
 /// speed, reset) sit in the top bar and work from here too.
-import { ApiError, draftTest } from "../api";
 import type { Connection } from "../connection";
 import { type Parameter, parseRange, rangeText } from "../description";
 import { checkNumber } from "../params";
 import type { Session, SessionEvent } from "../session";
 import { h, setText, shortElement, toast } from "../ui";
-import { testDraftBody } from "./testdraft";
+import { saveDraft, testDraftBody } from "./testdraft";
 
 type Target = { kind: "option" | "behavior"; name: string };
 
@@ -202,21 +201,7 @@ export class TesterPanel {
       toast("Nothing to save: the robot has no XABSL behavior in view", "error");
       return;
     }
-    const body = testDraftBody(name, state, index);
-    const title = globalThis.prompt?.("Name of the test", body.name);
-    if (!title) return;
-    body.name = title;
-    try {
-      const draft = await draftTest({ ...body, save: true });
-      download(draft.path, draft.text);
-      toast(`Saved ${draft.path}: edit its assertions, run it with xabsl test`, "ok");
-    } catch (e) {
-      if (e instanceof ApiError && e.status === 409) {
-        const draft = await draftTest({ ...body, save: false }).catch(() => null);
-        if (draft) download(draft.path, draft.text);
-      }
-      toast(`Could not save the test: ${(e as Error).message}`, "error");
-    }
+    await saveDraft(testDraftBody(name, state, index));
   }
 
   private resetAgent(): void {
@@ -241,8 +226,3 @@ export class TesterPanel {
   }
 }
 
-function download(path: string, text: string): void {
-  const link = h("a", { href: URL.createObjectURL(new Blob([text], { type: "application/toml" })), download: path.split("/").pop() ?? "test.xabsl-test.toml" });
-  link.click();
-  URL.revokeObjectURL(link.href);
-}
