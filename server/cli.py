@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     from engine.cli import UsageError
     from server.app import WEB_DIST, create_app
     from server.examples import ExampleError, load_example
-    from server.protocol import MAX_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
+    from server.protocol import MAX_LSP_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
     from server.security import SecurityPolicy, TokenError
     from server.session import Session
 
@@ -125,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         app,
         host=args.host,
         port=args.port,
-        ws_max_size=MAX_MESSAGE_BYTES,
+        ws_max_size=MAX_LSP_MESSAGE_BYTES,
         ws_per_message_deflate=args.compress,
         log_level="warning",
         lifespan="on",

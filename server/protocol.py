@@ -13,6 +13,10 @@ VERSION = 1
 
 #: Largest client message in bytes (uvicorn's ``ws_max_size`` and our own check, close 1009).
 MAX_MESSAGE_BYTES = 64 * 1024
+#: Largest message on the editor's language-server websocket (``/lsp``): an opened or changed file
+#: travels whole, JSON-escaped, and files may be 16 MiB (``server.files.MAX_FILE_BYTES``). It is
+#: uvicorn's ``ws_max_size``; ``/ws`` keeps its own lower limit.
+MAX_LSP_MESSAGE_BYTES = 40 * 1024 * 1024
 #: Largest REST request body in bytes (413 above).
 MAX_BODY_BYTES = 1024 * 1024
 #: Most websocket clients at once (close 1013 above).

@@ -91,3 +91,21 @@ def test_lsp_endpoint_serves_the_behavior_folder(live: LiveServer) -> None:
         # 'exit' ends this connection, not the studio
         rpc.notify("exit", None)
     assert live.thread.is_alive()
+
+
+def test_a_file_larger_than_the_command_limit_opens_over_lsp(live: LiveServer) -> None:
+    # A whole file travels in one didOpen; /ws's 64 KiB limit must not cut the editor off.
+    with connect(f"ws://127.0.0.1:{live.port}/lsp?token=s3cret", open_timeout=10, max_size=None) as ws:
+        rpc = Rpc(ws)
+        rpc.request("initialize", {"processId": None, "rootUri": None, "capabilities": {}})
+        rpc.notify("initialized", {})
+        root = rpc.request("xabsl/root", None)["uri"]
+        uri = root + "/options/play.xabsl"
+        text = (Path(live.session.example.root) / "options" / "play.xabsl").read_text()
+        padded = text.replace("goto chase;", "goto chasee;", 1) + "/* " + "x" * 200_000 + " */\n"
+        assert len(padded) > 3 * 64 * 1024
+        rpc.notify(
+            "textDocument/didOpen",
+            {"textDocument": {"uri": uri, "languageId": "xabsl", "version": 1, "text": padded}},
+        )
+        assert any(d["code"] == "unknown-state" for d in rpc.diagnostics(uri))

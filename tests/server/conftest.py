@@ -26,7 +26,7 @@ from websockets.sync.client import ClientConnection, connect
 from examples.soccer.studio import SoccerExample
 from server.app import create_app
 from server.bench_world import BenchExample
-from server.protocol import MAX_MESSAGE_BYTES
+from server.protocol import MAX_LSP_MESSAGE_BYTES
 from server.security import SecurityPolicy
 from server.session import Session
 
@@ -70,7 +70,7 @@ class LiveServer:
             host="127.0.0.1",
             port=self.port,
             log_level="warning",
-            ws_max_size=MAX_MESSAGE_BYTES,
+            ws_max_size=MAX_LSP_MESSAGE_BYTES,  # as `xabsl serve` (the /ws limit is the client handler's)
             ws_per_message_deflate=False,
             lifespan="on",
         )
