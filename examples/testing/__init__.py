@@ -14,6 +14,20 @@ Worlds come through the world plug-ins (``engine.host.Example``, loaded by
 :class:`examples.testing.runner.ArrangeableExample`. Nothing here is imported by ``engine/``.
 """
 
-from examples.testing.spec import Case, Expect, SpecError, Suite, load_suite
+from __future__ import annotations
+
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing: `xabsl --help` stays light
+if TYPE_CHECKING:
+    from examples.testing.spec import Case, Expect, SpecError, Suite, load_suite
 
 __all__ = ["Case", "Expect", "SpecError", "Suite", "load_suite"]
+
+
+def __getattr__(name: str) -> object:
+    # The format's names load with the format (PEP 562): registering `xabsl test` on the command
+    # line imports this package, and `xabsl --help` must not pay for TOML, JSON and dataclasses.
+    if name in __all__:
+        from examples.testing import spec
+
+        return getattr(spec, name)
+    raise AttributeError(f"module 'examples.testing' has no attribute {name!r}")

@@ -9,17 +9,21 @@ Registered under the ``xabsl.commands`` entry-point group (``test = "examples.te
 from __future__ import annotations
 
 import argparse
-import concurrent.futures
-import multiprocessing
 import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
 
-from examples.testing.coverage import Coverage
-from examples.testing.report import KeywordError, keyword_matcher, write_junit
-from examples.testing.runner import CaseResult, run_case
-from examples.testing.spec import SUFFIX, Case, SpecError, load_suite
+# This module registers `xabsl test` whenever `xabsl` starts, so it imports only argparse at the
+# top; the test format, the runner and the worlds load when the command runs.
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    from typing import Any
+
+    from examples.testing.runner import CaseResult
+    from examples.testing.spec import Case
+
+#: How test files are named (``examples.testing.spec.SUFFIX``; a test checks that they agree).
+SUFFIX = ".xabsl-test.toml"
 
 __all__ = ["collect", "main", "register", "run_cases"]
 
@@ -60,6 +64,8 @@ def collect(paths: Iterable[str | Path]) -> list[Case]:
     Raises:
         SpecError: a bad test file, or a path that is neither.
     """
+    from examples.testing.spec import SpecError, load_suite
+
     cases: list[Case] = []
     for raw in paths:
         path = Path(raw)
@@ -76,6 +82,11 @@ def collect(paths: Iterable[str | Path]) -> list[Case]:
 
 def run_cases(cases: Sequence[Case], jobs: int = 1, recordings: Path | None = None) -> list[CaseResult]:
     """Run ``cases`` (in ``jobs`` processes); the results are in the order of ``cases``."""
+    import concurrent.futures
+    import multiprocessing
+
+    from examples.testing.runner import run_case
+
     if jobs <= 1 or len(cases) <= 1:
         return [run_case(case, recordings) for case in cases]
     # forkserver: the workers start from a clean interpreter (no threads of the parent), and each
@@ -93,6 +104,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from examples.testing.coverage import Coverage
+    from examples.testing.report import KeywordError, keyword_matcher, write_junit
+    from examples.testing.spec import SpecError
+
     try:
         cases = collect(args.paths)
         if args.keyword:

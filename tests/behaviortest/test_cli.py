@@ -144,3 +144,10 @@ def test_register_adds_the_subcommand(suite: Path) -> None:
     args = parser.parse_args(["test", str(suite), "-k", "busy", "--jobs", "2", "--no-recordings", "-q"])
     assert (args.keyword, args.jobs, args.no_recordings) == ("busy", 2, True)
     assert args.func(args) == 0
+
+
+def test_the_command_line_names_test_files_as_the_format_does() -> None:
+    # examples.testing.cli keeps its own copy so that registering `xabsl test` loads no TOML.
+    from examples.testing import cli, spec
+
+    assert cli.SUFFIX == spec.SUFFIX

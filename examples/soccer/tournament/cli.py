@@ -12,18 +12,18 @@ import argparse
 import math
 import os
 import sys
-import tempfile
 import time
 from pathlib import Path
-from typing import Any
-
-import orjson
 
 from engine.cli import UsageError
-from engine.files import write_atomically
-from engine.ir.model import Program
-from examples.soccer.run import TeamError, load_team
-from examples.soccer.tournament import match, report, runners, versions
+
+# This module registers `xabsl tournament` whenever `xabsl` starts: what a match needs loads when
+# the command runs.
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    from typing import Any
+
+    from engine.ir.model import Program
 
 
 def _cores() -> int:
@@ -100,6 +100,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 def main(args: argparse.Namespace) -> int:
     """Run the tournament the flags describe; returns the exit status."""
+    import tempfile
+
+    import orjson
+
+    from engine.files import write_atomically
+    from examples.soccer.run import TeamError, load_team
+    from examples.soccer.tournament import match, report, runners, versions
+
     if not 1 <= args.players <= 7:
         raise UsageError(f"--players must be in 1..7, got {args.players}")
     jobs = args.jobs or _cores()
