@@ -27,6 +27,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
+from server.clients import ClientState
 from server.protocol import MAX_CLIENTS, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL
 from tests.server.conftest import LiveServer, WsClient
 
@@ -278,34 +279,49 @@ def _masked_text(payload: bytes) -> bytes:
     mask = os.urandom(4)
     size = len(payload)
     head = bytes([0x81]) + (
-        bytes([0x80 | size]) if size < 126 else bytes([0x80 | 126]) + struct.pack("!H", size)
-        if size < 1 << 16 else bytes([0x80 | 127]) + struct.pack("!Q", size)
+        bytes([0x80 | size])
+        if size < 126
+        else bytes([0x80 | 126]) + struct.pack("!H", size)
+        if size < 1 << 16
+        else bytes([0x80 | 127]) + struct.pack("!Q", size)
     )
     return head + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
 
 
 def _raw_close_code(raw: socket.socket, timeout: float = 10.0) -> int | None:
-    """Read a raw connection to its end; the code of the server's close frame (None: none came)."""
+    """Read a raw connection until the server's close frame; its code (None: the stream ended first)."""
     data = bytearray()
+    at = 0
     deadline = time.monotonic() + timeout
-    with contextlib.suppress(OSError):
-        while time.monotonic() < deadline:
-            raw.settimeout(max(0.01, deadline - time.monotonic()))
-            chunk = raw.recv(1 << 16)
-            if not chunk:
+    while time.monotonic() < deadline:
+        while at + 2 <= len(data):  # whole server frames (not masked) read so far
+            opcode, size, start = data[at] & 0x0F, data[at + 1] & 0x7F, at + 2
+            if size == 126:
+                size, start = (
+                    (struct.unpack("!H", data[start : start + 2])[0], start + 2)
+                    if len(data) >= start + 2
+                    else (-1, start)
+                )
+            elif size == 127:
+                size, start = (
+                    (struct.unpack("!Q", data[start : start + 8])[0], start + 8)
+                    if len(data) >= start + 8
+                    else (-1, start)
+                )
+            if size < 0 or start + size > len(data):
                 break
-            data += chunk
-    at, code = 0, None
-    while at + 2 <= len(data):  # server frames are not masked
-        opcode, size, at = data[at] & 0x0F, data[at + 1] & 0x7F, at + 2
-        if size == 126:
-            size, at = struct.unpack("!H", data[at : at + 2])[0], at + 2
-        elif size == 127:
-            size, at = struct.unpack("!Q", data[at : at + 8])[0], at + 8
-        if opcode == 0x8 and size >= 2 and at + 2 <= len(data):
-            code = struct.unpack("!H", data[at : at + 2])[0]
-        at += size
-    return code
+            if opcode == 0x8:
+                return int(struct.unpack("!H", data[start : start + 2])[0]) if size >= 2 else None
+            at = start + size
+        raw.settimeout(max(0.01, deadline - time.monotonic()))
+        try:
+            chunk = raw.recv(1 << 16)
+        except OSError:
+            return None
+        if not chunk:
+            return None
+        data += chunk
+    raise AssertionError("no close frame in time")
 
 
 def _raw_websocket(server: LiveServer) -> socket.socket:
@@ -426,8 +442,11 @@ def abuse_command_flood(server: LiveServer, seen: dict[str, int]) -> None:
         # The id comes back in each reply: 256 of them are more than the socket buffers hold.
         frame = _masked_text(orjson.dumps({"type": "command", "id": "x" * 30_000, "op": "fly"}))
         deadline = time.monotonic() + 10
-        sent, longest, flooder = 0, 0, set(hub.clients) - before
-        while sent < 5000 and time.monotonic() < deadline and flooder & set(hub.clients):
+        while not set(hub.clients) - before and time.monotonic() < deadline:  # accepted, not yet listed
+            time.sleep(0.01)
+        (flooder,) = [c for key, c in hub.clients.items() if key not in before]
+        sent, longest = 0, 0
+        while sent < 5000 and time.monotonic() < deadline and flooder.state is ClientState.LIVE:
             try:
                 raw.sendall(frame)
             except OSError:  # the server closed (and reset) the connection
@@ -438,6 +457,10 @@ def abuse_command_flood(server: LiveServer, seen: dict[str, int]) -> None:
         assert longest <= MAX_PENDING_CONTROL, longest
         code = _raw_close_code(raw)
         assert code == 1008, f"closed with {code} after {sent} commands (queue at most {longest})"
+        deadline = time.monotonic() + 5
+        while flooder.id in hub.clients and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert flooder.id not in hub.clients, "the flooder still holds a place after its close"
         seen["close 1008 (command flood)"] = sent
     finally:
         raw.close()
@@ -494,6 +517,9 @@ def abuse_slow_reader(server: LiveServer, seen: dict[str, int]) -> None:
         stuck.sendall(_masked_text(orjson.dumps({"type": "subscribe", "rate": 60})))
         for _ in range(30):  # replies it never reads
             stuck.sendall(_masked_text(orjson.dumps({"type": "command", "id": 1, "op": "status"})))
+        deadline = time.monotonic() + 5
+        while not set(hub.clients) - before and time.monotonic() < deadline:
+            time.sleep(0.01)
         time.sleep(0.5)
         mine = [c for key, c in hub.clients.items() if key not in before]
         assert len(mine) == 1
@@ -557,7 +583,9 @@ def test_abuse_leaves_a_healthy_client_its_frame_rate(live_demo: LiveServer, ser
         healthy.connection.__exit__(None, None, None)
     rate, gap = healthy.rate(t0, t1)
     print(f"abuse window {t1 - t0:.1f} s {durations}")
-    print(f"healthy client: {rate:.1f} frames/s of {HEALTHY_RATE}, longest gap {gap:.2f} s, {healthy.replies_ok} replies")
+    print(
+        f"healthy client: {rate:.1f} frames/s of {HEALTHY_RATE}, longest gap {gap:.2f} s, {healthy.replies_ok} replies"
+    )
     print(f"seen: {seen}")
     assert not healthy.errors, healthy.errors
     assert rate >= MIN_SHARE * HEALTHY_RATE, f"the healthy client got {rate:.1f} frames/s"
