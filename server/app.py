@@ -317,6 +317,16 @@ async def websocket(ws: WebSocket) -> None:
     await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
 
 
+@router.websocket("/lsp")
+async def language_server(ws: WebSocket) -> None:
+    """The XABSL language server for the editor (docs/editors.md): LSP, one message per text frame."""
+    from lsp.bridge import serve_connection  # pygls is imported only when an editor connects
+
+    studio: Studio = ws.app.state.studio
+    await ws.accept()
+    await serve_connection(ws.receive_text, ws.send_text, studio.session.example.root)
+
+
 # -- session --------------------------------------------------------------------------------------
 
 
@@ -645,6 +655,7 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     studio.hub = hub
     session.notify = hub.on_entry
     session.on_crash = hub.on_crash
+    session.on_breakpoint = hub.on_breakpoint
     await session.start()
     try:
         yield
