@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import dataclasses
 import logging
 import os
+import re
 import socket
 import struct
 import threading
 import time
+import typing
 from collections.abc import Iterator
 from typing import Any
 
@@ -27,6 +30,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
+from server import messages
 from server.clients import ClientState
 from server.protocol import MAX_CLIENTS, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL
 from tests.server.conftest import LiveServer, WsClient
@@ -72,7 +76,13 @@ NUMERIC_ARGS: list[tuple[dict[str, Any], str]] = [
     ({"type": "command", "op": "history"}, "t0"),
     ({"type": "command", "op": "history"}, "t1"),
     ({"type": "command", "op": "history"}, "every"),
+    ({"type": "command", "op": "explain", "robot": 0, "option": "x"}, "seq"),
     ({"type": "command", "op": "world_command", "name": "x"}, "args"),
+    ({"type": "command", "op": "set_breakpoint", "kind": "leaf", "option": "x"}, "breakpoint"),
+    ({"type": "command", "op": "set_breakpoint", "kind": "leaf", "option": "x"}, "leaf"),
+    ({"type": "command", "op": "set_breakpoint", "kind": "leaf", "option": "x"}, "robot"),
+    ({"type": "command", "op": "remove_breakpoint"}, "breakpoint"),
+    ({"type": "command", "op": "enable_breakpoint", "enabled": True}, "breakpoint"),
 ]
 
 #: Wrong shapes: unknown type/op, wrong argument types, extra and missing arguments.
@@ -561,6 +571,18 @@ ABUSES = [
     abuse_slow_reader,
     abuse_wrong_origin,
 ]
+
+
+def test_every_numeric_argument_is_abused() -> None:
+    """NUMERIC_ARGS names every argument of every op that takes a number (a new command joins it)."""
+    covered = {(base.get("op", base["type"]), name) for base, name in NUMERIC_ARGS}
+    numeric = re.compile(r"\b(int|float|Ref|RobotId|Ms|BreakpointId|CommandValue|dict)\b")
+    for union in typing.get_args(messages.Command)[0].__args__:
+        op = typing.get_args(typing.get_type_hints(union)["op"])[0]
+        for field in dataclasses.fields(union):
+            if field.name not in ("type", "op", "id") and numeric.search(str(field.type)):
+                assert (op, field.name) in covered, (op, field.name)
+    assert ("subscribe", "rate") in covered and ("status", "id") in covered
 
 
 def test_abuse_leaves_a_healthy_client_its_frame_rate(live_demo: LiveServer, server_log: LogCapture) -> None:
