@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     from server.protocol import MAX_LSP_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
     from server.security import SecurityPolicy, TokenError
     from server.session import Session
+    from server.transport import WebSocketProtocol
 
     try:
         policy = SecurityPolicy.for_host(args.host, args.token, args.allow_origin)
@@ -125,6 +126,7 @@ def run(args: argparse.Namespace) -> int:
         app,
         host=args.host,
         port=args.port,
+        ws=WebSocketProtocol,
         ws_max_size=MAX_LSP_MESSAGE_BYTES,
         ws_per_message_deflate=args.compress,
         log_level="warning",

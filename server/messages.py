@@ -79,8 +79,17 @@ Number = Int64 | float
 #: A parameter or input value in a command: a number, a boolean, or an enum element (its index is
 #: a number; its qualified name, ``"game.state.playing"``, a string).
 CommandValue = bool | Int64 | float | str
+
+
+def _not_integer(value: object) -> object:
+    """An integer is no float id: one beyond 64 bits would come back rounded, not as it was sent."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        raise ValueError("an integer id must fit in 64 bits")
+    return value
+
+
 #: A command's client-chosen id, echoed in its reply.
-CommandId = Int64 | float | str
+CommandId = Int64 | Annotated[float, BeforeValidator(_not_integer)] | str
 #: A robot id: its index in ``hello.structure.robots``.
 RobotId = Annotated[int, Field(ge=0, le=2**31), _INTEGRAL]
 #: An option, basic behavior or symbol by id (the program JSON's) or by name.

@@ -29,6 +29,7 @@ from server.bench_world import BenchExample
 from server.protocol import MAX_LSP_MESSAGE_BYTES
 from server.security import SecurityPolicy
 from server.session import Session
+from server.transport import WebSocketProtocol
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -70,6 +71,7 @@ class LiveServer:
             host="127.0.0.1",
             port=self.port,
             log_level="warning",
+            ws=WebSocketProtocol,
             ws_max_size=MAX_LSP_MESSAGE_BYTES,  # as `xabsl serve` (the /ws limit is the client handler's)
             ws_per_message_deflate=False,
             lifespan="on",
