@@ -74,6 +74,12 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
+    parser.add_argument(
+        "--replay",
+        default=None,
+        metavar="FILE.mcap",
+        help="serve a recording (xabsl run ... --record) instead of a live world: seek any tick, explain it",
+    )
     parser.set_defaults(func=run)
 
 
@@ -96,18 +102,25 @@ def run(args: argparse.Namespace) -> int:
     options: dict[str, Any] = dict(args.world_option)
     if args.robots is not None:
         options["robots"] = args.robots
+    session: Session
     try:
-        example = load_example(args.path, args.world, **options)
+        if args.replay is not None:
+            from server.replay import ReplaySession
+
+            session = ReplaySession(args.replay, speed=args.speed)
+        else:
+            example = load_example(args.path, args.world, **options)
+            session = Session(
+                example,
+                seed=args.seed,
+                speed=args.speed,
+                behavior_hz=example.behavior_hz,
+                physics_hz=example.physics_hz,
+            )
+            session.paused = args.paused
     except ExampleError as error:
         raise UsageError(str(error)) from None
-    session = Session(
-        example,
-        seed=args.seed,
-        speed=args.speed,
-        behavior_hz=example.behavior_hz,
-        physics_hz=example.physics_hz,
-    )
-    session.paused = args.paused
+    name = session.example.name
     for key, state in session.programs.items():
         comp = state.compilation
         if comp is not None and not comp.ok:
@@ -131,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    print(f"xabsl studio: {example.name}, speed {session.speed:g}x (simulation in its own process)")
+    where = "a recording, paused" if args.replay is not None else "simulation in its own process"
+    print(f"xabsl studio: {name}, speed {session.speed:g}x ({where})")
     print(f"  open  http://{shown}:{args.port}{query}")
     print(f"  API   http://{shown}:{args.port}/api/openapi.json   websocket ws://{shown}:{args.port}/ws")
     if not (web_dist / "index.html").is_file():

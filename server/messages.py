@@ -280,6 +280,19 @@ class Explain:
     op: Literal["explain"]
     robot: RobotId
     option: Ref
+    #: a replay: the tick to explain (default: the current one); a live session refuses it
+    seq: Annotated[int, Field(ge=0, le=2**62), _INTEGRAL] | None = None
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Seek:
+    """A replay: make tick ``seq`` of the recording the current one (a live session refuses it)."""
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["seek"]
+    seq: Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
 
 
 @with_config(_STRICT)
@@ -334,7 +347,8 @@ Command = Annotated[
     | Explain
     | History
     | Status
-    | WorldCommand,
+    | WorldCommand
+    | Seek,
     Discriminator("op"),
 ]
 #: Commands that address one robot's engine (they have a ``robot`` field).
@@ -669,6 +683,15 @@ class PausedResult:
 
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class SeekResult:
+    """The result of ``seek``: the current tick and the recording's length in ticks."""
+
+    seq: int
+    ticks: int
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class StepResult:
     """The result of ``step``: the last tick run."""
 
@@ -738,6 +761,7 @@ RESULTS: dict[str, Any] = {
     "history": HistoryResult,
     "status": dict[str, Any],
     "world_command": Any,
+    "seek": SeekResult,
 }
 
 ServerEvent = FileEvent | CompileEvent | CrashEvent
@@ -850,7 +874,9 @@ class ReleaseOwner:
 
 
 #: What the simulation carries out: the commands not handled in the server process, and two internal ones.
-WorkerCommand = Pause | Resume | Step | Speed | Reset | RobotCommand | Status | WorldCommand | Apply | ReleaseOwner
+WorkerCommand = (
+    Pause | Resume | Step | Speed | Reset | RobotCommand | Status | WorldCommand | Seek | Apply | ReleaseOwner
+)
 
 
 @dataclass(frozen=True, slots=True)

@@ -37,6 +37,7 @@ export interface Explain {
   op: "explain";
   robot: number;
   option: number | string;
+  seq?: number | null;
 }
 
 /** The result of `explain`. */
@@ -259,6 +260,20 @@ export interface RobotInfo {
   program: string | null;
 }
 
+/** A replay: make tick `seq` of the recording the current one (a live session refuses it). */
+export interface Seek {
+  type: "command";
+  id?: number | string | null;
+  op: "seek";
+  seq: number;
+}
+
+/** The result of `seek`: the current tick and the recording's length in ticks. */
+export interface SeekResult {
+  seq: number;
+  ticks: number;
+}
+
 /** The engine of `robot` runs the XABSL agent `agent` (a name of the program's `agents`). */
 export interface SelectAgent {
   type: "command";
@@ -349,7 +364,7 @@ export type PathNode = OptionNode | BehaviorNode;
 
 export type HelloReason = "connect" | "reload" | "reset" | "resync";
 
-export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand;
+export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | Seek;
 
 export type ClientMessage = Subscribe | Resync | Command;
 
@@ -376,4 +391,5 @@ export interface CommandResults {
   history: HistoryResult;
   status: Record<string, unknown>;
   world_command: unknown;
+  seek: SeekResult;
 }
