@@ -34,6 +34,10 @@ def replay(recorded: Path) -> Any:
         yield server
 
 
+def _round3(value: Any) -> Any:
+    return round(value * 1000) / 1000 if isinstance(value, float) else value
+
+
 def _expected(client: Any, view: Any, robot: int, name: str) -> dict[str, Any]:
     """The display values the frame must carry for ``name``'s recorded tick, by symbol id."""
     program = client.program(robot)
@@ -73,7 +77,7 @@ def test_seek_any_tick_gives_the_recorded_tick(replay: LiveServer, client_for: A
                 recorded_path = view.agents[name].path
                 path = frame["robots"][robot]["path"]
                 assert [n[:-1] for n in path] == [n[:-1] for n in recorded_path]  # all but the parameters
-                rounded = [[round(v * 1000) / 1000 if isinstance(v, float) else v for v in n[-1]] for n in recorded_path]
+                rounded = [[_round3(v) for v in n[-1]] for n in recorded_path]
                 assert [n[-1] for n in path] == rounded
                 got = {f"{k}:{i}": v for k in ("inputs", "outputs") for i, v in client.values[robot][k].items()}
                 assert got == {k: v for k, v in _expected(client, view, robot, name).items()}, (seq, name)
