@@ -338,6 +338,9 @@ class ReplaySession(Session):
         self._player: asyncio.Task[None] | None = None
         self.seek_seconds = 0.0
         self.seeks = 0
+        #: behavior times of the first and the last tick (the UI's timeline extent)
+        self.t_first = recording.tick(0).t
+        self.t_last = recording.tick(len(recording) - 1).t
 
     # -- the session's lifetime ---------------------------------------------------------------------
 
@@ -533,6 +536,8 @@ class ReplaySession(Session):
                 "file": self.recording.path,
                 "ticks": len(self.source),
                 "position": self.position,
+                "t0": self.t_first,
+                "t1": self.t_last,
                 "seconds": round(len(self.source) / self.behavior_hz, 3),
                 "header": {k: v for k, v in self.recording.header.items() if k != "tables"},
                 "events": len(self.recording.events),

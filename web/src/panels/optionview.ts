@@ -226,8 +226,9 @@ export class OptionView {
     }
     const decided = option.states[node.decidedIn];
     const target = option.states[node.state];
-    const ex = this.explanation && this.explanation.option === option.id && this.explanation.leaf === node.leaf && this.explanation.decided_in === node.decidedIn ? this.explanation : null;
-    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${ex ? JSON.stringify(ex.conditions.map((c) => c.value)) : ""}`;
+    const sameTick = !this.session.replay || (this.explanation as { seq?: number } | null)?.seq === this.session.view?.seq;
+    const ex = this.explanation && sameTick && this.explanation.option === option.id && this.explanation.leaf === node.leaf && this.explanation.decided_in === node.decidedIn ? this.explanation : null;
+    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${ex ? JSON.stringify(ex.conditions) : ""}`;
     if (key === this.lastWhy) return;
     this.lastWhy = key;
     const path = decided ? leafPath(decided.decision, node.leaf) : null;
@@ -240,6 +241,7 @@ export class OptionView {
         h("span.branch", {}, taken ? "if" : "else of"),
         h("code", {}, ifNode.if),
         live ? h("span.value", { class: `value ${String(live.value)}` }, value) : null,
+        live ? operandsOf(live) : null,
         ifNode.doc ? h("div.cond-doc.muted", {}, ifNode.doc) : null,
       );
     });
@@ -247,7 +249,7 @@ export class OptionView {
     this.why.replaceChildren(
       h("div.why-head", {}, h("strong", {}, "Decision of this tick: "), `${decided?.name ?? node.decidedIn} `, h("span.arrow", {}, stays ? "stays" : `→ ${target?.name ?? node.state}`), h("span.muted", {}, ` (leaf ${node.leaf})`)),
       rows.length ? h("ol.conditions", {}, ...rows) : h("div.muted", {}, "No condition: the decision always takes this leaf."),
-      h("div.muted.small", {}, ex ? "Values re-evaluated by the engine just now." : this.session.isLive ? "Asking the engine for values…" : "Scrubbed back: values are shown only for the live tick."),
+      h("div.muted.small", {}, ex ? (this.session.replay ? "Values computed from the recording at this tick." : "Values re-evaluated by the engine just now.") : this.session.isLive || this.session.replay ? "Asking the engine for values…" : "Scrubbed back: values are shown only for the live tick."),
     );
     void index;
   }
@@ -256,17 +258,19 @@ export class OptionView {
   private explain(force: boolean): void {
     const session = this.session;
     const option = this.current();
-    if (!option || !session.isLive || this.explaining || this.element.closest("[hidden]")) return;
+    // A replay explains any tick (from the recording); a live session only the newest.
+    const seq = session.replay ? session.view?.seq : undefined;
+    if (!option || (!session.isLive && seq === undefined) || this.explaining || this.element.closest("[hidden]")) return;
     const node = this.node(option);
     if (!node || node.leaf < 0) return;
-    const key = `${session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}`;
+    const key = `${session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}|${seq ?? ""}`;
     const now = performance.now();
     if (!force && key === this.explainKey && now - this.explainAt < 1000) return;
     this.explainKey = key;
     this.explainAt = now;
     this.explaining = true;
     this.connection
-      .command("explain", { robot: session.selectedRobot, option: option.id })
+      .command("explain", { robot: session.selectedRobot, option: option.id, ...(seq === undefined ? {} : { seq }) })
       .then((ex) => {
         this.explanation = ex;
       })
@@ -276,6 +280,22 @@ export class OptionView {
       .finally(() => {
         this.explaining = false;
         this.lastWhy = "";
+        // A paused replay sends no frame that would redraw the panel: show the answer now.
+        const shown = this.current();
+        if (session.replay && shown) this.renderWhy(shown, session.indexOf(session.selectedRobot));
       });
   }
+}
+
+interface Operand {
+  text: string;
+  value: unknown;
+}
+
+/// The operand values of a condition's comparisons (a replay's explanation carries them).
+function operandsOf(condition: object): HTMLElement | null {
+  const operands = (condition as { operands?: Array<{ left: Operand; right: Operand }> }).operands;
+  if (!operands?.length) return null;
+  const shown = (o: Operand): string => `${o.text} = ${o.value === null || o.value === undefined ? "?" : typeof o.value === "number" ? formatValue(o.value) : String(o.value)}`;
+  return h("div.operands.muted.small", {}, operands.map((c) => `${shown(c.left)}, ${shown(c.right)}`).join(" · "));
 }
