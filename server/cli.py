@@ -75,6 +75,16 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
     parser.add_argument(
+        "--record-dir",
+        default=None,
+        metavar="DIR",
+        help="record the live session into rolling .mcap files here (default $XDG_CACHE_HOME/xabsl-studio/recordings)",
+    )
+    parser.add_argument("--no-record", action="store_true", help="do not record the live session")
+    parser.add_argument(
+        "--record-cap-mb", type=float, default=2000.0, help="the recordings folder's size cap (default 2000 MB)"
+    )
+    parser.add_argument(
         "--replay",
         default=None,
         metavar="FILE.mcap",
@@ -97,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
     from server.security import SecurityPolicy
     from server.session import Session
 
+    if not 0 < args.record_cap_mb < float("inf"):
+        raise UsageError("--record-cap-mb must be a positive number")
     if not MIN_SPEED <= args.speed <= MAX_SPEED:
         raise UsageError(f"--speed must be in {MIN_SPEED:g}..{MAX_SPEED:g}")
     options: dict[str, Any] = dict(args.world_option)
@@ -118,6 +130,14 @@ def run(args: argparse.Namespace) -> int:
                 physics_hz=example.physics_hz,
             )
             session.paused = args.paused
+            if not args.no_record:
+                from server.recording import LiveRecorder, default_folder
+
+                folder = Path(args.record_dir) if args.record_dir else default_folder()
+                cap = int(args.record_cap_mb * 1e6)
+                session.live_recorder = LiveRecorder(
+                    folder, example.name, example.behavior_hz, example.physics_hz, cap_bytes=cap
+                )
     except ExampleError as error:
         raise UsageError(str(error)) from None
     name = session.example.name
@@ -147,6 +167,8 @@ def run(args: argparse.Namespace) -> int:
     where = "a recording, paused" if args.replay is not None else "simulation in its own process"
     print(f"xabsl studio: {name}, speed {session.speed:g}x ({where})")
     print(f"  open  http://{shown}:{args.port}{query}")
+    if session.live_recorder is not None:
+        print(f"  recording the session into {session.live_recorder.folder} (--no-record: off)")
     print(f"  API   http://{shown}:{args.port}/api/openapi.json   websocket ws://{shown}:{args.port}/ws")
     if not (web_dist / "index.html").is_file():
         print(f"  (the web UI is not built: {web_dist} is missing; run make)")

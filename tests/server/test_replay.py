@@ -147,3 +147,64 @@ def test_commands_needing_a_world_are_refused(replay: LiveServer, client_for: An
     assert client.command("step", ticks=3)["result"]["seq"] == 3
     status = client.command("status")["result"]
     assert status["replay"]["position"] == 3 and status["paused"]
+
+
+def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Path, client_for: Any) -> None:
+    from server.recording import LiveRecorder
+
+    folder = soccer_dir.parent / "recordings"
+    session = soccer_session
+    session.live_recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz)
+    with LiveServer(session) as server:
+        client = client_for(server)
+        client.frame_after()
+        assert client.command("pause")["ok"]
+        assert client.command("step", ticks=5)["ok"]
+        assert client.command("resume")["ok"]
+        option = soccer_dir / "behavior" / "options" / "approach_ball.xabsl"
+        option.write_text(option.read_text().replace("ball.distance < 900", "ball.distance < 950"))
+        reply = client.command("reload", program="behavior")
+        assert reply["ok"], reply
+        client.wait_hello("reload")
+        seq = client.frame_after()["seq"]
+        client.frame_after(lambda f: f["seq"] > seq + 20)
+    session.stop()
+    files = sorted(folder.glob("*.mcap"))
+    assert len(files) == 1
+    with Recording(files[0]) as recording:
+        kinds = [e["kind"] for e in recording.events]
+        assert kinds[:3] == ["pause", "step", "resume"] and "reload" in kinds
+        assert recording.events[1]["data"] == {"ticks": 5}
+        assert ("behavior", 1) in recording.programs
+        new = recording.programs[("behavior", 1)].description
+        approach = next(o for o in new["options"] if o["name"] == "approach_ball")
+        assert "950" in str(approach["states"])
+        last = recording.tick(len(recording) - 1)
+        assert set(last.agents) == {"blue1", "blue2", "red1", "red2"}
+        assert last.agents["blue1"].gen == 1 and last.agents["red1"].gen == 0
+        assert last.agents["blue1"].option_names()[0] == "play_soccer"
+        assert len(recording) > 30
+        assert str(last.agents["blue1"].inputs["game.state"]).startswith("game.state.")  # enums by name
+        assert isinstance(last.agents["blue1"].inputs["ball.distance"], float)
+
+
+def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer_dir: Path, client_for: Any) -> None:
+    from server.recording import LiveRecorder
+
+    folder = soccer_dir.parent / "rolling"
+    session = soccer_session
+    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes=60_000, roll_ticks=40)
+    session.live_recorder = recorder
+    with LiveServer(session) as server:
+        client = client_for(server)
+        client.frame_after()
+        assert client.command("pause")["ok"]
+        for _ in range(8):
+            assert client.command("step", ticks=40)["ok"]
+    session.stop()
+    assert len(recorder.files) >= 8  # a new file every 40 ticks
+    kept = sorted(folder.glob("*.mcap"))
+    assert sum(p.stat().st_size for p in kept) <= 60_000 and len(kept) < len(recorder.files)
+    assert kept[-1] == recorder.files[-1]  # the newest survive
+    with Recording(kept[-1]) as recording:  # each file opens on its own
+        assert len(recording) >= 1 and recording.tick(0).agents
