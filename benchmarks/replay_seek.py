@@ -66,7 +66,7 @@ def main() -> int:
     for _ in range(20):
         seq = rng.randrange(1, ticks)
         started = time.perf_counter()
-        session.explain(0, session.recording.tick(seq).agents[session.recording.agents[0]].option_names()[0], seq)
+        session.explain_at(0, session.recording.tick(seq).agents[session.recording.agents[0]].option_names()[0], seq)
         explains.append(1000 * (time.perf_counter() - started))
     print(f"explain the root option at a random tick: median {statistics.median(explains):.1f} ms")
     start = rng.randrange(ticks - 400)

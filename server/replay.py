@@ -48,6 +48,7 @@ from engine.runtime import AssignmentNode, Engine, OptionNode
 from server import frames
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.messages import (
+    BreakpointCommand,
     Explain,
     Pause,
     Resume,
@@ -428,7 +429,7 @@ class ReplaySession(Session):
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand, owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand | BreakpointCommand, owner: str | None = None) -> Any:
         """Playback commands, ``seek`` and ``explain``; anything needing a world is refused."""
         if isinstance(command, Status):
             return await self.status()
@@ -457,10 +458,14 @@ class ReplaySession(Session):
             self.speed = check_speed(command.speed)
             return {"speed": self.speed}
         if isinstance(command, Explain):
-            return self.explain(command.robot, command.option, command.seq)
+            return await self.explain(command, owner)
         raise CommandError(f"{command.op} needs a live world; this is a replay of {self.recording.path}")
 
-    def explain(self, robot: int, option: str | int, seq: int | None = None) -> dict[str, Any]:
+    async def explain(self, command: Explain, owner: str | None = None) -> Any:
+        """``explain`` at tick ``command.seq`` (default: the current one), from the recording."""
+        return self.explain_at(command.robot, command.option, command.seq)
+
+    def explain_at(self, robot: int, option: str | int, seq: int | None = None) -> dict[str, Any]:
         """``explain`` at tick ``seq`` (default: the current one) of ``robot``."""
         robots = self.source.robots
         if not 0 <= robot < len(robots) or robots[robot]["program"] is None:
@@ -475,7 +480,8 @@ class ReplaySession(Session):
         if agent is None:
             raise CommandError(f"{name} has no tick {at} in the recording")
         result = explain(agent, previous.agents.get(name) if previous else None, option, view.t, previous)
-        result["seq"] = at
+        # Asked without a tick (the page's "live" view: the playback position): shown as live.
+        result.update(seq=at if seq is not None else None, t=view.t, recorded=seq is not None)
         return result
 
     # -- history and status ---------------------------------------------------------------------------
@@ -692,18 +698,25 @@ def _binary(op: str, left: Any, right: Any) -> Any:
 
 
 def _comparisons(expr: ast.Expr, text: str, values: _Values, into: list[dict[str, Any]]) -> None:
-    """Every comparison in ``expr`` with the value of each operand (pre-order)."""
+    """Every comparison in ``expr`` with the value of each side (pre-order; the live ``explain``'s shape)."""
     if isinstance(expr, ast.BinaryOp):
         if expr.op in _COMPARISONS:
             left = _evaluate(expr.left, values)
             right = _evaluate(expr.right, values)
+            left_text, right_text = _text(expr.left, text), _text(expr.right, text)
+            left_value, right_value = _show(left), _show(right)
+            shown_left = left_text if left_value == left_text else f"{left_text} ({left_value})"
+            shown_right = right_text if right_value == right_text else f"{right_text} ({right_value})"
             into.append(
                 {
                     "text": text[expr.span.start : expr.span.end],
                     "op": expr.op,
-                    "left": {"text": _text(expr.left, text), "value": left},
-                    "right": {"text": _text(expr.right, text), "value": right},
+                    "left": left_text,
+                    "left_value": left_value,
+                    "right": right_text,
+                    "right_value": right_value,
                     "value": None if left is None or right is None else _binary(expr.op, left, right),
+                    "shown": f"{shown_left} {expr.op} {shown_right}",
                 }
             )
         _comparisons(expr.left, text, values, into)
@@ -715,6 +728,17 @@ def _comparisons(expr: ast.Expr, text: str, values: _Values, into: list[dict[str
     elif isinstance(expr, ast.CondOp):
         for part in (expr.condition, expr.then, expr.otherwise):
             _comparisons(part, text, values, into)
+
+
+def _show(value: Any) -> str:
+    """A value as the explanation shows it (``?``: the recording does not tell)."""
+    if value is None:
+        return "?"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:.10g}"
+    return str(value)
 
 
 def _text(expr: ast.Expr, text: str) -> str:
@@ -756,8 +780,8 @@ def explain(
     """Why ``option`` took its leaf in the recorded tick of ``agent`` (the live ``explain``'s shape).
 
     Each condition on the way to the recorded leaf has ``branch`` (taken, as recorded), ``value``
-    (computed from the recorded values; null when they do not tell) and ``operands``: per
-    comparison its text, the value of each side and its result.
+    (computed from the recorded values; null when they do not tell) and ``comparisons``: per
+    comparison its text, the value of each side (``?``: not recorded) and its result.
 
     Raises:
         CommandError: no such option, or it did not decide anything in that tick.
@@ -822,7 +846,7 @@ def explain(
                 "value": None if value is None else bool(value),
                 "branch": branch,
                 "span": tree.get("span"),
-                "operands": operands,
+                "comparisons": operands,
             }
         )
     leaf_node = _find_leaf(decided["decision"], leaf) or {}
@@ -839,4 +863,7 @@ def explain(
         "stay": target_name == decided["name"],
         "leaf_span": leaf_node.get("span"),
         "conditions": conditions,
+        "recorded": True,
+        "tree": {},
+        "last_transition": None,
     }

@@ -113,7 +113,7 @@ class _Exporter:
 
     def tree(self, t: ir.DecisionTree) -> dict[str, Any]:
         if isinstance(t, ir.Transition):
-            return {"goto": t.target, "stay": t.stay, "leaf": t.leaf, "span": self.span(t.span)}
+            return {"to": t.target, "stay": t.stay, "leaf": t.leaf, "span": self.span(t.span)}
         return {
             "if": t.text or self.text(t.condition),
             "doc": t.doc,

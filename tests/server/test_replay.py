@@ -112,6 +112,7 @@ def test_explain_at_a_past_tick_gives_operand_values(replay: LiveServer, client_
             if any(n[0] == 0 and n[2] == option and n[7] >= 0 for n in v.agents["blue2"].path)
         )
         distance = recording.tick(seq).agents["blue2"].inputs["ball.distance"]
+        recording_t = recording.tick(seq).t
     client.command("seek", seq=len(recording) - 1)  # explain a tick other than the current one
     reply = client.command("explain", robot=1, option="approach_ball", seq=seq)
     assert reply["ok"], reply
@@ -119,8 +120,10 @@ def test_explain_at_a_past_tick_gives_operand_values(replay: LiveServer, client_
     assert result["seq"] == seq and result["option_name"] == "approach_ball"
     condition = result["conditions"][0]
     assert condition["text"].startswith("ball.distance")
-    comparison = condition["operands"][0]
-    assert comparison["left"] == {"text": "ball.distance", "value": distance}
+    comparison = condition["comparisons"][0]
+    assert comparison["left"] == "ball.distance" and float(comparison["left_value"]) == distance
+    assert comparison["shown"] == f"ball.distance ({comparison['left_value']}) < 900"
+    assert result["recorded"] and result["t"] == recording_t
     assert comparison["value"] == condition["branch"] == condition["value"]
     # Over many ticks and options: what the recording lets compute agrees with the recorded leaves.
     computed = 0
