@@ -126,6 +126,8 @@ class LiveRecorder:
         self._extras: list[bytes] = []
         self._failed = False
         self._t = 0
+        #: seconds spent encoding samples (the server process's cost of recording)
+        self.seconds = 0.0
 
     # -- from the session ------------------------------------------------------------------------
 
@@ -177,6 +179,7 @@ class LiveRecorder:
         gen = self._gen
         if gen is None or self._failed:
             return
+        started = time.perf_counter()
         try:
             if self._encoder is None:
                 self._open()
@@ -210,6 +213,19 @@ class LiveRecorder:
                 self._close()
         except Exception:
             self._fail()
+        self.seconds += time.perf_counter() - started
+
+    def stats(self) -> dict[str, Any]:
+        """For ``/api/status``: where, how much, at what cost per tick."""
+        current = self._encoder.path if self._encoder is not None else None
+        return {
+            "folder": str(self.folder),
+            "file": str(current) if current is not None else None,
+            "files": [str(p) for p in self.files],
+            "ticks": self.ticks,
+            "ms_per_tick": round(1000 * self.seconds / self.ticks, 4) if self.ticks else 0.0,
+            "failed": self._failed,
+        }
 
     def event(self, kind: str, agent: str | None = None, **data: Any) -> None:
         """A session event (``engine.record.schema.EVENT_KINDS``) before the next tick."""

@@ -688,6 +688,7 @@ class Session:
             },
             "programs": {key: state.as_dict() for key, state in self.programs.items()},
             "world": sim.get("world") or _latest_world(latest),
+            "recording": self.live_recorder.stats() if self.live_recorder is not None else None,
         }
 
 

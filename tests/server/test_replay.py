@@ -171,6 +171,9 @@ def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Pa
         client.wait_hello("reload")
         seq = client.frame_after()["seq"]
         client.frame_after(lambda f: f["seq"] > seq + 20)
+        recording = client.command("status")["result"]["recording"]
+        assert recording["ticks"] > 20 and recording["file"].startswith(str(folder))
+        print(f"live recording: {recording['ms_per_tick']} ms per tick in the server process (4 agents)")
     session.stop()
     files = sorted(folder.glob("*.mcap"))
     assert len(files) == 1
