@@ -50,18 +50,23 @@ def main() -> int:
     print(f"{path}: {ticks} ticks, {agents} XABSL agents, {path.stat().st_size / 1e6:.1f} MB")
     rng = random.Random(args.seed)
     times = []
+    cpu = []
     for _ in range(args.seeks):
         seq = rng.randrange(ticks)
-        started = time.perf_counter()
+        started, started_cpu = time.perf_counter(), time.process_time()
         entry = session.seek(seq)
         times.append(1000 * (time.perf_counter() - started))
+        cpu.append(1000 * (time.process_time() - started_cpu))
         assert entry.seq == seq and entry.full is not None
     times.sort()
+    cpu.sort()
     p95 = times[int(0.95 * (len(times) - 1))]
     print(
         f"seek a random tick ({args.seeks}x): median {statistics.median(times):.1f} ms, "
         f"p95 {p95:.1f} ms, max {times[-1]:.1f} ms (goal < 100 ms)"
     )
+    # Wall time also counts time the OS gave the core to other processes; CPU time does not.
+    print(f"  CPU time per seek: median {statistics.median(cpu):.1f} ms, max {cpu[-1]:.1f} ms")
     explains = []
     for _ in range(20):
         seq = rng.randrange(1, ticks)
