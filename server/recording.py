@@ -3,7 +3,7 @@
 :class:`LiveRecorder` turns the simulation's :class:`~server.messages.Sample` messages (which the
 server process receives anyway for its frames) into :class:`~engine.record.RecordingEncoder`
 operations, so recording costs the simulation process nothing. Files roll: a new one every
-``roll_ticks`` ticks (10 minutes at 40 Hz by default), named ``EXAMPLE-YYYYmmdd-HHMMSS.mcap``;
+``roll_ticks`` ticks (10 minutes at 40 Hz by default), named ``EXAMPLE-YYYYmmdd-HHMMSS-NNN.mcap``;
 after each roll the oldest files of the folder are deleted while the folder holds more than
 ``cap_bytes``. Every file opens on its own (header, program descriptions, static scene).
 
@@ -263,11 +263,11 @@ class LiveRecorder:
         assert gen is not None
         stamp = time.strftime("%Y%m%d-%H%M%S")
         name = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.example).strip("._") or "session"
-        path = self.folder / f"{name}-{stamp}.mcap"
         n = 1
+        path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"  # names sort in time order
         while path.exists() or path.with_name(path.name + ".part").exists():
             n += 1
-            path = self.folder / f"{name}-{stamp}-{n}.mcap"
+            path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"
         # Display values are rounded already (decimals=None: written as they come).
         self._encoder = RecordingEncoder(path, self.behavior_hz, self.key_every, decimals=None)
         self._seq = 0
