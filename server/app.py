@@ -61,6 +61,7 @@ from server.messages import (
 )
 from server.profile import router as profile_router
 from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
+from server.replay import ReplaySession
 from server.security import SecurityMiddleware, SecurityPolicy
 from server.session import CommandError, Session
 
@@ -214,8 +215,11 @@ class Studio:
             raise CommandError("history needs t0 <= t1")
         if client is None:
             raise CommandError("history streams over the websocket; use GET /api/log over REST")
-        encoded = frames.history(self.session.ring, t0, t1, every)
-        count = _count_history(self.session, t0, t1, every)
+        if isinstance(self.session, ReplaySession):  # the whole recording, read from the file
+            count, encoded = self.session.history_frames(t0, t1, every)
+        else:
+            encoded = frames.history(self.session.ring, t0, t1, every)
+            count = _count_history(self.session, t0, t1, every)
         chunks = max(1, -(-count // HISTORY_CHUNK)) if count else 0
 
         def messages() -> Iterator[bytes]:

@@ -74,6 +74,22 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
+    parser.add_argument(
+        "--record-dir",
+        default=None,
+        metavar="DIR",
+        help="record the live session into rolling .mcap files here (default $XDG_CACHE_HOME/xabsl-studio/recordings)",
+    )
+    parser.add_argument("--no-record", action="store_true", help="do not record the live session")
+    parser.add_argument(
+        "--record-cap-mb", type=float, default=2000.0, help="the recordings folder's size cap (default 2000 MB)"
+    )
+    parser.add_argument(
+        "--replay",
+        default=None,
+        metavar="FILE.mcap",
+        help="serve a recording (xabsl run ... --record) instead of a live world: seek any tick, explain it",
+    )
     parser.set_defaults(func=run)
 
 
@@ -92,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
     from server.session import Session
     from server.transport import WebSocketProtocol
 
+    if not 0 < args.record_cap_mb < float("inf"):
+        raise UsageError("--record-cap-mb must be a positive number")
     try:
         policy = SecurityPolicy.for_host(args.host, args.token, args.allow_origin)
     except TokenError as error:
@@ -101,18 +119,33 @@ def run(args: argparse.Namespace) -> int:
     options: dict[str, Any] = dict(args.world_option)
     if args.robots is not None:
         options["robots"] = args.robots
+    session: Session
     try:
-        example = load_example(args.path, args.world, **options)
+        if args.replay is not None:
+            from server.replay import ReplaySession
+
+            session = ReplaySession(args.replay, speed=args.speed)
+        else:
+            example = load_example(args.path, args.world, **options)
+            session = Session(
+                example,
+                seed=args.seed,
+                speed=args.speed,
+                behavior_hz=example.behavior_hz,
+                physics_hz=example.physics_hz,
+            )
+            session.paused = args.paused
+            if not args.no_record:
+                from server.recording import LiveRecorder, default_folder
+
+                folder = Path(args.record_dir) if args.record_dir else default_folder()
+                cap = int(args.record_cap_mb * 1e6)
+                session.live_recorder = LiveRecorder(
+                    folder, example.name, example.behavior_hz, example.physics_hz, cap_bytes=cap
+                )
     except ExampleError as error:
         raise UsageError(str(error)) from None
-    session = Session(
-        example,
-        seed=args.seed,
-        speed=args.speed,
-        behavior_hz=example.behavior_hz,
-        physics_hz=example.physics_hz,
-    )
-    session.paused = args.paused
+    name = session.example.name
     for key, state in session.programs.items():
         comp = state.compilation
         if comp is not None and not comp.ok:
@@ -136,8 +169,11 @@ def run(args: argparse.Namespace) -> int:
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    print(f"xabsl studio: {example.name}, speed {session.speed:g}x (simulation in its own process)")
+    where = "a recording, paused" if args.replay is not None else "simulation in its own process"
+    print(f"xabsl studio: {name}, speed {session.speed:g}x ({where})")
     print(f"  open  http://{shown}:{args.port}{query}")
+    if session.live_recorder is not None:
+        print(f"  recording the session into {session.live_recorder.folder} (--no-record: off)")
     print(f"  API   http://{shown}:{args.port}/api/openapi.json   websocket ws://{shown}:{args.port}/ws")
     if not (web_dist / "index.html").is_file():
         print(f"  (the web UI is not built: {web_dist} is missing; run make)")

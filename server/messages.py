@@ -296,6 +296,17 @@ class Explain:
 
 @with_config(_STRICT)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class Seek:
+    """A replay: make tick ``seq`` of the recording the current one (a live session refuses it)."""
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["seek"]
+    seq: Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class History:
     """Stream the ring buffer between behavior times ``t0`` and ``t1`` (every ``every``-th frame)."""
 
@@ -427,7 +438,8 @@ Command = Annotated[
     | RemoveBreakpoint
     | EnableBreakpoint
     | ListBreakpoints
-    | CheckCondition,
+    | CheckCondition
+    | Seek,
     Discriminator("op"),
 ]
 #: Breakpoint commands: the server process keeps (and persists) breakpoints, the simulation checks them.
@@ -820,6 +832,15 @@ class PausedResult:
 
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class SeekResult:
+    """The result of ``seek``: the current tick and the recording's length in ticks."""
+
+    seq: int
+    ticks: int
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class StepResult:
     """The result of ``step``: the last tick run."""
 
@@ -924,6 +945,7 @@ RESULTS: dict[str, Any] = {
     "history": HistoryResult,
     "status": dict[str, Any],
     "world_command": Any,
+    "seek": SeekResult,
     "set_breakpoint": BreakpointList,
     "remove_breakpoint": BreakpointList,
     "enable_breakpoint": BreakpointList,
@@ -1075,6 +1097,7 @@ WorkerCommand = (
     | RobotCommand
     | Status
     | WorldCommand
+    | Seek
     | Apply
     | ReleaseOwner
     | SetBreakpoints

@@ -73,6 +73,7 @@ from server.messages import (
     WorkerReply,
     WorkerRequest,
 )
+from server.recording import LiveRecorder
 from server.worker import CommandError, WorkerConfig, check_speed
 
 __all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session"]
@@ -168,6 +169,9 @@ class Session:
         self._stopping = False
         self._worker_status: dict[str, Any] = {}
         self._restart_lock: asyncio.Lock | None = None
+        #: records the session to a folder from the samples (``server.recording``); None: off
+        self.live_recorder: LiveRecorder | None = None
+        self._incoming: dict[str, Program] = {}
         for key in self.programs:
             self._store_compilation(key, self.compile(key))
         #: called on the asyncio loop when a breakpoint hit (after the sample of its tick)
@@ -268,6 +272,8 @@ class Session:
                     continue  # never expected: a sample always follows its generation
                 latest = self.recorder.record(self.generation, message)
                 self.paused, self.speed = message.paused, message.speed
+                if self.live_recorder is not None:
+                    self.live_recorder.sample(message)
             elif isinstance(message, WorkerReply):
                 future = self._pending.pop(message.ident, None) if message.ident is not None else None
                 if future is not None and not future.done():
@@ -278,6 +284,9 @@ class Session:
                 for key, error in message.errors.items():
                     if key in self.programs:
                         self.programs[key].error = error
+                if self.live_recorder is not None:
+                    programs = {k: self._incoming.get(k) or s.running for k, s in self.programs.items()}
+                    self.live_recorder.generation(self.generation, programs, message.seed, {})
             elif isinstance(message, Hit):
                 hits.append(message)
             elif isinstance(message, Crash):
@@ -368,6 +377,8 @@ class Session:
             channel.close()
         self._channel = None
         self._process = None
+        if self.live_recorder is not None:
+            self.live_recorder.close()
         for future in list(self._pending.values()):
             if not future.done() and self._loop is not None and not self._loop.is_closed():
                 with contextlib.suppress(RuntimeError):
@@ -394,6 +405,8 @@ class Session:
         ok, result, error = await self._send(command, owner)
         if not ok:
             raise CommandError(error)
+        if self.live_recorder is not None:
+            self.live_recorder.command(command)
         if isinstance(command, Pause | Resume):
             # a paused simulation sends no sample that would carry the new state: mirror the answer
             self.paused = bool(result["paused"])
@@ -614,7 +627,11 @@ class Session:
             return "the behavior has errors; the running version is kept"
         program_json = program_to_json(program, compilation.source_text)
         if self.running:
-            ok, problem, error = await self._send(Apply(key, program, program_json), None)
+            self._incoming[key] = program  # the new generation arrives before the answer
+            try:
+                ok, problem, error = await self._send(Apply(key, program, program_json), None)
+            finally:
+                self._incoming.pop(key, None)
             if not ok:
                 raise CommandError(error)
             if problem is not None:
@@ -671,6 +688,7 @@ class Session:
             },
             "programs": {key: state.as_dict() for key, state in self.programs.items()},
             "world": sim.get("world") or _latest_world(latest),
+            "recording": self.live_recorder.stats() if self.live_recorder is not None else None,
         }
 
 

@@ -78,6 +78,7 @@ from server.messages import (
     ResetAgent,
     Resume,
     Sample,
+    Seek,
     SelectAgent,
     SetBreakpoints,
     Speed,
@@ -448,7 +449,12 @@ class Simulation:
         engine.reset()
         return None
 
+    def _op_seek(self, command: Seek, owner: str | None) -> Any:
+        raise CommandError("seek needs a replay (xabsl serve --replay FILE.mcap)")
+
     def _op_explain(self, command: Explain, owner: str | None) -> Any:
+        if command.seq is not None:
+            raise CommandError("explain at a past tick needs a replay (xabsl serve --replay FILE.mcap)")
         _, engine, codec = self._robot(command.robot)
         option = self._named(command.option, codec.option_ids, "option")
         explanation = Debugger(engine).explain(option)

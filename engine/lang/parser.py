@@ -740,3 +740,20 @@ class _Parser:
 
 def _expr_span(expr: ast.Expr) -> Span:
     return expr.span
+
+
+def parse_expression_text(text: str, path: str = "<expression>") -> ast.Expr:
+    """Parse ``text`` as one XABSL expression (a decision's condition text); spans index ``text``.
+
+    Raises:
+        CompileError: ``text`` is not exactly one expression.
+    """
+    diagnostics = Diagnostics()
+    tokens = tokenize(text, path, diagnostics)
+    if diagnostics.errors:
+        raise CompileError(diagnostics.errors[0].message)
+    parser = _Parser(path, text, tokens, diagnostics, False)
+    expr = parser.parse_expression()  # a syntax error raises (a CompileError)
+    if parser.tok.type is not TokenType.EOF:
+        raise CompileError(f"{path}: more than one expression in {text!r}")
+    return expr

@@ -64,6 +64,7 @@ class StudioServer:
     def start(self) -> None:
         xabsl = Path(sys.executable).with_name("xabsl")
         command = [str(xabsl), "serve", str(self.example), "--port", str(self.port), "--web-dist", str(WEB_DIST)]
+        command += ["--record-dir", str(self.log.parent / "recordings")]  # not into the user's cache
         with self.log.open("ab") as log:
             self.process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
         deadline = time.monotonic() + 60

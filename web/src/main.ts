@@ -18,6 +18,7 @@ import { SymbolsPanel } from "./panels/symbols";
 import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
+import { loadReplay, replayOf } from "./replay";
 import { TopBar } from "./panels/topbar";
 import { DynamicsPanel } from "./panels/dynamics";
 import { FactsPanel } from "./panels/facts";
@@ -40,11 +41,18 @@ function main(): void {
         if (hello.reason !== "connect" && hello.reason !== "resync") clearGraphCache();
         session.applyHello(hello);
         void optionView.breakpoints.refresh();
-        // Fill the timeline with what the server buffered before we came (or before a reload).
+        // Fill the timeline with what the server buffered before we came (or before a reload);
+        // a replay: with the whole recording.
         const t = hello.session.t;
         void connection
-          .history(Math.max(0, t - HISTORY_MS), t, 1)
-          .then((frames) => session.applyHistory(frames))
+          .command("status", {})
+          .then((status) => replayOf(status as Record<string, unknown>))
+          .catch(() => null)
+          .then((replay) =>
+            replay
+              ? loadReplay(connection, session, replay)
+              : connection.history(Math.max(0, t - HISTORY_MS), t, 1).then((frames) => session.applyHistory(frames)),
+          )
           .catch(() => undefined);
       },
       frame: (frame) => session.applyFrame(frame),

@@ -365,6 +365,20 @@ export interface RobotInfo {
   program: string | null;
 }
 
+/** A replay: make tick `seq` of the recording the current one (a live session refuses it). */
+export interface Seek {
+  type: "command";
+  id?: number | string | null;
+  op: "seek";
+  seq: number;
+}
+
+/** The result of `seek`: the current tick and the recording's length in ticks. */
+export interface SeekResult {
+  seq: number;
+  ticks: number;
+}
+
 /** The engine of `robot` runs the XABSL agent `agent` (a name of the program's `agents`). */
 export interface SelectAgent {
   type: "command";
@@ -475,7 +489,7 @@ export type PathNode = OptionNode | BehaviorNode;
 
 export type HelloReason = "connect" | "reload" | "reset" | "resync";
 
-export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition;
+export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek;
 
 export type ClientMessage = Subscribe | Resync | Command;
 
@@ -502,6 +516,7 @@ export interface CommandResults {
   history: HistoryResult;
   status: Record<string, unknown>;
   world_command: unknown;
+  seek: SeekResult;
   set_breakpoint: BreakpointList;
   remove_breakpoint: BreakpointList;
   enable_breakpoint: BreakpointList;

@@ -7,6 +7,7 @@
 /// it shows changed, so a burst of frames costs one draw.
 import { type DescriptionIndex, indexDescription } from "./description";
 import { TickBuffer } from "./history";
+import type { ReplayInfo } from "./replay";
 import { type Frame, FrameDecoder, type Hello, type RobotInfo, type RobotState, type StaticScene, type Tick } from "./protocol";
 
 export type SessionEvent = "hello" | "tick" | "select" | "cursor" | "option" | "history";
@@ -26,6 +27,8 @@ export class Session {
   scene: StaticScene | null = null;
   readonly buffer = new TickBuffer(60_000);
   live: Tick | null = null;
+  /// A replay (`xabsl serve --replay`): the recording's extent; null in a live session.
+  replay: ReplayInfo | null = null;
   /// Behavior time shown by every panel, or null for live.
   cursor: number | null = null;
   selectedRobot = 0;
@@ -123,7 +126,8 @@ export class Session {
     const oldest = this.buffer.oldest;
     const newest = this.buffer.newest;
     if (t !== null && newest && oldest) t = Math.max(oldest.t, Math.min(newest.t, t));
-    if (t !== null && newest && t >= newest.t) t = null;
+    // In a replay the newest tick is the recording's last one, not "live".
+    if (t !== null && newest && t >= newest.t && !this.replay) t = null;
     if (t === this.cursor) return;
     this.cursor = t;
     this.emit("cursor");

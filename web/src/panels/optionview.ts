@@ -348,6 +348,13 @@ export class OptionView {
       .finally(() => {
         this.explaining = false;
         this.lastWhy = "";
+        // A paused replay sends no frame that would redraw the panel: show the answer now, and
+        // ask for the decision in view if it changed while this answer was on its way.
+        const shown = this.current();
+        if (session.replay && shown) {
+          this.renderWhy(shown, session.indexOf(session.selectedRobot));
+          this.explain(false);
+        }
       });
   }
 }

@@ -1,0 +1,869 @@
+"""A recording served as a studio session: ``xabsl serve --replay FILE.mcap``.
+
+:class:`ReplaySession` offers the app and the websocket hub what a live
+:class:`~server.session.Session` offers (a ring of frames, generations, ``history``, ``status``,
+the playback commands), with the recording (``engine.record.Recording``) in place of a simulation
+process. Every tick of the file is reachable: ``seek`` puts any tick in the ring (the MCAP chunk
+index makes that a read of at most ``key_every`` ticks), ``pause``/``resume``/``step``/``speed``
+play the file at its own rate, and ``history`` decodes any range of ticks from the file, so the
+timeline covers the whole recording, not the live ring's 120 s.
+
+A recorded tick becomes the same :class:`~server.messages.Sample` the simulation would have sent
+(paths, display values aligned with the generation's symbol ids, fault, scene, status), and the
+usual :class:`~server.frames.FrameRecorder` turns it into frames, so every panel reads a replay
+exactly as it reads a live session.
+
+``explain`` works at any tick: :func:`explain` walks the recorded generation's decision tree
+(its program description) to the recorded leaf and evaluates the operands of every comparison of
+the conditions on the way from the recorded symbol values (inputs of the tick; outputs as the
+decision saw them: the previous tick's, updated by the assignments that ran before the option in
+this tick), the option's parameters and times. Values a recording does not hold (input functions
+with parameters, ``action_done``) are ``null``; the branch taken is always the recorded one.
+
+Commands that need a live world (forcing, overrides, resets, world commands) answer an error.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import time
+from bisect import bisect_right
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import orjson
+
+from engine.errors import CompileError
+from engine.host import Agent, AgentController, BehaviorSource, ExampleError, World
+from engine.ir.model import Program
+from engine.lang import ast
+from engine.lang.parser import parse_expression_text
+from engine.record import Recording, RecordingError, TickView
+from engine.record.reader import AgentTick, ProgramView
+from engine.runtime import AssignmentNode, Engine, OptionNode
+from server import frames
+from server.frames import Entry, FrameRecorder, Generation, Ring
+from server.messages import (
+    BreakpointCommand,
+    Explain,
+    Pause,
+    Resume,
+    Seek,
+    Speed,
+    Status,
+    Step,
+    WorkerCommand,
+)
+from server.session import CommandError, Session
+from server.worker import check_speed
+
+__all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
+
+#: The most ticks one ``history`` request of a replay decodes (ask for longer spans in hunks).
+MAX_HISTORY_TICKS = 4800
+#: Ticks the replay's ring keeps (what the client encoder needs for deltas; history reads the file).
+RING_TICKS = 256
+_COMPARISONS = frozenset(("==", "!=", "<", "<=", ">", ">="))
+
+
+@dataclass(frozen=True, slots=True)
+class ReplayExample:
+    """The :class:`~engine.host.Example` of a replay: a name and a folder, no world to build."""
+
+    name: str
+    root: Path
+    sources: Sequence[BehaviorSource] = ()
+    preload: Sequence[str] = ()
+    behavior_hz: int = 40
+    physics_hz: int = 120
+
+    def build_world(self, seed: int) -> World:
+        """A replay has no world."""
+        raise ExampleError("a replay has no world to build")
+
+    def program_key(self, agent: Agent) -> str | None:
+        """A replay has no world."""
+        raise ExampleError("a replay has no world")
+
+    def make_controller(self, agent: Agent, program: Program) -> tuple[AgentController, Engine]:
+        """A replay has no world."""
+        raise ExampleError("a replay has no world")
+
+
+class _Codec:
+    """Recorded values of one program generation -> the frames' display values and id order."""
+
+    def __init__(self, view: ProgramView, decimals: int) -> None:
+        description = view.description
+        self.scale = 10.0**decimals
+        elements = {e["name"]: list(e["elements"]) for e in description["enums"]}
+        self.element_index = {name: {el: i for i, el in enumerate(els)} for name, els in elements.items()}
+        host = view.tables["enums"]
+        # enum -> host value -> element index
+        self.host_index = {
+            name: {int(v): self.element_index.get(name, {}).get(el, -1) for v, el in table.items()}
+            for name, table in host.items()
+        }
+        self.inputs = [s for s in description["inputs"] if not s.get("params")]
+        self.outputs = list(description["outputs"])
+        self.input_ids = tuple(int(s["id"]) for s in self.inputs)
+        self.output_ids = tuple(int(s["id"]) for s in self.outputs)
+        self.option_params = {
+            o["id"]: [(p["type"], p.get("enum")) for p in o["params"]] for o in description["options"]
+        }
+        self.behavior_params = {
+            b["id"]: [(p["type"], p.get("enum")) for p in b["params"]] for b in description["behaviors"]
+        }
+
+    def named(self, kind: str, enum: str | None, value: Any) -> Any:
+        """A recorded value (enums as element names) as frames carry it."""
+        if value is None:
+            return None
+        if kind == "decimal":
+            return round(float(value) * self.scale) / self.scale
+        if kind == "boolean":
+            return bool(value)
+        if kind == "enum":
+            return self.element_index.get(enum or "", {}).get(value, -1)
+        return value
+
+    def raw(self, kind: str, enum: str | None, value: Any) -> Any:
+        """A raw path parameter (enums as host values) as frames carry it."""
+        if kind == "decimal":
+            return round(float(value) * self.scale) / self.scale
+        if kind == "boolean":
+            return bool(value)
+        if kind == "enum":
+            return self.host_index.get(enum or "", {}).get(int(value), -1)
+        return value
+
+    def path(self, path: list[list[Any]]) -> list[list[Any]]:
+        """The recorded path with display parameter values (the frame's path layout)."""
+        out = []
+        for node in path:
+            if node[0] == 0:
+                params = node[8]
+                if params:
+                    kinds = self.option_params[node[2]]
+                    node = [*node[:8], [self.raw(k, e, v) for (k, e), v in zip(kinds, params, strict=False)]]
+            else:
+                params = node[4]
+                if params:
+                    kinds = self.behavior_params[node[2]]
+                    node = [*node[:4], [self.raw(k, e, v) for (k, e), v in zip(kinds, params, strict=False)]]
+            out.append(node)
+        return out
+
+    def values(self, symbols: list[dict[str, Any]], values: dict[str, Any]) -> tuple[Any, ...]:
+        """The recorded values of ``symbols`` in id order, as display values."""
+        return tuple(self.named(s["type"], s.get("enum"), values.get(s["name"])) for s in symbols)
+
+
+class ReplaySource:
+    """The frames of a recording: generations by segment, ticks as samples (no asyncio here)."""
+
+    def __init__(self, recording: Recording) -> None:
+        self.recording = recording
+        header = recording.header
+        self.decimals = int(header.get("decimals") or 3)
+        self.robots = [
+            {
+                "id": a["id"],
+                "name": a["name"],
+                "team": a.get("team"),
+                "number": a.get("number"),
+                "program": a["program"],
+            }
+            for a in header["agents"]
+        ]
+        # A new generation (a hello) where a program generation or a static scene starts.
+        starts = {view.seq for view in recording.programs.values()} | {s["seq"] for s in recording.static_scenes}
+        self.boundaries = sorted(starts - {0})
+        self._generations: dict[int, Generation] = {}
+        self._codecs: dict[tuple[str, int], _Codec] = {}
+
+    def __len__(self) -> int:
+        return len(self.recording)
+
+    def generation_number(self, seq: int) -> int:
+        """The hello generation tick ``seq`` belongs to."""
+        return bisect_right(self.boundaries, seq)
+
+    def generation(self, seq: int) -> Generation:
+        """The generation (structure, static scene, symbol ids) in force at tick ``seq``."""
+        number = self.generation_number(seq)
+        gen = self._generations.get(number)
+        if gen is not None:
+            return gen
+        start = self.boundaries[number - 1] if number else 0
+        recording = self.recording
+        programs: dict[str, dict[str, Any]] = {}
+        input_ids: list[tuple[int, ...]] = []
+        output_ids: list[tuple[int, ...]] = []
+        for robot in self.robots:
+            key = robot["program"]
+            if key is None:
+                input_ids.append(())
+                output_ids.append(())
+                continue
+            view = recording.program(robot["name"], _latest_gen(recording, key, start))
+            programs[key] = view.description
+            codec = self.codec(view)
+            input_ids.append(codec.input_ids)
+            output_ids.append(codec.output_ids)
+        scenes = [s for s in recording.static_scenes if s["seq"] <= start] or recording.static_scenes[:1]
+        structure = {"programs": programs, "robots": self.robots}
+        structure_bytes = orjson.dumps(structure)
+        gen = Generation(
+            number=number,
+            reason="connect" if number == 0 else "reload",
+            structure=orjson.loads(structure_bytes),
+            structure_bytes=structure_bytes,
+            scene_bytes=orjson.dumps(scenes[-1]["scene"] if scenes else {}),
+            input_ids=tuple(input_ids),
+            output_ids=tuple(output_ids),
+            engines=tuple(r["program"] is not None for r in self.robots),
+        )
+        self._generations[number] = gen
+        return gen
+
+    def codec(self, view: ProgramView) -> _Codec:
+        """The value conversion of one program generation (cached)."""
+        codec = self._codecs.get((view.key, view.gen))
+        if codec is None:
+            codec = self._codecs[(view.key, view.gen)] = _Codec(view, self.decimals)
+        return codec
+
+    def sample(self, view: TickView, number: int, paused: bool, speed: float) -> Any:
+        """The :class:`~server.messages.Sample` the simulation would have sent for ``view``."""
+        from server.messages import Sample
+
+        paths: list[bytes] = []
+        extras: list[bytes] = []
+        inputs: list[tuple[Any, ...]] = []
+        outputs: list[tuple[Any, ...]] = []
+        for robot in self.robots:
+            agent = view.agents.get(robot["name"])
+            if agent is None:
+                paths.append(b"[]")
+                extras.append(b"")
+                inputs.append(())
+                outputs.append(())
+                continue
+            codec = self.codec(agent.program)
+            paths.append(orjson.dumps(codec.path(agent.path)))
+            fault = agent.fault
+            if fault:
+                part = {"message": fault.get("message"), "option": fault.get("option"), "state": fault.get("state")}
+                extras.append(b',"fault":' + orjson.dumps(part))
+            else:
+                extras.append(b"")
+            inputs.append(codec.values(codec.inputs, agent.inputs))
+            outputs.append(codec.values(codec.outputs, agent.outputs))
+        return Sample(
+            view.seq,
+            number,
+            view.t,
+            time.time() * 1000.0,
+            paused,
+            speed,
+            tuple(paths),
+            tuple(extras),
+            tuple(inputs),
+            tuple(outputs),
+            orjson.dumps(view.scene or {}),
+            orjson.dumps(view.status or {}),
+        )
+
+    def history(self, start: int, stop: int, t0: int, t1: int, every: int) -> Iterator[bytes]:
+        """The frames of ticks ``start`` .. ``stop - 1`` with ``t0 <= t <= t1`` (``frames.history``)."""
+        ring = Ring(max(1, stop - start) / self.recording.behavior_hz, self.recording.behavior_hz)
+        recorder = FrameRecorder(ring)
+        gen: Generation | None = None
+        for view in self.recording.ticks(start, stop):
+            number = self.generation_number(view.seq)
+            gen = self.generation(view.seq)
+            recorder.record(gen, self.sample(view, number, True, 1.0))
+        if gen is None:
+            return iter(())
+        return frames.history(ring, t0, t1, every)
+
+
+def _latest_gen(recording: Recording, key: str, seq: int) -> int:
+    gens = [view.gen for (k, _), view in recording.programs.items() if k == key and view.seq <= seq]
+    return max(gens, default=0)
+
+
+class ReplaySession(Session):
+    """A recording served like a live session (see the module docstring).
+
+    Args:
+        path: the ``.mcap`` file.
+        root: the folder the studio's file API serves (default: the recording's folder).
+        speed: playback speed, x the recording's rate.
+    """
+
+    def __init__(self, path: str | Path, root: Path | None = None, speed: float = 1.0) -> None:
+        try:
+            recording = Recording(path)
+        except (RecordingError, OSError) as error:
+            raise ExampleError(str(error)) from None
+        if len(recording) == 0:
+            recording.close()
+            raise ExampleError(f"{path}: the recording holds no tick")
+        header = recording.header
+        name = f"{header.get('example') or header.get('world') or 'recording'} (replay of {Path(path).name})"
+        example = ReplayExample(
+            name,
+            (root or Path(path).resolve().parent),
+            behavior_hz=int(header["behavior_hz"]),
+            physics_hz=int(header.get("physics_hz") or 120),
+        )
+        super().__init__(
+            example,
+            seed=int(header.get("seed") or 0),
+            speed=speed,
+            behavior_hz=example.behavior_hz,
+            physics_hz=example.physics_hz,
+            ring_seconds=RING_TICKS / example.behavior_hz,
+        )
+        self.recording = recording
+        self.source = ReplaySource(recording)
+        self.paused = True
+        self.position = 0
+        self._last_recorded: int | None = None
+        self._player: asyncio.Task[None] | None = None
+        self.seek_seconds = 0.0
+        self.seeks = 0
+        #: behavior times of the first and the last tick (the UI's timeline extent)
+        self.t_first = recording.tick(0).t
+        self.t_last = recording.tick(len(recording) - 1).t
+
+    # -- the session's lifetime ---------------------------------------------------------------------
+
+    @property
+    def running(self) -> bool:
+        """A replay never has a simulation process."""
+        return False
+
+    async def start(self) -> None:
+        """Put the first tick in the ring (paused)."""
+        self.seek(0)
+
+    async def aclose(self) -> None:
+        """Stop playing and close the file."""
+        self.stop()
+
+    def stop(self) -> None:
+        """Stop playing and close the file."""
+        if self._player is not None:
+            self._player.cancel()
+            self._player = None
+        self.recording.close()
+
+    def release_owner(self, owner: str) -> None:
+        """Nothing is forced in a replay."""
+
+    # -- seeking and playing -----------------------------------------------------------------------
+
+    def seek(self, seq: int) -> Entry:
+        """Make tick ``seq`` the ring's newest entry and tell the clients.
+
+        Raises:
+            CommandError: ``seq`` is outside the recording.
+        """
+        if not 0 <= seq < len(self.source):
+            raise CommandError(f"tick {seq} is outside the recording (0..{len(self.source) - 1})")
+        started = time.perf_counter()
+        view = self.recording.tick(seq)
+        entry = self._record(view)
+        self.seek_seconds += time.perf_counter() - started
+        self.seeks += 1
+        self.notify(entry)
+        return entry
+
+    def _record(self, view: TickView) -> Entry:
+        number = self.source.generation_number(view.seq)
+        gen = self.source.generation(view.seq)
+        if self._last_recorded is not None and view.seq != self._last_recorded + 1:
+            # Not the next tick: a copy of the generation makes the frame recorder start over
+            # (a full frame; no delta against a tick the clients may not have), same number.
+            gen = dataclasses.replace(gen)
+        self.generation = gen
+        entry = self.recorder.record(gen, self.source.sample(view, number, self.paused, self.speed))
+        self._last_recorded = view.seq
+        self.position = view.seq
+        return entry
+
+    def _advance(self, ticks: int) -> int:
+        """Record the next ``ticks`` ticks (fewer at the end); the ticks recorded."""
+        start = self.position + 1
+        stop = min(len(self.source), start + ticks)
+        last: Entry | None = None
+        if self._last_recorded != self.position:
+            self.seek(self.position)
+        for view in self.recording.ticks(start, stop):
+            last = self._record(view)
+        if last is not None:
+            self.notify(last)
+        return max(0, stop - start)
+
+    async def _play(self) -> None:
+        period = 1.0 / self.behavior_hz
+        due = time.perf_counter()
+        while not self.paused and self.position < len(self.source) - 1:
+            due += period / self.speed
+            delay = due - time.perf_counter()
+            if delay > 0:
+                await asyncio.sleep(delay)
+            # Catch up by recording the ticks that fell due (clients pick their own rate).
+            behind = max(1, 1 + int((time.perf_counter() - due) * self.behavior_hz * self.speed))
+            self._advance(min(behind, 40))
+            if behind > 1:
+                due = time.perf_counter()
+        self.paused = True
+
+    # -- commands ----------------------------------------------------------------------------------
+
+    async def request(self, command: WorkerCommand | BreakpointCommand, owner: str | None = None) -> Any:
+        """Playback commands, ``seek`` and ``explain``; anything needing a world is refused."""
+        if isinstance(command, Status):
+            return await self.status()
+        if isinstance(command, Seek):
+            self.seek(command.seq)
+            return {"seq": self.position, "ticks": len(self.source)}
+        if isinstance(command, Pause):
+            self.paused = True
+            if self._player is not None:
+                self._player.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await self._player
+                self._player = None
+            return {"paused": True}
+        if isinstance(command, Resume):
+            if self.paused:
+                self.paused = False
+                self._player = asyncio.get_running_loop().create_task(self._play())
+            return {"paused": False}
+        if isinstance(command, Step):
+            if not self.paused:
+                raise CommandError("step needs a paused replay")
+            self._advance(command.ticks)
+            return {"seq": self.position, "t": self.ring.latest.t if self.ring.latest else 0}
+        if isinstance(command, Speed):
+            self.speed = check_speed(command.speed)
+            return {"speed": self.speed}
+        if isinstance(command, Explain):
+            return await self.explain(command, owner)
+        raise CommandError(f"{command.op} needs a live world; this is a replay of {self.recording.path}")
+
+    async def explain(self, command: Explain, owner: str | None = None) -> Any:
+        """``explain`` at tick ``command.seq`` (default: the current one), from the recording."""
+        return self.explain_at(command.robot, command.option, command.seq)
+
+    def explain_at(self, robot: int, option: str | int, seq: int | None = None) -> dict[str, Any]:
+        """``explain`` at tick ``seq`` (default: the current one) of ``robot``."""
+        robots = self.source.robots
+        if not 0 <= robot < len(robots) or robots[robot]["program"] is None:
+            raise CommandError(f"no XABSL robot {robot} in this recording")
+        at = self.position if seq is None else seq
+        if not 0 <= at < len(self.source):
+            raise CommandError(f"tick {at} is outside the recording (0..{len(self.source) - 1})")
+        name = robots[robot]["name"]
+        view = self.recording.tick(at)
+        previous = self.recording.tick(at - 1) if at > 0 else None
+        agent = view.agents.get(name)
+        if agent is None:
+            raise CommandError(f"{name} has no tick {at} in the recording")
+        result = explain(agent, previous.agents.get(name) if previous else None, option, view.t, previous)
+        # Asked without a tick (the page's "live" view: the playback position): shown as live.
+        result.update(seq=at if seq is not None else None, t=view.t, recorded=seq is not None)
+        return result
+
+    # -- history and status ---------------------------------------------------------------------------
+
+    def history_frames(self, t0: int, t1: int, every: int) -> tuple[int, Iterator[bytes]]:
+        """The frames of behavior times ``t0`` .. ``t1`` of the recording, and how many.
+
+        Times map to ticks by the recording's rate within the current generation's segment (a
+        reset sets the clock back).
+        """
+        source = self.source
+        number = source.generation_number(self.position)
+        seg_start = source.boundaries[number - 1] if number else 0
+        seg_stop = source.boundaries[number] if number < len(source.boundaries) else len(source)
+        base = self.recording.tick(seg_start).t
+        step = 1000.0 / self.behavior_hz
+        start = max(seg_start, seg_start + int((t0 - base) // step))
+        stop = min(seg_stop, seg_start + int((t1 - base) // step) + 2)
+        if stop <= start:
+            return 0, iter(())
+        if stop - start > MAX_HISTORY_TICKS:
+            raise CommandError(
+                f"history of a replay spans at most {MAX_HISTORY_TICKS} ticks "
+                f"({MAX_HISTORY_TICKS / self.behavior_hz:g} s); ask for the rest in further requests"
+            )
+        encoded = list(source.history(start, stop, t0, t1, every))
+        return len(encoded), iter(encoded)
+
+    async def status(self) -> dict[str, Any]:
+        """The status of a replay: position, length, the live session's fields where they apply."""
+        latest = self.ring.latest
+        gen = self.generation
+        return {
+            "example": self.example.name,
+            "paused": self.paused,
+            "finished": self.position >= len(self.source) - 1,
+            "speed": self.speed,
+            "seed": self.seed,
+            "behavior_hz": self.behavior_hz,
+            "seq": latest.seq if latest else 0,
+            "t": latest.t if latest else 0,
+            "generation": gen.number if gen is not None else 0,
+            "real_time_factor": 0.0 if self.paused else self.speed,
+            "tick_ms": 0.0,
+            "timing": {},
+            "ring": {
+                "frames": len(self.ring),
+                "capacity": self.ring.capacity,
+                "seconds": round(len(self.ring) / self.behavior_hz, 1),
+                "bytes": self.ring.nbytes(),
+                "record_seconds": self.recorder.record_seconds,
+                "recorded": self.recorder.recorded,
+            },
+            "simulation": {"running": False, "pid": None, "restarts": 0, "crash": None, "pipe": {}},
+            "programs": {},
+            "world": latest_status(latest),
+            "replay": {
+                "file": self.recording.path,
+                "ticks": len(self.source),
+                "position": self.position,
+                "t0": self.t_first,
+                "t1": self.t_last,
+                "seconds": round(len(self.source) / self.behavior_hz, 3),
+                "header": {k: v for k, v in self.recording.header.items() if k != "tables"},
+                "events": len(self.recording.events),
+                "seeks": self.seeks,
+                "seek_ms": round(1000 * self.seek_seconds / self.seeks, 3) if self.seeks else 0.0,
+            },
+        }
+
+
+def latest_status(entry: Entry | None) -> dict[str, Any]:
+    """The world status of ``entry`` (empty before the first tick)."""
+    if entry is None or not entry.status:
+        return {}
+    status: dict[str, Any] = orjson.loads(entry.status)
+    return status
+
+
+# -- explain --------------------------------------------------------------------------------------
+
+
+def _leaf_path(tree: dict[str, Any], leaf: int) -> list[tuple[dict[str, Any], bool]] | None:
+    if "leaf" in tree:
+        return [] if tree["leaf"] == leaf else None
+    for branch, key in ((True, "then"), (False, "else")):
+        below = _leaf_path(tree[key], leaf)
+        if below is not None:
+            return [(tree, branch), *below]
+    return None
+
+
+def _find_leaf(tree: dict[str, Any], leaf: int) -> dict[str, Any] | None:
+    if "leaf" in tree:
+        return tree if tree["leaf"] == leaf else None
+    return _find_leaf(tree["then"], leaf) or _find_leaf(tree["else"], leaf)
+
+
+class _Values:
+    """What a condition of one option could read at its decision, from the recording."""
+
+    def __init__(
+        self,
+        agent: AgentTick,
+        outputs: dict[str, Any],
+        params: dict[str, Any],
+        times: dict[str, float | None],
+    ) -> None:
+        description = agent.program.description
+        self.inputs = agent.inputs
+        self.outputs = outputs
+        self.params = params
+        self.times = times
+        self.constants = {c["name"]: c["value"] for c in description["constants"]}
+        self.elements = {el for e in description["enums"] for el in e["elements"]}
+        # Conditions may name an element short (``game.state == init``): by its last part.
+        short: dict[str, list[str]] = {}
+        for element in self.elements:
+            short.setdefault(element.rsplit(".", 1)[-1], []).append(element)
+        self.short = short
+
+    def ident(self, name: str) -> Any:
+        if name.startswith("@"):
+            return self.params.get(name[1:])
+        for table in (self.inputs, self.outputs, self.constants):
+            if name in table:
+                return table[name]
+        if name in self.elements:
+            return name
+        matches = self.short.get(name, [])
+        if len(matches) == 1:
+            return matches[0]
+        return _Element(name) if matches else None
+
+
+class _Element(str):
+    """A short element name that several enumerations have: equal to any element ending in it."""
+
+    __slots__ = ()
+
+    def matches(self, other: object) -> bool:
+        return isinstance(other, str) and (other == self or other.endswith("." + self))
+
+
+def _evaluate(expr: ast.Expr, values: _Values) -> Any:
+    """The value of ``expr`` from recorded values; None where the recording does not tell."""
+    if isinstance(expr, ast.NumberLit):
+        return float(expr.text)
+    if isinstance(expr, ast.BoolLit):
+        return expr.value
+    if isinstance(expr, ast.Ident):
+        return values.ident(expr.name)
+    if isinstance(expr, ast.Builtin):
+        return values.times.get(expr.name)
+    if isinstance(expr, ast.Paren):
+        return _evaluate(expr.inner, values)
+    if isinstance(expr, ast.UnaryOp):
+        operand = _evaluate(expr.operand, values)
+        if operand is None:
+            return None
+        return (not operand) if expr.op == "!" else -operand
+    if isinstance(expr, ast.CondOp):
+        condition = _evaluate(expr.condition, values)
+        if condition is None:
+            return None
+        return _evaluate(expr.then if condition else expr.otherwise, values)
+    if isinstance(expr, ast.BinaryOp):
+        left = _evaluate(expr.left, values)
+        if expr.op in ("&&", "||"):
+            if left is not None and bool(left) == (expr.op == "||"):
+                return bool(left)
+            right = _evaluate(expr.right, values)
+            if right is not None and bool(right) == (expr.op == "||"):
+                return bool(right)
+            return None if left is None or right is None else bool(right)
+        right = _evaluate(expr.right, values)
+        if left is None or right is None:
+            return None
+        return _binary(expr.op, left, right)
+    return None  # a Call: an input function with parameters is not recorded
+
+
+def _binary(op: str, left: Any, right: Any) -> Any:
+    if op in ("==", "!=") and (isinstance(left, _Element) or isinstance(right, _Element)):
+        short, other = (left, right) if isinstance(left, _Element) else (right, left)
+        return short.matches(other) == (op == "==")
+    try:
+        match op:
+            case "==":
+                return bool(left == right)
+            case "!=":
+                return bool(left != right)
+            case "<":
+                return bool(left < right)
+            case "<=":
+                return bool(left <= right)
+            case ">":
+                return bool(left > right)
+            case ">=":
+                return bool(left >= right)
+            case "+":
+                return left + right
+            case "-":
+                return left - right
+            case "*":
+                return left * right
+            case "/":
+                return left / right if right else None
+            case "%":
+                return left % right if right else None
+    except TypeError:
+        return None
+    return None
+
+
+def _comparisons(expr: ast.Expr, text: str, values: _Values, into: list[dict[str, Any]]) -> None:
+    """Every comparison in ``expr`` with the value of each side (pre-order; the live ``explain``'s shape)."""
+    if isinstance(expr, ast.BinaryOp):
+        if expr.op in _COMPARISONS:
+            left = _evaluate(expr.left, values)
+            right = _evaluate(expr.right, values)
+            left_text, right_text = _text(expr.left, text), _text(expr.right, text)
+            left_value, right_value = _show(left), _show(right)
+            shown_left = left_text if left_value == left_text else f"{left_text} ({left_value})"
+            shown_right = right_text if right_value == right_text else f"{right_text} ({right_value})"
+            into.append(
+                {
+                    "text": text[expr.span.start : expr.span.end],
+                    "op": expr.op,
+                    "left": left_text,
+                    "left_value": left_value,
+                    "right": right_text,
+                    "right_value": right_value,
+                    "value": None if left is None or right is None else _binary(expr.op, left, right),
+                    "shown": f"{shown_left} {expr.op} {shown_right}",
+                }
+            )
+        _comparisons(expr.left, text, values, into)
+        _comparisons(expr.right, text, values, into)
+    elif isinstance(expr, ast.UnaryOp):
+        _comparisons(expr.operand, text, values, into)
+    elif isinstance(expr, ast.Paren):
+        _comparisons(expr.inner, text, values, into)
+    elif isinstance(expr, ast.CondOp):
+        for part in (expr.condition, expr.then, expr.otherwise):
+            _comparisons(part, text, values, into)
+
+
+def _show(value: Any) -> str:
+    """A value as the explanation shows it (``?``: the recording does not tell)."""
+    if value is None:
+        return "?"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:.10g}"
+    return str(value)
+
+
+def _text(expr: ast.Expr, text: str) -> str:
+    return text[expr.span.start : expr.span.end]
+
+
+def _decision_outputs(agent: AgentTick, previous: AgentTick | None, option_id: int) -> dict[str, Any]:
+    """Outputs as option ``option_id``'s decision read them: last tick's, then this tick's earlier writes."""
+    outputs = dict(previous.outputs) if previous is not None else dict(agent.outputs)
+    enums = agent.program.tables["enums"]
+    description = agent.program.description
+    target = description["options"][option_id]["name"]
+
+    def walk(nodes: Sequence[Any]) -> bool:
+        for node in nodes:
+            if isinstance(node, OptionNode):
+                if node.option == target:
+                    return True
+                if walk(node.sub):
+                    return True
+            elif isinstance(node, AssignmentNode):
+                value: Any = node.value
+                if node.enum is not None:
+                    value = enums.get(node.enum, {}).get(str(int(value)), value)
+                outputs[node.symbol] = value
+        return False
+
+    walk(agent.tree())
+    return outputs
+
+
+def explain(
+    agent: AgentTick,
+    previous: AgentTick | None,
+    option: str | int,
+    t: int,
+    previous_view: TickView | None = None,
+) -> dict[str, Any]:
+    """Why ``option`` took its leaf in the recorded tick of ``agent`` (the live ``explain``'s shape).
+
+    Each condition on the way to the recorded leaf has ``branch`` (taken, as recorded), ``value``
+    (computed from the recorded values; null when they do not tell) and ``comparisons``: per
+    comparison its text, the value of each side (``?``: not recorded) and its result.
+
+    Raises:
+        CommandError: no such option, or it did not decide anything in that tick.
+    """
+    description = agent.program.description
+    options = description["options"]
+    if isinstance(option, int):
+        if not 0 <= option < len(options):
+            raise CommandError(f"no option {option}")
+        option_json = options[option]
+    else:
+        found = [o for o in options if o["name"] == option]
+        if not found:
+            raise CommandError(f"unknown option {option}")
+        option_json = found[0]
+    option_id = option_json["id"]
+    node = next((n for n in agent.path if n[0] == 0 and n[2] == option_id), None)
+    if node is None:
+        raise CommandError(f"option {option_json['name']} did not run in tick {agent.tick} of {agent.name}")
+    state_id, option_time, state_time, decided_in, leaf = node[3], node[4], node[5], node[6], node[7]
+    if leaf < 0:
+        raise CommandError(f"option {option_json['name']} decided nothing in that tick")
+    states = option_json["states"]
+    decided = states[decided_in]
+    # The decision saw the decided-in state's time: after a transition this tick, last tick's + a period.
+    decision_state_time: float | None = float(state_time)
+    if decided_in != state_id:
+        decision_state_time = None
+        if previous is not None and previous_view is not None:
+            before = next((n for n in previous.path if n[0] == 0 and n[2] == option_id), None)
+            if before is not None and before[3] == decided_in:
+                decision_state_time = float(before[5] + (t - previous_view.t))
+    params = {p["name"].rsplit(".", 1)[-1]: v for p, v in zip(option_json["params"], node[8], strict=False)}
+    params.update({p["name"]: v for p, v in zip(option_json["params"], node[8], strict=False)})
+    for p in option_json["params"]:
+        if p.get("enum") and p["name"] in params:
+            host = agent.program.tables["enums"].get(p["enum"], {})
+            for key in (p["name"], p["name"].rsplit(".", 1)[-1]):
+                params[key] = host.get(str(int(params[key])), params[key])
+    values = _Values(
+        agent,
+        _decision_outputs(agent, previous, option_id),
+        params,
+        {"state_time": decision_state_time, "option_time": float(option_time), "action_done": None},
+    )
+    conditions = []
+    for tree, branch in _leaf_path(decided["decision"], leaf) or []:
+        text = tree["if"]
+        operands: list[dict[str, Any]] = []
+        value: Any = None
+        try:
+            expr = parse_expression_text(text)
+        except CompileError:
+            expr = None
+        if expr is not None:
+            value = _evaluate(expr, values)
+            _comparisons(expr, text, values, operands)
+        conditions.append(
+            {
+                "text": text,
+                "source": text,
+                "value": None if value is None else bool(value),
+                "branch": branch,
+                "span": tree.get("span"),
+                "comparisons": operands,
+            }
+        )
+    leaf_node = _find_leaf(decided["decision"], leaf) or {}
+    target_name = leaf_node.get("goto") or decided["name"]
+    target = next((s["id"] for s in states if s["name"] == target_name), -1)
+    return {
+        "option": option_id,
+        "option_name": option_json["name"],
+        "decided_in": decided_in,
+        "decided_in_name": decided["name"],
+        "leaf": leaf,
+        "target": target,
+        "target_name": target_name,
+        "stay": target_name == decided["name"],
+        "leaf_span": leaf_node.get("span"),
+        "conditions": conditions,
+        "recorded": True,
+        "tree": {},
+        "last_transition": None,
+    }

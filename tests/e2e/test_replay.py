@@ -1,0 +1,128 @@
+"""The studio on a recording (``xabsl serve --replay``) in Chromium: the whole match in the
+timeline, seeking by the timeline, "why" at a past tick with the operand values."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from engine.record import Recording
+from tests.e2e.conftest import REPO, WEB_DIST, StudioServer, free_port, screenshot
+
+STUDIO = "window.xabslStudio"
+
+
+class ReplayServer(StudioServer):
+    """``xabsl serve --replay FILE``."""
+
+    def start(self) -> None:
+        xabsl = Path(sys.executable).with_name("xabsl")
+        command = [str(xabsl), "serve", "--replay", str(self.example), "--port", str(self.port)]
+        with self.log.open("ab") as log:
+            self.process = subprocess.Popen([*command, "--web-dist", str(WEB_DIST)], stdout=log, stderr=log, cwd=REPO)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"xabsl serve exited: {self.log.read_text(errors='replace')}")
+            try:
+                with urllib.request.urlopen(self.url + "api/status", timeout=2) as response:
+                    if response.status == 200:
+                        return
+            except OSError:
+                time.sleep(0.2)
+        raise RuntimeError("xabsl serve --replay did not answer within 60 s")
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("replay-e2e") / "match.mcap"
+    command = [sys.executable, "-m", "engine.cli", "run", "examples/soccer", "--duration", "20", "--players", "2"]
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    subprocess.run([*command, "--record", str(path)], cwd=REPO, env=env, check=True, capture_output=True)
+    return path
+
+
+@pytest.fixture(scope="module")
+def replay_server(recording: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[ReplayServer]:
+    server = ReplayServer(recording, free_port(), tmp_path_factory.mktemp("replay-log") / "serve.log")
+    server.start()
+    yield server
+    server.stop()
+
+
+@pytest.fixture
+def tab(browser: Any, replay_server: ReplayServer) -> Iterator[Any]:
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(replay_server.url)
+    yield page
+    page.close()
+    assert not errors, f"uncaught errors in the page: {errors}"
+
+
+def loaded(tab: Any, ticks: int) -> None:
+    """Wait until the page holds every tick of the recording."""
+    try:
+        tab.wait_for_function(f"() => {STUDIO}.session.buffer.length === {ticks}", timeout=30000)
+    except Exception:
+        state = tab.evaluate(f"() => [{STUDIO}.session.buffer.length, JSON.stringify({STUDIO}.session.replay)]")
+        raise AssertionError(f"the page holds {state[0]} of {ticks} ticks (replay: {state[1]})") from None
+
+
+def test_the_timeline_covers_the_recording_and_seeks(tab: Any, recording: Path) -> None:
+    with Recording(recording) as file:
+        ticks = len(file)
+        t_last = file.tick(ticks - 1).t
+    # Every tick of the recording is loaded, far more than a live page's 60 s window.
+    loaded(tab, ticks)
+    assert tab.evaluate(f"{STUDIO}.session.buffer.newest.t") == t_last
+    canvas = tab.locator(".timeline-canvas")
+    box = canvas.bounding_box()
+    assert box is not None
+    tab.mouse.click(box["x"] + 150 + (box["width"] - 156) * 0.9, box["y"] + 30)
+    tab.wait_for_function(f"() => {STUDIO}.session.cursor !== null")
+    late = tab.evaluate(f"{STUDIO}.session.view.seq")
+    assert late > ticks * 0.8
+    canvas.focus()
+    tab.keyboard.press("Home")
+    tab.wait_for_function(f"() => {STUDIO}.session.view.seq === 0")
+    # Dragging to the right end shows the recording's last tick (not "live": that is the
+    # server's playback position, where End and L go back to).
+    tab.mouse.click(box["x"] + box["width"] - 7, box["y"] + 30)
+    tab.wait_for_function(f"() => {STUDIO}.session.view.seq >= {ticks - 3}")
+    tab.keyboard.press("End")
+    tab.wait_for_function(f"() => {STUDIO}.session.cursor === null && {STUDIO}.session.view.seq === 0")
+
+
+def test_why_at_a_past_tick_shows_operand_values(tab: Any, recording: Path) -> None:
+    with Recording(recording) as file:
+        ticks = len(file)
+        option = next(
+            o["id"] for o in file.programs[("behavior", 0)].description["options"] if o["name"] == "approach_ball"
+        )
+        view = next(
+            v
+            for v in file.ticks(200, ticks)
+            if any(n[0] == 0 and n[2] == option and n[7] >= 0 for n in v.agents["blue2"].path)
+        )
+        distance = view.agents["blue2"].inputs["ball.distance"]
+    loaded(tab, ticks)
+    tab.evaluate(f"() => {{ {STUDIO}.session.selectRobot(1); {STUDIO}.session.setCursor({view.t}); }}")
+    tab.wait_for_function(f"() => {STUDIO}.session.view.seq === {view.seq}")
+    tab.keyboard.press("o")
+    tab.evaluate(f"() => {STUDIO}.session.openOptionById({option})")
+    tab.wait_for_function("() => document.querySelector('.why').textContent.includes('Values recorded at')")
+    comparison = tab.locator(".why .comparisons li code").first.inner_text()
+    assert comparison.startswith("ball.distance (") and comparison.endswith(") < 900"), comparison
+    shown = float(comparison.split("(")[1].split(")")[0])
+    assert abs(shown - distance) < 0.01
+    screenshot(tab, "replay-why")
