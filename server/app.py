@@ -484,9 +484,10 @@ async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
 
 def _running(studio: Studio, key: str) -> Program:
     state = studio.session.programs.get(key)
-    if state is None or state.running is None:
+    shown = state.shown if state is not None else None
+    if shown is None:
         raise HTTPException(404, f"no running behavior {key!r}")
-    return state.running
+    return shown
 
 
 async def _svg(studio: Studio, request: Request, dot: str) -> Response:

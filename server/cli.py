@@ -74,6 +74,19 @@ def register(subparsers: Any) -> None:
         metavar="KEY=VALUE",
         help="an option of the world plug-in (VALUE as JSON, else text), e.g. half_duration_s=300",
     )
+    parser.add_argument(
+        "--bindings",
+        default=None,
+        metavar="FILE.py",
+        help="bench world: a Python module whose bind(bindings, robot) supplies input symbols, input "
+        "functions and basic behaviors (docs/own-behaviors.md)",
+    )
+    parser.add_argument(
+        "--inputs",
+        default=None,
+        metavar="FILE.jsonl",
+        help="bench world: an input trace (the xabsl trace format) played on every robot, on the session's clock",
+    )
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
     parser.set_defaults(func=run)
@@ -95,6 +108,10 @@ def run(args: argparse.Namespace) -> int:
     options: dict[str, Any] = dict(args.world_option)
     if args.robots is not None:
         options["robots"] = args.robots
+    for flag in ("bindings", "inputs"):  # options of the bench world, absolute for the simulation process
+        value = getattr(args, flag)
+        if value is not None:
+            options[flag] = str(Path(value).expanduser().resolve())
     try:
         example = load_example(args.path, args.world, **options)
     except ExampleError as error:
@@ -110,7 +127,11 @@ def run(args: argparse.Namespace) -> int:
     for key, state in session.programs.items():
         comp = state.compilation
         if comp is not None and not comp.ok:
-            print(f"warning: behavior {key!r} has errors; its agents stand until it is fixed:", file=sys.stderr)
+            print(
+                f"warning: behavior {key!r} has {len(comp.errors)} errors; the studio shows them, "
+                "its robots stand until it compiles:",
+                file=sys.stderr,
+            )
             for diagnostic in comp.errors[:10]:
                 print("  " + diagnostic.format(), file=sys.stderr)
     policy = SecurityPolicy.for_host(args.host, args.token, args.allow_origin)

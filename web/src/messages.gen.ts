@@ -250,13 +250,19 @@ export interface RobotFrame {
   overrides?: Record<string, WireValue> | null;
 }
 
-/** A robot of the world; `program`: the behavior set its engine runs (`None`: no XABSL engine). */
+/**
+ * A robot of the world; `program`: the behavior set it runs (`None`: no XABSL behavior).
+ *
+ * `engine` is false while its behavior set has errors and never compiled clean: `program`
+ * then names the set whose parsed part the studio shows, and the robot stands until it compiles.
+ */
 export interface RobotInfo {
   id: number;
   name: string;
   team: string;
   number: number;
   program: string | null;
+  engine?: boolean;
 }
 
 /** The engine of `robot` runs the XABSL agent `agent` (a name of the program's `agents`). */
