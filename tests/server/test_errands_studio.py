@@ -204,4 +204,6 @@ def test_a_world_command_it_does_not_have_is_named(live_demo: LiveServer, client
     client = client_for(live_demo)
     client.frame_after()
     reply = client.command("world_command", name="teleport")
-    assert reply["ok"] is False and reply["error"] == "unknown command 'teleport' (set_input, set_function, follow_world)"
+    assert (
+        reply["ok"] is False and reply["error"] == "unknown command 'teleport' (set_input, set_function, follow_world)"
+    )
