@@ -508,10 +508,12 @@ _SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
 
 
 @router.get("/api/graph/{program}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
-async def graph(studio: StudioDep, request: Request, program: str, agent: str | None = None) -> Response:
-    """The option graph below an XABSL agent's root option (SVG)."""
+async def graph(
+    studio: StudioDep, request: Request, program: str, agent: str | None = None, root: str | None = None
+) -> Response:
+    """The option graph below an XABSL agent's root option, or below option ``root`` (a forced root) (SVG)."""
     try:
-        dot = option_graph_dot(_running(studio, program), agent)
+        dot = option_graph_dot(_running(studio, program), agent, root)
     except GraphError as error:
         raise HTTPException(404, str(error)) from None
     return await _svg(studio, request, dot)

@@ -22,6 +22,7 @@ import { DynamicsPanel } from "./panels/dynamics";
 import { FactsPanel } from "./panels/facts";
 import { PlanPanel } from "./panels/plan";
 import { panelsOf } from "./panels/world";
+import { ProblemBanner } from "./panels/banner";
 import { Session, type SessionEvent } from "./session";
 import { h, isTyping, toast } from "./ui";
 
@@ -38,6 +39,7 @@ function main(): void {
       hello: (hello) => {
         if (hello.reason !== "connect" && hello.reason !== "resync") clearGraphCache();
         session.applyHello(hello);
+        problems.refresh();
         // Fill the timeline with what the server buffered before we came (or before a reload).
         const t = hello.session.t;
         void connection
@@ -48,7 +50,10 @@ function main(): void {
       frame: (frame) => session.applyFrame(frame),
       event: (event) => {
         if (event.event === "file") editor.fileEvent(event);
-        else if (event.event === "compile") editor.compileEvent(event);
+        else if (event.event === "compile") {
+          editor.compileEvent(event);
+          problems.refresh();
+        }
         else if (event.event === "crash")
           toast(`The simulation stopped: ${event.message}. Reset (top bar) starts it again.`, "error", 15000);
       },
@@ -122,6 +127,10 @@ function main(): void {
       right.activate("test");
     },
   });
+  const problems = new ProblemBanner((span) => {
+    center.activate("editor");
+    editor.openSpan(span);
+  });
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
@@ -170,8 +179,11 @@ function main(): void {
     " it decided · E edits, Ctrl+S hot-reloads · X runs an option by hand · drag the timeline to go back, L for live · ? for all keys",
     h("button.icon", { title: "Hide this hint", "aria-label": "hide hint", onclick: () => { hint.remove(); localStorage.setItem(HINT_KEY, "1"); } }, "×"),
   );
+  // The notices row under the top bar: the problem banner, then the first-visit hint.
+  const notices = h("div.notices", {}, problems.element);
   app.append(
     topbar.element,
+    notices,
     h(
       "main.workspace",
       {},
@@ -191,7 +203,7 @@ function main(): void {
     ),
   );
 
-  if (!localStorage.getItem(HINT_KEY)) topbar.element.after(hint);
+  if (!localStorage.getItem(HINT_KEY)) notices.append(hint);
 
   // -------------------------------------------------------------------------- render loop
   const pending = new Set<SessionEvent>();
@@ -233,7 +245,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 
