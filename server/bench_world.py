@@ -403,36 +403,10 @@ class BenchController:
     ) -> None:
         self.agent = agent
         self.program = program
-        bindings = Bindings()
-        for enum in program.enums.values():
-            if not enum.internal:
-                bindings.enum(enum.name, list(enum.elements))
-        values: dict[str, Value] = {}
-        agent.values = values
+        self.bindings = bindings = Bindings()
+        agent.values = {}
         agent.functions = {}
-        ours: dict[str, object] = {}
-        for symbol in program.inputs.values():
-            if symbol.params:
-                read: Callable[..., Value] = _hand_function(agent, symbol.name, _initial(symbol.kind))
-                bindings.input(symbol.name, symbol.kind, read, params=symbol.params, enum=symbol.enum)
-            else:
-                values[symbol.name] = _initial(symbol.kind)
-                bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
-            ours[symbol.name] = bindings.inputs[symbol.name]
-        for out in program.outputs.values():
-            if not out.internal:
-                bindings.output(out.name, out.kind, enum=out.enum)
-        for behavior in program.behaviors.values():
-            cls: Any = type(
-                f"Bench_{behavior.name}",
-                (_Skill,),
-                {
-                    "name": behavior.name,
-                    "parameters": behavior.params,
-                    "run": staticmethod(_SKILLS.get(behavior.name, _nothing)),
-                },
-            )
-            bindings.behavior(cls(agent))
+        ours = self._bind_missing(program)
         if user is not None:
             user.bind(bindings, agent)
         #: names of the input symbols the bindings module supplies (not settable by hand)
@@ -443,6 +417,56 @@ class BenchController:
                 bindings.input(
                     name, binding.kind, _recorded(agent, name, binding.read), params=binding.params, enum=binding.enum
                 )
+        self.adopt(program)
+        self.trace = trace
+        self.trace_position = 0
+        self.engine = _BenchEngine(self, bindings, program, agent_name=agent.name)
+        if trace is not None:
+            self.trace_lines = [self._checked(line) for line in trace.lines]
+
+    def _bind_missing(self, program: Program) -> dict[str, object]:
+        """Bind what ``program`` names and nobody bound yet (at start, and before a hot reload).
+
+        Returns:
+            the input bindings made, by name.
+        """
+        agent, bindings, values = self.agent, self.bindings, self.agent.values
+        for enum in program.enums.values():
+            if not enum.internal and enum.name not in bindings.enums:
+                bindings.enum(enum.name, list(enum.elements))
+        ours: dict[str, object] = {}
+        for symbol in program.inputs.values():
+            if symbol.name in bindings.inputs:
+                continue
+            if symbol.params:
+                read: Callable[..., Value] = _hand_function(agent, symbol.name, _initial(symbol.kind))
+                bindings.input(symbol.name, symbol.kind, read, params=symbol.params, enum=symbol.enum)
+            else:
+                values[symbol.name] = _initial(symbol.kind)
+                bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
+            ours[symbol.name] = bindings.inputs[symbol.name]
+        for out in program.outputs.values():
+            if not out.internal and out.name not in bindings.outputs:
+                bindings.output(out.name, out.kind, enum=out.enum)
+        for behavior in program.behaviors.values():
+            if behavior.name in bindings.behaviors:
+                continue
+            cls: Any = type(
+                f"Bench_{behavior.name}",
+                (_Skill,),
+                {
+                    "name": behavior.name,
+                    "parameters": behavior.params,
+                    "run": staticmethod(_SKILLS.get(behavior.name, _nothing)),
+                },
+            )
+            bindings.behavior(cls(agent))
+        return ours
+
+    def adopt(self, program: Program) -> None:
+        """``program`` is the one running: its enumerations' host values, the world's game states."""
+        self.program = program
+        bindings = self.bindings
         #: per external enumeration: its host values in declaration order (for the scene and commands)
         self.enums = {
             name: EnumValues(name, {e: bindings.enums.get(name, {}).get(e, i) for i, e in enumerate(enum.elements)})
@@ -451,14 +475,13 @@ class BenchController:
         }
         game = self.enums.get("game.state")
         if game is not None:
-            world = agent.world
+            world = self.agent.world
             world.ready_value = game.elements.get("game.state.ready", 0)
             world.playing_value = game.elements.get("game.state.playing", 0)
-        self.trace = trace
-        self.trace_position = 0
-        self.engine = Engine(bindings, program, agent_name=agent.name)
-        if trace is not None:
-            self.trace_lines = [self._checked(line) for line in trace.lines]
+
+    def before_reload(self, program: Program) -> None:
+        """A hot reload is coming: bind the names the new version adds (the bench binds any)."""
+        self._bind_missing(program)
 
     def _checked(self, line: TraceLine) -> tuple[int, str | None, dict[str, Value]]:
         """A trace line with its values converted for this program (raises EngineError naming the line)."""
@@ -518,6 +541,20 @@ class BenchController:
             if host == value:
                 return i
         return -1
+
+
+class _BenchEngine(Engine):
+    """The engine of a bench robot: on a hot reload the bench first binds what the new version adds."""
+
+    def __init__(self, controller: BenchController, bindings: Bindings, program: Program, agent_name: str) -> None:
+        self.controller = controller
+        super().__init__(bindings, program, agent_name=agent_name)
+
+    def reload(self, program: Program) -> None:
+        """Bind the new names, then reload (``Engine.reload``)."""
+        self.controller.before_reload(program)
+        super().reload(program)
+        self.controller.adopt(program)
 
 
 def _reader(values: dict[str, Value], name: str) -> Callable[[], Value]:

@@ -275,3 +275,25 @@ def test_a_hot_reload_that_breaks_keeps_the_last_good_behavior_running(demo_dir:
         frame = client.wait_frame(lambda f: bool(f["robots"][0]["path"]))
         assert frame["robots"][0]["path"], "the last good behavior keeps running"
         assert 'id="option_0"' in http.get(f"/api/graph/{key}").text
+
+
+def test_a_hot_reload_that_adds_inputs_runs_on_the_bench(demo_dir: Path) -> None:
+    session, sim = simulation(BenchExample(demo_dir))
+    key = next(iter(session.programs))
+    symbols = demo_dir / "symbols.xabsl"
+    symbols.write_text(
+        symbols.read_text().replace(
+            "  /** The game phase",
+            '  float input ball.speed "mm/s";\n  bool input near ( float x; float y; );\n  /** The game phase',
+        )
+    )
+    compilation = session.compile(key)
+    assert compilation.program is not None, [d.format() for d in compilation.errors]
+    from engine.emit.json import program_to_json
+
+    assert sim.apply(key, compilation.program, program_to_json(compilation.program, compilation.source_text)) is None
+    command(sim, "set_input", robot=0, symbol="ball.speed", value=12.5)
+    command(sim, "set_function", robot=0, symbol="near", value=True)
+    sim.tick()
+    assert sim.world.agents[0].values["ball.speed"] == 12.5  # type: ignore[attr-defined]
+    assert "near" in sim.world.static_scene()["bench"]["functions"]
