@@ -115,6 +115,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         example = load_example(args.path, args.world, **options)
     except ExampleError as error:
+        if (args.bindings or args.inputs) and "unexpected keyword argument" in str(error):
+            raise UsageError(
+                f"{args.path}: --bindings and --inputs are options of the bench world, and this folder runs in "
+                "a world of its own"
+            ) from None
         raise UsageError(str(error)) from None
     session = Session(
         example,

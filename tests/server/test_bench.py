@@ -297,3 +297,60 @@ def test_a_hot_reload_that_adds_inputs_runs_on_the_bench(demo_dir: Path) -> None
     sim.tick()
     assert sim.world.agents[0].values["ball.speed"] == 12.5  # type: ignore[attr-defined]
     assert "near" in sim.world.static_scene()["bench"]["functions"]
+
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "own-behaviors.md"
+
+
+def _block(language: str) -> str:
+    text = DOC.read_text()
+    start = text.index(f"```{language}\n") + len(language) + 4
+    return text[start : text.index("```", start)]
+
+
+def test_the_worked_example_of_the_docs_runs_its_bindings_and_its_trace(demo_dir: Path, tmp_path: Path) -> None:
+    module = tmp_path / "my_bindings.py"
+    module.write_text(_block("python"))
+    trace = tmp_path / "steps.jsonl"
+    trace.write_text(_block("jsonl"))
+    _, sim = simulation(BenchExample(demo_dir, bindings=module, inputs=trace))
+    assert sim.world.static_scene()["bench"]["bound"] == ["ball.time_since_seen", "clamp"]
+    sim.execute(_force(sim, "approach_ball", stop_at=100.0))
+    sim.tick()
+    ((args, value),) = bench(sim)["calls"]["clamp"]
+    assert args == [450.0, 50.0, 250.0] and value == 250.0, "ball.distance 900 from the trace, halved, clamped"
+    walk = [n for n in sim.samplers[0].path() if n[0] == 1]  # type: ignore[union-attr]
+    assert walk[0][4][:2] == [250.0, 40.0]
+
+
+@pytest.mark.parametrize(
+    ("flags", "error"),
+    [
+        (["--bindings", "nope.py"], "nope.py: no such file"),
+        (["--inputs", "nope.jsonl"], "nope.jsonl"),
+    ],
+)
+def test_serve_refuses_bench_flags_that_do_not_load(demo_dir: Path, flags: list[str], error: str) -> None:
+    import subprocess
+    import sys
+
+    result = subprocess.run(
+        [sys.executable, "-m", "engine.cli", "serve", str(demo_dir), *flags],
+        capture_output=True,
+        text=True,
+        cwd=demo_dir,
+    )
+    assert result.returncode == 2 and error in result.stderr
+
+
+def test_serve_says_the_bench_flags_are_the_bench_worlds(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    soccer = Path(__file__).resolve().parents[2] / "examples" / "soccer"
+    result = subprocess.run(
+        [sys.executable, "-m", "engine.cli", "serve", str(soccer), "--inputs", str(tmp_path / "x.jsonl")],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 2 and "options of the bench world" in result.stderr
