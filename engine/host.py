@@ -150,7 +150,7 @@ class World(Protocol):
         ...
 
 
-class WorldCommandError(ValueError):
+class WorldCommandError(HostError, ValueError):
     """A world command that cannot be carried out (unknown name, bad arguments); the world is unchanged."""
 
 

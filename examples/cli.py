@@ -35,6 +35,7 @@ def available_examples() -> list[str]:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add ``xabsl run`` (headless matches of an example world) to the command line."""
     parser = subparsers.add_parser(
         "run",
         help="run an example world headless (xabsl run examples/soccer --help for its flags)",
@@ -72,6 +73,7 @@ def load_example(example: str) -> tuple[str, ModuleType]:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run the example named on the command line headless; the exit status."""
     _name, module = load_example(args.example)
     # The example's docstring opens with what it does and what to watch for: show both in --help.
     paragraphs = (module.__doc__ or "").strip().split("\n\n")

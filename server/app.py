@@ -36,6 +36,7 @@ from engine.emit.dot import GraphvizMissing
 from engine.ir.model import Program
 from server import frames
 from server.clients import Client, Hub
+from server.docs import router as docs_router
 from server.files import BehaviorFiles, FileError
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
 from server.messages import (
@@ -605,6 +606,7 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.add_exception_handler(CommandError, _command_error)
     app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     app.include_router(router)
+    app.include_router(docs_router)
     _document_messages(app)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")

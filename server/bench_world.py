@@ -53,7 +53,7 @@ from engine.host import (
     behavior_source,
     common_root,
 )
-from engine.ir.model import Program
+from engine.ir.model import Program, short_name
 from engine.runtime import BasicBehavior, Bindings, Engine
 from engine.runtime.values import EnumValues, coerce
 from engine.types import Kind, Value
@@ -353,10 +353,9 @@ class _Skill(BasicBehavior):
         self.calls = 0
 
     def execute(self) -> None:
-        """Run the skill with the parameters by their names within the behavior."""
+        """Run the skill with the parameters by their declared names (the behavior's prefix stripped)."""
         self.calls += 1
-        prefix = len(self.name) + 1
-        params = {name[prefix:]: value for name, value in self.params.items()}
+        params = {short_name(name, self.name): value for name, value in self.params.items()}
         type(self).run(self.agent, params)
 
 

@@ -13,13 +13,11 @@ none is given.
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from pathlib import Path
-from typing import Any
 
 
-def _option(text: str) -> tuple[str, Any]:
+def _option(text: str) -> tuple[str, object]:
     """``KEY=VALUE`` of ``--world-option``: the value as JSON when it parses, else the text."""
     import json
 
@@ -32,7 +30,7 @@ def _option(text: str) -> tuple[str, Any]:
         return key, value
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``serve`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "serve",
@@ -94,6 +92,9 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load the world plug-in, compile its behaviors, serve the studio until interrupted."""
+    import logging  # here, not at the top: `xabsl --help` imports this module
+    from typing import Any
+
     import uvicorn
 
     from engine.cli import UsageError

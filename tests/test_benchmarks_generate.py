@@ -43,3 +43,34 @@ def test_generator_is_deterministic(tmp_path: Path) -> None:
     benchmark.generate_behavior_set(second, options=10)
     texts = [{p.relative_to(root): p.read_bytes() for p in root.rglob("*.xabsl")} for root in (first, second)]
     assert texts[0] == texts[1]
+
+
+def test_team_shaped_set_compiles_without_errors(tmp_path: Path) -> None:
+    benchmark = load_benchmark()
+    agents = benchmark.generate_team_set(tmp_path)
+    compilation = compile_file(str(agents), base=str(tmp_path))
+    assert not compilation.errors, "\n".join(d.format() for d in compilation.errors[:10])
+    program = compilation.program
+    assert program is not None
+    # shaped like the 197-file/180-option real set of issue 11
+    assert len(program.options) == benchmark.TEAM_OPTIONS == 180
+    assert len(compilation.files) == 197
+    # every option is included through the options that call it, and called
+    assert not [d for d in compilation.warnings if d.code == "unreachable-option"]
+    # dotted names everywhere: parameters, enum elements, symbols
+    assert any("." in p.short_name for o in program.options.values() for p in o.params)
+    assert any("." in p.short_name for s in program.inputs.values() for p in s.params)
+    assert any("." in e.removeprefix(n + ".") for n, enum in program.enums.items() for e in enum.elements)
+    assert sum(bool(s.params) for s in program.inputs.values()) >= 100
+    # long else-if chains
+    depth = max(_chain(s.decision) for o in program.options.values() for s in o.states)
+    assert depth >= 10
+
+
+def _chain(tree: object) -> int:
+    from engine import ir
+
+    length = 0
+    while isinstance(tree, ir.If):
+        tree, length = tree.otherwise, length + 1
+    return length

@@ -8,23 +8,19 @@ a summary line; ``--format json`` prints one JSON object instead. Exit status: 0
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import sys
 import time
 
-import orjson
-
 from engine.cli import UsageError
-from engine.emit.ic import emit_ic
-from engine.emit.json import program_to_json
-from engine.files import write_atomically
-from engine.lang import compile_file, deep_recursion
 
 #: Diagnostic codes of the whole-program lint that ``--no-lint`` silences.
 LINT_CODES = frozenset({"unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"})
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``compile`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "compile",
         help="check a behavior; write intermediate code (--ic) and a JSON description (--json)",
@@ -41,10 +37,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.add_argument(
         "--no-lint", action="store_true", help="omit the lint warnings (unreachable and unused declarations)"
     )
-    parser.set_defaults(func=run)
+    parser.set_defaults(func=run, exit_at_once=True)
 
 
 def run(args: argparse.Namespace) -> int:
+    """Compile, print the diagnostics and a summary, write the outputs; returns the exit status."""
+    # One compile, then the process ends: the cyclic garbage collector would only traverse the
+    # program's hundreds of thousands of live objects (once more when `compile_file` re-enables
+    # it), so it stays off for the command. Reference counting still frees what dies.
+    gc.disable()
+    # Imported here, not at the top: `xabsl --help` and the other subcommands need none of it;
+    # the emitters and orjson (which imports uuid, platform, datetime) only when asked for.
+    from engine.files import write_atomically
+    from engine.lang import compile_file, deep_recursion
+
     if not os.path.isfile(args.agents_file):
         raise UsageError(f"no such file: {args.agents_file}")
     started = time.perf_counter()
@@ -58,12 +64,16 @@ def run(args: argparse.Namespace) -> int:
     if not failed and compilation.program is not None:
         try:
             if args.ic:
+                from engine.emit.ic import emit_ic
+
                 with deep_recursion():
                     text = emit_ic(compilation.program)
                 write_atomically(args.ic, text.encode("utf-8"))
             if args.json:
+                from engine.emit.json import dumps, program_to_json
+
                 document = program_to_json(compilation.program, compilation.source_text)
-                write_atomically(args.json, orjson.dumps(document, option=orjson.OPT_INDENT_2))
+                write_atomically(args.json, dumps(document))
         except OSError as error:
             raise UsageError(f"cannot write output: {error.strerror}: {error.filename}") from error
     finished = time.perf_counter()
@@ -79,6 +89,8 @@ def run(args: argparse.Namespace) -> int:
         "emit_ms": round((finished - emit_started) * 1000, 1),
     }
     if args.format == "json":
+        import orjson
+
         sys.stdout.buffer.write(
             orjson.dumps({"ok": not failed, "diagnostics": [d.as_dict() for d in diagnostics], "summary": summary})
         )

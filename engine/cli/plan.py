@@ -20,6 +20,7 @@ from engine.cli import UsageError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``plan`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "plan",
         help="run GRAPHPLAN on a PDDL domain and problem and print the layered plan",
@@ -41,7 +42,7 @@ def _read(path: str) -> str:
         raise UsageError(f"{path}: cannot read: {error}") from None
 
 
-def _one_line(text: str) -> str:
+def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
 
@@ -66,11 +67,13 @@ def _parse_error(path: str, error: Exception) -> UsageError:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Parse, ground and plan; print the layered plan; returns the exit status."""
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 
+    from engine.errors import PlanningError
     from engine.planning.graphplan import format_stats, graphplan
-    from engine.planning.strips import PlanningError, ground
+    from engine.planning.strips import ground
 
     domain_text, problem_text = _read(args.domain), _read(args.problem)
     try:

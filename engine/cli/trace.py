@@ -20,17 +20,19 @@ import argparse
 import json
 import os
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from engine.cli import UsageError
 from engine.errors import CommandLineError
-from engine.files import write_atomically
-from engine.ir.model import Program
+
+if TYPE_CHECKING:  # the IR is imported when a trace runs, not for `xabsl --help`
+    from engine.ir.model import Program
 
 _IC_SUFFIXES = (".ic", ".dat")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the ``trace`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
         "trace",
         help="run a behavior under the conformance host: input trace in, activation trace out",
@@ -90,7 +92,9 @@ def _load(args: argparse.Namespace) -> Program:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run one tick per input line and write the trace; returns the exit status."""
     from engine.errors import EngineError
+    from engine.files import write_atomically
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
     if not os.path.isfile(args.inputs):

@@ -6,19 +6,20 @@ symbols sorted by lower-cased name (the IR already holds options in that order),
 formatting, n-ary ``&``/``|``, inlined common decision trees and common actions, constants as
 written, and the trailing space after enum element tokens (§3.3).
 
-Expressions are emitted through a dispatch table keyed by IR node type (``_EXPRESSIONS``), in
-the manner of sqlglot's generator ``TRANSFORMS``.
+Expressions are emitted by one ``match`` over the IR node types (``_expression``).
 """
 
 from __future__ import annotations
 
-import decimal
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from typing import TypeVar, assert_never
 
 from engine import ir
+from engine.types import Kind
 
 ENDL = "\r\n"
+_T = TypeVar("_T")
 
 #: IC letters of decimal operators (division is 'd' because readers treat '/' as a comment).
 _ARITHMETIC = {"+": "+", "-": "-", "*": "*", "/": "d", "%": "%"}
@@ -40,6 +41,8 @@ def format_number(value: float) -> str:
         return "Infinity" if value > 0 else "-Infinity" if value < 0 else "NaN"
     if value == int(value):
         return str(int(value))
+    import decimal  # here: only non-integral literals need it (an import less at start-up)
+
     sign = "-" if value < 0 else ""
     digits_tuple = decimal.Decimal(repr(abs(value))).normalize().as_tuple()
     digits = "".join(map(str, digits_tuple.digits))
@@ -74,7 +77,7 @@ class _Writer:
 def _arguments(out: _Writer, args: tuple[ir.Argument, ...]) -> None:
     out.line(str(len(args)))
     for arg in args:
-        if arg.kind is ir.Kind.ENUM:
+        if arg.kind is Kind.ENUM:
             out.line(f"e {arg.enum} {arg.param}")
         else:
             out.line(f"{arg.kind.ic_code} {arg.param}")
@@ -99,7 +102,7 @@ def _binary(out: _Writer, e: ir.Binary) -> None:
     elif e.op == "enum!=":
         out.line("!")
         out.line("c")
-    elif e.op in _ARITHMETIC and e.kind is ir.Kind.DECIMAL:
+    elif e.op in _ARITHMETIC and e.kind is Kind.DECIMAL:
         out.line(_ARITHMETIC[e.op])
     else:
         out.line(_COMPARISON[e.op])
@@ -120,27 +123,38 @@ def _conditional(out: _Writer, e: ir.Conditional) -> None:
     _expression(out, e.otherwise)
 
 
-_EXPRESSIONS: dict[type, Callable[[_Writer, ir.Expression], None]] = {
-    ir.Number: lambda out, e: out.line(f"v {format_number(e.value)}"),
-    ir.Constant: lambda out, e: out.line(f"c {e.text}"),
-    ir.BooleanLiteral: lambda out, e: out.line(f"v {'true' if e.value else 'false'}"),
-    ir.EnumLiteral: lambda out, e: out.line(f"v {e.element} "),
-    ir.InputRef: _input,
-    ir.OutputRef: lambda out, e: out.line(f"o {e.symbol}"),
-    ir.ParameterRef: lambda out, e: out.line(f"p {e.param}"),
-    ir.StateTime: lambda out, e: out.line("s"),
-    ir.OptionTime: lambda out, e: out.line("t"),
-    ir.ActionDone: lambda out, e: out.line("t"),
-    ir.Conflict: lambda out, e: out.line("x"),
-    ir.Unary: _unary,
-    ir.Binary: _binary,
-    ir.Logical: _logical,
-    ir.Conditional: _conditional,
-}
-
-
 def _expression(out: _Writer, e: ir.Expression) -> None:
-    _EXPRESSIONS[type(e)](out, e)
+    match e:
+        case ir.InputRef():
+            _input(out, e)
+        case ir.Binary():
+            _binary(out, e)
+        case ir.Number():
+            out.line(f"v {format_number(e.value)}")
+        case ir.ParameterRef():
+            out.line(f"p {e.param}")
+        case ir.OutputRef():
+            out.line(f"o {e.symbol}")
+        case ir.EnumLiteral():
+            out.line(f"v {e.element} ")
+        case ir.Logical():
+            _logical(out, e)
+        case ir.Unary():
+            _unary(out, e)
+        case ir.Constant():
+            out.line(f"c {e.text}")
+        case ir.BooleanLiteral():
+            out.line(f"v {'true' if e.value else 'false'}")
+        case ir.Conditional():
+            _conditional(out, e)
+        case ir.StateTime():
+            out.line("s")
+        case ir.OptionTime() | ir.ActionDone():
+            out.line("t")
+        case ir.Conflict():
+            out.line("x")
+        case _:
+            assert_never(e)
 
 
 def _action(out: _Writer, action: ir.Action) -> None:
@@ -166,12 +180,12 @@ def _statement(out: _Writer, tree: ir.DecisionTree) -> None:
 
 
 def _parameter(param: ir.Parameter) -> str:
-    if param.kind is ir.Kind.ENUM:
+    if param.kind is Kind.ENUM:
         return f"e {param.enum} {param.name}"
     return f"{param.kind.ic_code} {param.name}"
 
 
-def _sorted(items: list, key: Callable) -> list:  # type: ignore[type-arg]
+def _sorted(items: Iterable[_T], key: Callable[[_T], str]) -> list[_T]:
     # by lower-cased name as the original; ties by exact name so that file order cannot matter
     return sorted(items, key=lambda item: (key(item).lower(), key(item)))
 
@@ -190,7 +204,7 @@ def emit_ic(program: ir.Program) -> str:
     symbols = _sorted(program.internal_symbols, lambda s: s.name)
     out.line(str(len(symbols)))
     for symbol in symbols:
-        if symbol.kind is ir.Kind.ENUM:
+        if symbol.kind is Kind.ENUM:
             out.line(f"e {symbol.enum} {symbol.name}")
         else:
             out.line(f"{symbol.kind.ic_code} {symbol.name}")

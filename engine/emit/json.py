@@ -26,8 +26,12 @@ SourceText = Callable[[Span], str]
 _OPERATOR_TEXT = {"enum==": "==", "enum!=": "!="}
 
 
-def render_expression(e: ir.Expression) -> str:
-    """A canonical XABSL rendering of an IR expression (fully parenthesised where needed)."""
+def render_expression(e: ir.Expression, option: str = "") -> str:
+    """A canonical XABSL rendering of an IR expression (fully parenthesised where needed).
+
+    ``option`` is the option that contains the expression: its parameters are written
+    ``@declared.name``, the option's prefix stripped (names keep their inner dots).
+    """
     match e:
         case ir.Number(value=value):
             return repr(value).removesuffix(".0") if value == int(value) else repr(value)
@@ -40,12 +44,12 @@ def render_expression(e: ir.Expression) -> str:
         case ir.InputRef(symbol=symbol, args=args):
             if not args:
                 return symbol
-            inner = ", ".join(f"{a.param.rsplit('.', 1)[-1]} = {render_expression(a.value)}" for a in args)
+            inner = ", ".join(f"{ir.short_name(a.param, symbol)} = {render_expression(a.value, option)}" for a in args)
             return f"{symbol}({inner})"
         case ir.OutputRef(symbol=symbol):
             return symbol
         case ir.ParameterRef(param=param):
-            return "@" + param.rsplit(".", 1)[-1]
+            return "@" + ir.short_name(param, option)
         case ir.StateTime():
             return "state_time"
         case ir.OptionTime():
@@ -55,29 +59,31 @@ def render_expression(e: ir.Expression) -> str:
         case ir.Conflict():
             return "conflict"
         case ir.Unary(op=op, operand=operand):
-            return f"{op}{_wrapped(operand)}"
+            return f"{op}{_wrapped(operand, option)}"
         case ir.Binary(op=op, left=left, right=right):
-            return f"{_wrapped(left)} {_OPERATOR_TEXT.get(op, op)} {_wrapped(right)}"
+            return f"{_wrapped(left, option)} {_OPERATOR_TEXT.get(op, op)} {_wrapped(right, option)}"
         case ir.Logical(op=op, operands=operands):
-            return f" {op} ".join(_wrapped(o) for o in operands)
+            return f" {op} ".join(_wrapped(o, option) for o in operands)
         case ir.Conditional(condition=c, then=t, otherwise=o):
-            return f"{_wrapped(c)} ? {_wrapped(t)} : {_wrapped(o)}"
+            return f"{_wrapped(c, option)} ? {_wrapped(t, option)} : {_wrapped(o, option)}"
     raise AssertionError(e)
 
 
-def _wrapped(e: ir.Expression) -> str:
-    text = render_expression(e)
+def _wrapped(e: ir.Expression, option: str) -> str:
+    text = render_expression(e, option)
     return f"({text})" if isinstance(e, ir.Binary | ir.Logical | ir.Conditional) else text
 
 
 class _Exporter:
     def __init__(self, source_text: SourceText | None) -> None:
         self.source_text = source_text
+        #: the option being exported (the owner of the ``@`` parameters its expressions read)
+        self.owner = ""
 
     def text(self, e: ir.Expression) -> str:
         if self.source_text is not None and e.span is not None:
             return self.source_text(e.span)
-        return render_expression(e)
+        return render_expression(e, self.owner)
 
     @staticmethod
     def span(span: Span | None) -> dict[str, Any] | None:
@@ -107,7 +113,7 @@ class _Exporter:
 
     def tree(self, t: ir.DecisionTree) -> dict[str, Any]:
         if isinstance(t, ir.Transition):
-            return {"goto": t.target, "stay": t.stay, "leaf": t.leaf, "span": self.span(t.span)}
+            return {"to": t.target, "stay": t.stay, "leaf": t.leaf, "span": self.span(t.span)}
         return {
             "if": t.text or self.text(t.condition),
             "doc": t.doc,
@@ -135,6 +141,7 @@ class _Exporter:
         return result
 
     def option(self, option: ir.Option) -> dict[str, Any]:
+        self.owner = option.name
         states = []
         for state in option.states:
             states.append(
@@ -250,3 +257,30 @@ class _Exporter:
 def program_to_json(program: ir.Program, source_text: SourceText | None = None) -> dict[str, Any]:
     """The JSON document of a program (plain dicts and lists, ready for orjson)."""
     return _Exporter(source_text).program(program)
+
+
+#: Nesting the standard library's encoder may need: a decision tree nests one object per level.
+_DEEP_RECURSION = 12_000
+
+
+def dumps(document: Any, *, indent: bool = True) -> bytes:
+    """``document`` as UTF-8 JSON, at any nesting depth.
+
+    orjson refuses documents nested deeper than 255 levels, which a long ``else if`` chain (one
+    object per level) reaches; those go through the standard library's encoder instead.
+    """
+    import orjson
+
+    try:
+        return orjson.dumps(document, option=orjson.OPT_INDENT_2 if indent else 0)
+    except orjson.JSONEncodeError:
+        import json
+        import sys
+
+        previous = sys.getrecursionlimit()
+        sys.setrecursionlimit(max(previous, _DEEP_RECURSION))
+        try:
+            text = json.dumps(document, indent=2 if indent else None, ensure_ascii=False, allow_nan=False)
+        finally:
+            sys.setrecursionlimit(previous)
+        return text.encode("utf-8")

@@ -14,8 +14,12 @@ The IC does not declare external things, so they are inferred from use:
   literals name the element. Enum-valued symbols, parameters and expressions that meet in an
   assignment, a comparison (``c``) or a conditional (``q``) share one enumeration (unification).
   External enum elements are listed in **order of first appearance in the IC**; the IC cannot
-  tell the declaration order, nor elements that are never mentioned. The enumeration of an
-  element literal is its qualified name up to the last dot.
+  tell the declaration order, nor elements that are never mentioned. Names may contain dots
+  (``v play.kind.kick.left`` is element ``kick.left`` of ``play.kind``), so, like the engine,
+  which reads an element in the enumeration its context expects, a literal belongs to the
+  enumeration its context names; only a literal whose context names none (an external enum
+  output assigned nothing but literals) is taken to belong to the longest enumeration named
+  elsewhere in the IC that prefixes it, else to its name up to the last dot.
 * **parameters** of input symbols and basic behaviors: the IC lists only the arguments a call
   assigns, so parameters are listed in order of first appearance.
 * **basic behaviors**: from ``a`` actions.
@@ -154,6 +158,10 @@ class _Facts:
     option_params: dict[str, dict[str, tuple[Kind, str | None]]] = field(default_factory=dict)
     elements: dict[str, list[str]] = field(default_factory=dict)
     unify: _UnionFind = field(default_factory=_UnionFind)
+    #: pass 1: every enum element literal as (token index, element), in IC order
+    literals: list[tuple[int, str]] = field(default_factory=list)
+    #: after pass 1: the enumeration of the element literal at each token index
+    literal_enums: dict[int, str] = field(default_factory=dict)
 
     def enum_of(self, key: str | None) -> str | None:
         if key is None:
@@ -242,7 +250,7 @@ class _Reader:
                 kind = self.kind_letter("parameter")
                 enum = self.next() if kind is Kind.ENUM else None
                 pname = self.next()
-                params.append(Parameter(pname, kind, enum))
+                params.append(Parameter(pname, kind, enum, owner=name))
                 declared[pname] = (kind, enum)
                 if enum is not None:
                     facts.unify.union(f"enum:{enum}", f"param:{pname}")
@@ -279,7 +287,7 @@ class _Reader:
         inputs: dict[str, InputSymbol] = {}
         for index, (name, kind) in enumerate(facts.inputs.items()):
             params = tuple(
-                Parameter(p, k, facts.enum_of(f"param:{p}") if k is Kind.ENUM else None)
+                Parameter(p, k, facts.enum_of(f"param:{p}") if k is Kind.ENUM else None, owner=name)
                 for p, k in facts.input_params.get(name, {}).items()
             )
             inputs[name] = InputSymbol(name, kind, self.enum_for(kind, f"in:{name}"), params, index=index)
@@ -298,7 +306,8 @@ class _Reader:
             name: BasicBehavior(
                 name,
                 tuple(
-                    Parameter(p, k, facts.enum_of(f"param:{p}") if k is Kind.ENUM else None) for p, k in params.items()
+                    Parameter(p, k, facts.enum_of(f"param:{p}") if k is Kind.ENUM else None, owner=name)
+                    for p, k in params.items()
                 ),
                 index=i,
             )
@@ -312,16 +321,18 @@ class _Reader:
             for name in list(all_enums):
                 if name in declared.enums and not all_enums[name].internal:
                     all_enums[name] = declared.enums[name]
-            for table, source in ((inputs, declared.inputs), (behaviors, declared.behaviors)):
-                for name in list(table):
-                    if name in source:
-                        table[name] = source[name]  # type: ignore[assignment]
-            for name, symbol in list(outputs.items()):
-                if name in declared.outputs and not symbol.internal:
+            for name in list(inputs):
+                if name in declared.inputs:
+                    inputs[name] = declared.inputs[name]
+            for name in list(behaviors):
+                if name in declared.behaviors:
+                    behaviors[name] = declared.behaviors[name]
+            for name, output in list(outputs.items()):
+                if name in declared.outputs and not output.internal:
                     outputs[name] = declared.outputs[name]
-            for symbol in [*inputs.values(), *outputs.values()]:
-                if symbol.enum is not None and symbol.enum not in all_enums and symbol.enum in declared.enums:
-                    all_enums[symbol.enum] = declared.enums[symbol.enum]
+            for symbol_enum in [s.enum for s in inputs.values()] + [s.enum for s in outputs.values()]:
+                if symbol_enum is not None and symbol_enum not in all_enums and symbol_enum in declared.enums:
+                    all_enums[symbol_enum] = declared.enums[symbol_enum]
         return Program(title, options, agents, all_enums, inputs, outputs, {}, behaviors)
 
     def enum_for(self, kind: Kind, key: str) -> str | None:
@@ -556,9 +567,14 @@ class _Reader:
         at = self.pos
         code = self.next()
         if code == "v":
+            at = self.pos
             element = self.next()
-            enum = self.element_enum(element)
-            return EnumLiteral(element, enum), f"enum:{enum}"
+            if not self.final:
+                # Which enumeration it belongs to is known once pass 1 has unified everything.
+                self.facts.literals.append((at, element))
+                return EnumLiteral(element, ""), f"lit:{at}"
+            element_enum = self.facts.literal_enums[at]
+            return EnumLiteral(element, element_enum), f"enum:{element_enum}"
         if code == "p":
             ref = self.param_ref(Kind.ENUM)
             return ref, f"param:{ref.param}"
@@ -575,17 +591,41 @@ class _Reader:
             return Conditional(condition, then, otherwise, Kind.ENUM, enum), tkey
         raise self.error("expected an enumerated expression", at)
 
-    def element_enum(self, element: str) -> str:
-        for enum, elements in self.facts.internal_enums.items():
-            if element in elements:
-                return enum
-        if "." not in element:
-            raise self.error("an enum element must be qualified (enum.element)", self.pos - 1)
-        enum = element.rsplit(".", 1)[0]
-        known = self.facts.elements.setdefault(enum, [])
-        if element not in known:
-            known.append(element)
-        return enum
+
+def _resolve_literals(tokens: list[_Token], facts: _Facts) -> None:
+    """Give every element literal its enumeration and list the external enums' elements.
+
+    The enumeration is the one the literal's context names (through unification); a literal
+    in a context that names none gets the longest enumeration named anywhere in the IC that
+    prefixes it, else its name up to the last dot (and its context then shares that one).
+    """
+    named = sorted((k[5:] for k in facts.unify.parent if k.startswith("enum:")), key=len, reverse=True)
+    for at, element in facts.literals:
+        key = f"lit:{at}"
+        enum = facts.enum_of(key)
+        if enum is None:
+            enum = next((e for e in named if element.startswith(e + ".")), None)
+            if enum is None:
+                if "." not in element:
+                    raise _token_error(tokens, at, "an enum element must be qualified (enum.element)")
+                enum = element.rsplit(".", 1)[0]
+            facts.unify.union(f"enum:{enum}", key)
+        internal = facts.internal_enums.get(enum)
+        if internal is not None:
+            if element not in internal:
+                raise _token_error(tokens, at, f"{element} is not an element of the internal enumeration {enum}")
+        elif not element.startswith(enum + ".") or len(element) == len(enum) + 1:
+            raise _token_error(tokens, at, f"{element} cannot be an element of enumeration {enum}")
+        else:
+            known = facts.elements.setdefault(enum, [])
+            if element not in known:
+                known.append(element)
+        facts.literal_enums[at] = enum
+
+
+def _token_error(tokens: list[_Token], at: int, message: str) -> ICError:
+    tok = tokens[at]
+    return ICError(message, tok.line, tok.col, tok.text)
 
 
 def _not(operand: Expression) -> Expression:
@@ -611,8 +651,9 @@ def read_ic(text: str, declarations: Program | None = None) -> Program:
     tokens, title = _tokenize(text)
     facts = _Facts()
     _Reader(tokens, facts, final=False).program(title)
+    _resolve_literals(tokens, facts)
     # Pass 2 sees the complete unification classes, so every expression gets its enumeration.
-    facts2 = _Facts(unify=facts.unify, elements=facts.elements)
+    facts2 = _Facts(unify=facts.unify, elements=facts.elements, literal_enums=facts.literal_enums)
     facts2.input_params = facts.input_params
     facts2.behaviors = facts.behaviors
     return _Reader(tokens, facts2, final=True, declarations=declarations).program(title)

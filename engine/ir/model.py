@@ -55,6 +55,8 @@ class Constant:
 
 @dataclass(frozen=True, slots=True)
 class BooleanLiteral:
+    """``true`` or ``false``."""
+
     value: bool
     span: Span | None = None
     kind: Kind = Kind.BOOLEAN
@@ -378,7 +380,12 @@ class Enumeration:
 
 @dataclass(frozen=True, slots=True)
 class Parameter:
-    """A parameter of an option, a basic behavior or an input symbol (qualified ``name``)."""
+    """A parameter of an option, a basic behavior or an input symbol (qualified ``name``).
+
+    ``owner`` is the name of the option, basic behavior or input symbol that declares it; the
+    qualified name is ``owner + "." + declared name``, and the declared name may itself contain
+    dots (``"locator.rel.x.robot.x"`` is parameter ``robot.x`` of ``locator.rel.x``).
+    """
 
     name: str
     kind: Kind
@@ -387,11 +394,23 @@ class Parameter:
     unit: str | None = None
     doc: str | None = None
     span: Span | None = None
+    owner: str = ""
 
     @property
     def short_name(self) -> str:
-        """The name without the owner prefix (``"walk_to.x"`` -> ``"x"``)."""
-        return self.name.rsplit(".", 1)[-1] if "." in self.name else self.name
+        """The declared name: ``name`` without the owner's prefix, dots kept.
+
+        ``"motion.walk.to.robot.x"`` of owner ``"motion.walk.to"`` -> ``"robot.x"``. Without an
+        owner (or with a name not under it) the whole name: never a guess at the last dot.
+        """
+        return short_name(self.name, self.owner)
+
+
+def short_name(name: str, owner: str) -> str:
+    """``name`` without the prefix ``owner + "."`` (the whole ``name`` if it has no such prefix)."""
+    if owner and name.startswith(owner) and name[len(owner) : len(owner) + 1] == ".":
+        return name[len(owner) + 1 :]
+    return name
 
 
 @dataclass(frozen=True, slots=True)
@@ -532,13 +551,16 @@ class Program:
 
     @property
     def internal_enums(self) -> list[Enumeration]:
+        """The internal enumerations (engine storage), in declaration order."""
         return [e for e in self.enums.values() if e.internal]
 
     @property
     def internal_symbols(self) -> list[OutputSymbol]:
+        """The internal symbols (engine storage), in declaration order."""
         return [s for s in self.outputs.values() if s.internal]
 
     def agent(self, name: str) -> Agent:
+        """The agent called ``name`` (KeyError if there is none)."""
         for agent in self.agents:
             if agent.name == name:
                 return agent

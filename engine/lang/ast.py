@@ -25,12 +25,16 @@ class Name:
 
 @dataclass(slots=True)
 class NumberLit:
+    """A decimal literal, with its text as written."""
+
     text: str
     span: Span
 
 
 @dataclass(slots=True)
 class BoolLit:
+    """``true`` or ``false``."""
+
     value: bool
     span: Span
 
@@ -45,6 +49,8 @@ class Ident:
 
 @dataclass(slots=True)
 class CallArg:
+    """One ``name = value`` of a call."""
+
     name: Name
     value: Expr
     span: Span
@@ -69,6 +75,8 @@ class Builtin:
 
 @dataclass(slots=True)
 class UnaryOp:
+    """``-x`` or ``!x``."""
+
     op: str
     operand: Expr
     span: Span
@@ -77,6 +85,8 @@ class UnaryOp:
 
 @dataclass(slots=True)
 class BinaryOp:
+    """``left op right`` for an arithmetic, comparison or logical operator."""
+
     op: str
     left: Expr
     right: Expr
@@ -86,6 +96,8 @@ class BinaryOp:
 
 @dataclass(slots=True)
 class CondOp:
+    """``condition ? then : otherwise``."""
+
     condition: Expr
     then: Expr
     otherwise: Expr
@@ -108,17 +120,23 @@ Expr: TypeAlias = NumberLit | BoolLit | Ident | Call | Builtin | UnaryOp | Binar
 
 @dataclass(slots=True)
 class Goto:
+    """``goto state;``."""
+
     target: Name
     span: Span
 
 
 @dataclass(slots=True)
 class Stay:
+    """``stay;``."""
+
     span: Span
 
 
 @dataclass(slots=True)
 class IfElse:
+    """``if (c) then else otherwise``; ``otherwise`` is None in a common decision branch."""
+
     condition: Expr
     then: DTree
     otherwise: DTree | None
@@ -134,6 +152,8 @@ DTree: TypeAlias = Goto | Stay | IfElse
 
 @dataclass(slots=True)
 class Assign:
+    """``symbol = value;``."""
+
     target: Name
     value: Expr
     span: Span
@@ -165,6 +185,8 @@ class TypeRef:
 
 @dataclass(slots=True)
 class ParamDecl:
+    """A parameter declaration of an option (``@name``), basic behavior or input symbol."""
+
     type: TypeRef
     name: Name
     range: str | None
@@ -177,6 +199,8 @@ class ParamDecl:
 
 @dataclass(slots=True)
 class ConstDecl:
+    """``[float] const name = [-]value [unit];``."""
+
     name: Name
     text: str
     negative: bool
@@ -187,6 +211,8 @@ class ConstDecl:
 
 @dataclass(slots=True)
 class EnumDecl:
+    """``enum name [internal] { elements };``."""
+
     name: Name
     internal: bool
     elements: list[Name]
@@ -196,6 +222,8 @@ class EnumDecl:
 
 @dataclass(slots=True)
 class SymbolDecl:
+    """An input, output or internal symbol declaration (input symbols may have parameters)."""
+
     type: TypeRef
     io: str
     name: Name
@@ -210,6 +238,8 @@ class SymbolDecl:
 
 @dataclass(slots=True)
 class BehaviorDecl:
+    """``behavior name { params }``: a basic behavior prototype."""
+
     name: Name
     params: list[ParamDecl]
     span: Span
@@ -221,6 +251,8 @@ NamespaceItem: TypeAlias = ConstDecl | EnumDecl | SymbolDecl | BehaviorDecl
 
 @dataclass(slots=True)
 class Namespace:
+    """``namespace name("title") { items }``."""
+
     name: Name
     title: str
     items: list[NamespaceItem]
@@ -238,6 +270,8 @@ class CommonDecision:
 
 @dataclass(slots=True)
 class StateDecl:
+    """One state of an option, as written."""
+
     name: Name
     initial: bool
     target: bool
@@ -253,6 +287,8 @@ class StateDecl:
 
 @dataclass(slots=True)
 class OptionDecl:
+    """``option name { params, common decision and action, states }``, as written."""
+
     name: Name
     params: list[ParamDecl]
     common_decision: CommonDecision | None
@@ -264,6 +300,8 @@ class OptionDecl:
 
 @dataclass(slots=True)
 class AgentDecl:
+    """``agent name("title", root_option);``."""
+
     name: Name
     title: str
     root: Name
@@ -273,6 +311,8 @@ class AgentDecl:
 
 @dataclass(slots=True)
 class Include:
+    """``include "path";``."""
+
     path: str
     span: Span
 

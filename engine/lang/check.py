@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from engine import ir
 from engine.lang import ast
@@ -22,7 +22,7 @@ from engine.lang.diagnostics import Diagnostics
 from engine.lang.symbols import OptionHeader, SymbolTable
 from engine.types import Kind, Span
 
-_BUILTINS: dict[str, type] = {
+_BUILTINS: dict[str, Callable[[Span | None], ir.Expression]] = {
     "state_time": ir.StateTime,
     "option_time": ir.OptionTime,
     "action_done": ir.ActionDone,
@@ -42,7 +42,7 @@ def _did_you_mean(name: str, candidates: Iterable[str]) -> str:
 def _describe(expr: ir.Expression) -> str:
     if expr.kind is Kind.ENUM:
         return f"enum '{expr.enum}'"
-    return expr.kind.value
+    return str(expr.kind.value)
 
 
 class OptionChecker:
@@ -86,6 +86,7 @@ class OptionChecker:
         raise AssertionError(f"unknown expression node {node!r}")
 
     def identifier(self, name: str, span: Span, enum: str | None) -> ir.Expression | None:
+        """Resolve a name: an enum element in enum context, else a constant, parameter or symbol."""
         if enum is not None:
             element = self.table.element(enum, name)
             if element is not None:
@@ -127,9 +128,11 @@ class OptionChecker:
         return matches[0]
 
     def is_enum_element(self, name: str) -> bool:
+        """Whether ``name`` is an element of some enumeration (short or qualified), for a hint."""
         return any(q.endswith("." + name) or q == name for q in self.table.elements)
 
     def option_parameter(self, name: str) -> ir.Parameter | None:
+        """This option's parameter named ``name`` (``@x`` or qualified), if any."""
         if name in self.header.params:
             return self.header.params[name]
         for param in self.header.params.values():
@@ -138,6 +141,7 @@ class OptionChecker:
         return None
 
     def note_use(self, expr: ir.Expression) -> None:
+        """Record the use of a constant or symbol for the unused-symbol lint."""
         match expr:
             case ir.Constant(name=name):
                 self.usage.add(("constant", name))
@@ -147,6 +151,7 @@ class OptionChecker:
                 self.usage.add(("output-read", name))
 
     def input_call(self, node: ast.Call) -> ir.Expression | None:
+        """Lower a call of a parameterized input symbol in an expression."""
         name = node.name.text
         symbol = self.table.inputs.get(name)
         if symbol is None:
@@ -175,6 +180,7 @@ class OptionChecker:
         call_span: Span,
         what: str,
     ) -> tuple[ir.Argument, ...] | None:
+        """Lower the arguments of a call; None (after reporting) if any is wrong."""
         by_short = {p.short_name: p for p in params}
         given: set[str] = set()
         lowered: list[ir.Argument] = []
@@ -210,6 +216,7 @@ class OptionChecker:
     def warn_missing(
         self, callee: str, params: tuple[ir.Parameter, ...], given: set[str], span: Span, what: str
     ) -> None:
+        """Warn about each parameter a call leaves out (it gets 0, false or enum value 0)."""
         for param in params:
             if param.short_name not in given:
                 default = {Kind.DECIMAL: "0", Kind.BOOLEAN: "false", Kind.ENUM: "the enum value 0"}[param.kind]
@@ -220,6 +227,7 @@ class OptionChecker:
                 )
 
     def same_type(self, value: ir.Expression, kind: Kind, enum: str | None, span: Span, what: str) -> bool:
+        """Whether ``value`` has type ``kind`` (and enumeration ``enum``); reports a mismatch."""
         if value.kind is not kind:
             expected = f"enum '{enum}'" if kind is Kind.ENUM else kind.value
             self.diagnostics.add(
@@ -236,6 +244,7 @@ class OptionChecker:
         return True
 
     def expect(self, value: ir.Expression, kind: Kind, op: str, span: Span) -> bool:
+        """Whether an operand of ``op`` has the type ``kind``; reports a mismatch."""
         if value.kind is kind:
             return True
         shown = f" '{self.source(value.span)}'" if value.span is not None else ""
@@ -247,6 +256,7 @@ class OptionChecker:
         return False
 
     def unary(self, node: ast.UnaryOp) -> ir.Expression | None:
+        """Lower ``-x`` (a literal folds) or ``!x``."""
         operand = self.expression(node.operand)
         if operand is None:
             return None
@@ -262,6 +272,7 @@ class OptionChecker:
         return ir.Unary("!", operand, Kind.BOOLEAN, node.span)
 
     def binary(self, node: ast.BinaryOp) -> ir.Expression | None:
+        """Lower arithmetic and (enum) comparisons; ``&&``/``||`` go to :meth:`logical`."""
         op = node.op
         if op in ("&&", "||"):
             return self.logical(node)
@@ -302,6 +313,7 @@ class OptionChecker:
         return ir.Binary(op, left, right, kind, node.span)
 
     def logical(self, node: ast.BinaryOp) -> ir.Expression | None:
+        """Lower ``&&``/``||`` into one n-ary node, flattening chains of the same operator."""
         operands: list[ir.Expression] = []
         ok = True
         for side in (node.left, node.right):
@@ -322,6 +334,7 @@ class OptionChecker:
         return ir.Logical(node.op, tuple(operands), node.span)
 
     def conditional(self, node: ast.CondOp, enum: str | None) -> ir.Expression | None:
+        """Lower ``c ? a : b``; ``enum`` is the enumeration an enum context expects."""
         condition = self.expression(node.condition)
         then = self.expression(node.then, enum)
         if then is None or condition is None:
@@ -346,6 +359,7 @@ class OptionChecker:
         return ir.Conditional(condition, then, otherwise, then.kind, then.enum, node.span)
 
     def condition(self, node: ast.Expr) -> ir.Expression | None:
+        """Lower a condition: an expression that must be boolean."""
         value = self.expression(node)
         if value is None:
             return None
@@ -355,16 +369,19 @@ class OptionChecker:
         return value
 
     def source(self, span: Span) -> str:
+        """The source text of ``span`` in this option's file, whitespace runs collapsed."""
         return " ".join(self.text[span.start : span.end].split())
 
     # ================================================================== actions
 
     def action(self, node: ast.ActionStmt) -> ir.Action | None:
+        """Lower one action: an assignment or a call."""
         if isinstance(node, ast.Assign):
             return self.assignment(node)
         return self.call(node)
 
     def assignment(self, node: ast.Assign) -> ir.Action | None:
+        """Lower ``symbol = value;`` to an output or internal symbol."""
         name = node.target.text
         symbol = self.table.outputs.get(name)
         if symbol is None:
@@ -387,6 +404,7 @@ class OptionChecker:
         return ir.Assignment(name, symbol.kind, symbol.enum, value, node.span)
 
     def call(self, node: ast.CallAction) -> ir.Action | None:
+        """Lower a call of a subsequent option or basic behavior."""
         name = node.name.text
         option = self.table.options.get(name) if node.explicit in (None, "option") else None
         behavior = self.table.behaviors.get(name) if node.explicit in (None, "behavior") else None
@@ -421,6 +439,7 @@ class OptionChecker:
         return None
 
     def actions(self, nodes: list[ast.ActionStmt]) -> list[ir.Action]:
+        """Lower a list of actions, dropping those with errors."""
         lowered = [self.action(n) for n in nodes]
         return [a for a in lowered if a is not None]
 
@@ -459,6 +478,7 @@ class OptionChecker:
     # ================================================================== the option
 
     def build(self, index: int) -> ir.Option:
+        """The option's IR; ``index`` is its position in the IC."""
         decl = self.header.decl
         states = decl.states
         self.check_states(decl)
@@ -487,9 +507,17 @@ class OptionChecker:
                 else ir.Transition(None, True, -1, state.name.span)
             )
             decision = own
-            for branch in reversed(common):
-                decision = ir.If(branch.condition, branch.tree, decision, branch.text, branch.doc, None, branch.span)
-            decision = _number_leaves(_resolve_stay(decision, state.name.text))
+            for common_branch in reversed(common):
+                decision = ir.If(
+                    common_branch.condition,
+                    common_branch.tree,
+                    decision,
+                    common_branch.text,
+                    common_branch.doc,
+                    None,
+                    common_branch.span,
+                )
+            decision = _finish_tree(decision, state.name.text)
             actions = tuple(common_action) + tuple(self.actions(state.actions))
             built.append(
                 ir.State(
@@ -521,6 +549,7 @@ class OptionChecker:
         )
 
     def check_states(self, decl: ast.OptionDecl) -> None:
+        """Report duplicate states and a missing or repeated initial state."""
         seen: dict[str, Span] = {}
         initials = [s for s in decl.states if s.initial]
         for state in decl.states:
@@ -545,6 +574,7 @@ class OptionChecker:
             )
 
     def check_leading_else(self, decl: ast.OptionDecl, state: ast.StateDecl) -> None:
+        """Check a decision's leading ``else`` against the option's common decision tree."""
         if state.decision is None or state.decision_span is None:
             return
         has_common = decl.common_decision is not None and bool(decl.common_decision.branches)
@@ -563,29 +593,21 @@ class OptionChecker:
             )
 
 
-def _resolve_stay(tree: ir.DecisionTree, state: str) -> ir.DecisionTree:
-    """``stay`` (target None) becomes ``state``; nodes are rebuilt directly (no ``replace``)."""
-    if isinstance(tree, ir.Transition):
-        target = state if tree.target is None else tree.target
-        return ir.Transition(target, target == state, tree.leaf, tree.span)
-    return ir.If(
-        tree.condition,
-        _resolve_stay(tree.then, state),
-        _resolve_stay(tree.otherwise, state),
-        tree.text,
-        tree.doc,
-        tree.else_doc,
-        tree.span,
-    )
+def _finish_tree(tree: ir.DecisionTree, state: str) -> ir.DecisionTree:
+    """The state's final decision tree, rebuilt once (nodes are frozen, so no ``replace``).
 
-
-def _number_leaves(tree: ir.DecisionTree) -> ir.DecisionTree:
-    """Number the leaves in pre-order (then-branch first), from 0."""
-    counter = iter(range(1 << 30))
+    ``stay`` (target None) becomes ``state``, and the leaves are numbered in pre-order
+    (then-branch first) from 0.
+    """
+    counter = 0
 
     def visit(node: ir.DecisionTree) -> ir.DecisionTree:
+        nonlocal counter
         if isinstance(node, ir.Transition):
-            return ir.Transition(node.target, node.stay, next(counter), node.span)
+            target = state if node.target is None else node.target
+            leaf = counter
+            counter += 1
+            return ir.Transition(target, target == state, leaf, node.span)
         then = visit(node.then)
         return ir.If(node.condition, then, visit(node.otherwise), node.text, node.doc, node.else_doc, node.span)
 

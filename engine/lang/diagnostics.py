@@ -17,6 +17,8 @@ from engine.types import Span
 
 
 class Severity(enum.Enum):
+    """How bad a diagnostic is: an error prevents output, a warning does not."""
+
     ERROR = "error"
     WARNING = "warning"
 
@@ -90,6 +92,7 @@ class Diagnostic:
 
     @property
     def is_error(self) -> bool:
+        """Whether this is an error."""
         return self.severity is Severity.ERROR
 
     @property
@@ -104,6 +107,7 @@ class Diagnostic:
         return f"{where}:{line}:{col}: {self.severity.value}: {self.message} [{self.code}]"
 
     def as_dict(self) -> dict[str, object]:
+        """The diagnostic as plain JSON data (``--format json``, the studio)."""
         return {
             "severity": self.severity.value,
             "code": self.code,
@@ -129,6 +133,7 @@ class Diagnostics:
         file: str | None = None,
         related: tuple[tuple[str, Span], ...] = (),
     ) -> Diagnostic:
+        """Report a diagnostic; its severity follows from ``code``."""
         assert code in CODES, f"unknown diagnostic code {code!r}"
         severity = CODES[code][0]
         where = file if file is not None else (span.file if span else "")
@@ -144,10 +149,12 @@ class Diagnostics:
 
     @property
     def errors(self) -> list[Diagnostic]:
+        """The errors reported so far."""
         return [d for d in self.items if d.is_error]
 
     @property
     def warnings(self) -> list[Diagnostic]:
+        """The warnings reported so far."""
         return [d for d in self.items if not d.is_error]
 
     def sorted(self) -> list[Diagnostic]:

@@ -19,6 +19,7 @@ def option_calls(option: ir.Option) -> list[ir.OptionCall]:
 
 
 def check_cycles(options: dict[str, ir.Option], diagnostics: Diagnostics) -> None:
+    """Report options that can reach themselves through subsequent-option calls."""
     white, grey, black = 0, 1, 2
     color = dict.fromkeys(options, white)
     reported: set[frozenset[str]] = set()
@@ -54,6 +55,7 @@ def check_cycles(options: dict[str, ir.Option], diagnostics: Diagnostics) -> Non
 
 
 def check_reachability(program: ir.Program, diagnostics: Diagnostics) -> None:
+    """Warn about options no agent reaches and states no transition enters."""
     if program.agents:
         reached: set[str] = set()
         stack = [a.root for a in program.agents if a.root in program.options]
@@ -93,17 +95,14 @@ def check_reachability(program: ir.Program, diagnostics: Diagnostics) -> None:
 
 
 def check_unused(program: ir.Program, usage: set[tuple[str, str]], diagnostics: Diagnostics) -> None:
+    """Warn about declared symbols, enumerations and basic behaviors that nothing uses."""
     if not program.agents:
         return
     used_enums = {e for klass, e in usage if klass == "enum"}
-    for symbol in [*program.inputs.values(), *program.outputs.values()]:
-        if symbol.enum:
-            used_enums.add(symbol.enum)
-    for collection in (program.inputs, program.outputs):
-        for symbol in collection.values():
-            for param in getattr(symbol, "params", ()):
-                if param.enum:
-                    used_enums.add(param.enum)
+    used_enums.update(s.enum for s in program.inputs.values() if s.enum)
+    used_enums.update(s.enum for s in program.outputs.values() if s.enum)
+    for symbol in program.inputs.values():  # only input symbols have parameters
+        used_enums.update(p.enum for p in symbol.params if p.enum)
     for option in program.options.values():
         used_enums.update(p.enum for p in option.params if p.enum)
     for behavior in program.behaviors.values():

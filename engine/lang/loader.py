@@ -30,6 +30,7 @@ class LoadedProgram:
 
 
 def display_path(real: str, base: str) -> str:
+    """How diagnostics name the file ``real``: relative to ``base`` when below it."""
     relative = os.path.relpath(real, base)
     return real if relative.startswith("..") else relative
 
@@ -53,6 +54,24 @@ def load(
     overrides = {os.path.realpath(k): v for k, v in (overrides or {}).items()}
     files: list[ast.SourceFile] = []
     seen: set[str] = set()
+    real_folders: dict[str, str] = {}
+
+    def resolve(folder: str, relative: str) -> str:
+        """``os.path.realpath(folder/relative)``, each folder resolved once.
+
+        ``realpath`` checks every component of a path for a symlink; a set includes hundreds
+        of files from a few folders, so the folder part is resolved once and only the file
+        name itself is checked (a symlinked file is resolved in full, as before).
+        """
+        joined = os.path.join(folder, relative)
+        head, tail = os.path.split(joined)
+        if tail in ("", ".", ".."):
+            return os.path.realpath(joined)
+        real_head = real_folders.get(head)
+        if real_head is None:
+            real_head = real_folders[head] = os.path.realpath(head)
+        candidate = os.path.join(real_head, tail)
+        return os.path.realpath(candidate) if os.path.islink(candidate) else candidate
 
     def read(real: str) -> str | None:
         if real in overrides:
@@ -77,7 +96,7 @@ def load(
                     "missing-include-file", "unable to open file: the name contains a NUL byte", include.span
                 )
                 continue
-            target = os.path.realpath(os.path.join(os.path.dirname(real), include.path))
+            target = resolve(os.path.dirname(real), include.path)
             if target in included_here:
                 diagnostics.add("include-twice", f"'{include.path}' is included twice from this file", include.span)
                 continue

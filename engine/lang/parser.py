@@ -35,10 +35,28 @@ BINARY_LEVELS: tuple[tuple[str, ...], ...] = (
 )
 #: Levels whose operators are non-associative (``a < b < c`` is a syntax error).
 NONASSOC_LEVELS = frozenset({2})
+#: The level of each binary operator.
+_LEVEL_OF = {op: level for level, operators in enumerate(BINARY_LEVELS) for op in operators}
 BUILTINS = frozenset({"state_time", "option_time", "action_done", "conflict"})
 TYPE_KEYWORDS = frozenset({"float", "bool", "enum"})
 IO_KEYWORDS = frozenset({"input", "output", "internal"})
 STATE_START = frozenset({"initial", "target", "state"})
+
+
+#: How deep decision trees (``if``/``else`` and braces, also of the common decision) may nest.
+#: Deeper input fails at once with ``nesting-too-deep`` instead of recursing to Python's limit.
+MAX_DECISION_DEPTH = 1000
+#: How deep expressions (parentheses, unary operators, call arguments, ``?:``) may nest.
+MAX_EXPRESSION_DEPTH = 1000
+
+
+class _TooDeepError(CompileError):
+    """Nesting beyond a limit: the rest of the file is not parsed (like a RecursionError)."""
+
+    def __init__(self, token: Token, message: str) -> None:
+        super().__init__(message)
+        self.token = token
+        self.message = message
 
 
 class _SyntaxError(CompileError):
@@ -56,6 +74,9 @@ def parse_file(path: str, text: str, diagnostics: Diagnostics) -> ast.SourceFile
     parser = _Parser(path, text, tokens, diagnostics, truncated)
     try:
         return parser.parse()
+    except _TooDeepError as deep:
+        diagnostics.add("nesting-too-deep", deep.message, deep.token.span, path)
+        return ast.SourceFile(path, text)
     except RecursionError:
         token = parser.tok
         diagnostics.add(
@@ -72,6 +93,11 @@ class _Parser:
         self.diagnostics = diagnostics
         self.truncated = truncated
         self.pos = 0
+        #: the current token, ``tokens[pos]`` (kept by advance and seek: the parser reads it most)
+        self.tok = tokens[0]
+        #: current nesting of decision trees and of expressions (see the MAX_* limits)
+        self.decision_depth = 0
+        self.expression_depth = 0
 
     @functools.cached_property
     def depth(self) -> list[int]:
@@ -83,25 +109,39 @@ class _Parser:
         depth = 0
         for token in self.tokens:
             depths.append(depth)
-            if token.is_op("{"):
+            if token.text == "{":
                 depth += 1
-            elif token.is_op("}"):
+            elif token.text == "}":
                 depth = max(0, depth - 1)
         return depths
 
     # ---------------------------------------------------------------- token helpers
 
-    @property
-    def tok(self) -> Token:
-        return self.tokens[self.pos]
+    # Operator tests compare the text only (`tok.text == ";"`): no other kind of token can have
+    # an operator's text (strings keep their quotes, ranges their brackets, comments their
+    # markers, and words and numbers start with a letter, `_`, `@` or a digit).
+
+    def at(self, kind: TokenType) -> bool:
+        """Whether the current token is of ``kind``.
+
+        Unlike reading ``self.tok.type`` twice, a call is no narrowing that a type checker
+        carries over an ``advance()`` in between.
+        """
+        return self.tok.type is kind
+
+    def seek(self, pos: int) -> None:
+        """Go back (or forth) to the token at ``pos``."""
+        self.pos = pos
+        self.tok = self.tokens[pos]
 
     def peek(self, offset: int = 1) -> Token:
         return self.tokens[min(self.pos + offset, len(self.tokens) - 1)]
 
     def advance(self) -> Token:
-        token = self.tokens[self.pos]
-        if token.type is not TokenType.EOF:
+        token = self.tok
+        if token.type is not TokenType.EOF:  # the list ends with EOF: pos + 1 exists
             self.pos += 1
+            self.tok = self.tokens[self.pos]
         return token
 
     def error(self, expected: str, token: Token | None = None) -> _SyntaxError:
@@ -182,7 +222,7 @@ class _Parser:
             elif self.tok.is_kw("namespace"):
                 source.namespace = self.parse_namespace(doc)
             elif self.tok.is_kw("agent"):
-                self.pos = doc_start
+                self.seek(doc_start)
                 self.parse_agents(source)
             elif self.tok.type is not TokenType.EOF:
                 raise self.error("'include', 'option', 'namespace' or 'agent'")
@@ -210,11 +250,11 @@ class _Parser:
             except _SyntaxError as error:
                 self.report(error)
                 self.advance()
-                while self.tok.type is not TokenType.EOF and not self.tok.is_kw("agent"):
+                while not self.at(TokenType.EOF) and not self.tok.is_kw("agent"):
                     self.advance()
                 # a doc comment right before the resumed agent belongs to it
                 if self.pos > 0 and self.tokens[self.pos - 1].type is TokenType.DOC_COMMENT:
-                    self.pos -= 1
+                    self.seek(self.pos - 1)
 
     # ---------------------------------------------------------------- namespaces
 
@@ -227,7 +267,7 @@ class _Parser:
         self.expect_op("{")
         body = self.pos
         items: list[ast.NamespaceItem] = []
-        while not self.tok.is_op("}"):
+        while self.tok.text != "}":
             if self.tok.type is TokenType.EOF:
                 raise self.error("'}'")
             try:
@@ -244,11 +284,11 @@ class _Parser:
         while self.tok.type is not TokenType.EOF:
             previous = self.tokens[self.pos - 1]
             at_depth = self.depth[self.pos] == depth
-            if at_depth and (previous.is_op(";") or previous.is_op("}")):
-                if self.tok.is_op(";"):  # the ';' after an enum's '}'
+            if at_depth and (previous.text == ";" or previous.text == "}"):
+                if self.tok.text == ";":  # the ';' after an enum's '}'
                     self.advance()
                 return
-            if at_depth and self.tok.is_op("}"):
+            if at_depth and self.tok.text == "}":
                 return
             if self.depth[self.pos] < depth:
                 return
@@ -263,7 +303,7 @@ class _Parser:
             name = self.expect_ident("the basic behavior's name")
             self.expect_op("{")
             params = []
-            while not self.tok.is_op("}"):
+            while self.tok.text != "}":
                 params.append(self.parse_param_decl())
             self.advance()
             return ast.BehaviorDecl(name, params, self.span_from(start), doc)
@@ -274,20 +314,20 @@ class _Parser:
             name = self.expect_ident("the constant's name")
             self.expect_op("=")
             negative = False
-            if self.tok.is_op("-"):
+            if self.tok.text == "-":
                 self.advance()
                 negative = True
             if self.tok.type is not TokenType.NUMBER:
                 raise self.error("a number")
             text = self.advance().text
-            unit = self.expect_string() if self.tok.type is TokenType.STRING else None
+            unit = self.expect_string() if self.at(TokenType.STRING) else None
             self.expect_op(";")
             return ast.ConstDecl(name, text, negative, unit, self.span_from(start), doc)
         if token.is_kw("enum") and self.peek().type is TokenType.IDENTIFIER:
             # `enum E { .. };` and `enum E internal { .. };` declare enumerations, while
             # `enum E internal name;` declares an internal symbol of type E
             after = self.peek(2)
-            if after.is_op("{") or (after.is_kw("internal") and self.peek(3).is_op("{")):
+            if after.text == "{" or (after.is_kw("internal") and self.peek(3).is_op("{")):
                 return self.parse_enum_decl(doc, start)
             if after.type is TokenType.KEYWORD and after.text in ("input", "output") and self.peek(3).is_op("{"):
                 raise _SyntaxError(
@@ -304,7 +344,7 @@ class _Parser:
             internal = True
         self.expect_op("{")
         elements = [self.expect_ident("an enum element")]
-        while self.tok.is_op(","):
+        while self.tok.text == ",":
             self.advance()
             elements.append(self.expect_ident("an enum element"))
         self.expect_op("}")
@@ -330,10 +370,10 @@ class _Parser:
         name = self.expect_ident("the symbol's name")
         range_, range_span, unit, unit_span = self.parse_range_unit()
         params = None
-        if self.tok.is_op("("):
+        if self.tok.text == "(":
             self.advance()
             params = []
-            while not self.tok.is_op(")"):
+            while self.tok.text != ")":
                 params.append(self.parse_param_decl())
             self.advance()
         self.expect_op(";")
@@ -391,7 +431,7 @@ class _Parser:
         except _SyntaxError as error:
             self.report(error)
             self.recover_to_state(self.depth[body])
-        while not self.tok.is_op("}"):
+        while self.tok.text != "}":
             if self.tok.type is TokenType.EOF:
                 raise self.error("'}' closing the option")
             try:
@@ -409,7 +449,7 @@ class _Parser:
             token = self.tok
             if token.type is TokenType.KEYWORD and token.text in STATE_START:
                 return
-            if token.is_op("}") and self.depth[self.pos] == depth:
+            if token.text == "}" and self.depth[self.pos] == depth:
                 return
             self.advance()
 
@@ -417,13 +457,34 @@ class _Parser:
         start = self.advance().span
         self.advance()  # 'decision'
         branches: list[ast.IfElse] = []
-        if self.tok.is_op("{") or self.tok.is_kw("if") or self.tok.type is TokenType.DOC_COMMENT:
+        if self.tok.text == "{":
+            # the braces of `common decision { }` are no nesting level (as `decision { }`'s)
+            self.advance()
+            self.parse_cdtree(branches)
+            self.expect_op("}")
+        elif self.tok.is_kw("if") or self.tok.type is TokenType.DOC_COMMENT:
             self.parse_cdtree(branches)
         return ast.CommonDecision(branches, self.span_from(start))
 
     def parse_cdtree(self, branches: list[ast.IfElse]) -> None:
         """``cdtree ::= '{' cdtree '}' | [DOC] if (exp) dtree [[DOC] else cdtree]``."""
-        if self.tok.is_op("{"):
+        self.enter_decision()
+        try:
+            self.parse_cdtree_level(branches)
+        finally:
+            self.decision_depth -= 1
+
+    def enter_decision(self) -> None:
+        self.decision_depth += 1
+        if self.decision_depth > MAX_DECISION_DEPTH:
+            raise _TooDeepError(
+                self.tok,
+                f"decision trees nest deeper than {MAX_DECISION_DEPTH} levels here; "
+                "split the decision with a sub-option or flatten it with && and ||",
+            )
+
+    def parse_cdtree_level(self, branches: list[ast.IfElse]) -> None:
+        if self.tok.text == "{":
             self.advance()
             self.parse_cdtree(branches)
             self.expect_op("}")
@@ -443,11 +504,20 @@ class _Parser:
             branch.else_doc = else_doc
             self.parse_cdtree(branches)
         else:
-            self.pos = mark
+            self.seek(mark)
 
     def parse_dtree(self) -> ast.DTree:
         token = self.tok
-        if token.is_op("{"):
+        if token.is_kw("goto") or token.is_kw("stay"):
+            return self.parse_dtree_level(token)
+        self.enter_decision()
+        try:
+            return self.parse_dtree_level(token)
+        finally:
+            self.decision_depth -= 1
+
+    def parse_dtree_level(self, token: Token) -> ast.DTree:
+        if token.text == "{":
             self.advance()
             tree = self.parse_dtree()
             self.expect_op("}")
@@ -512,7 +582,7 @@ class _Parser:
                 if isinstance(decision, ast.IfElse) and decision.doc is None:
                     decision.doc = doc
             else:
-                self.pos = mark
+                self.seek(mark)
                 decision = self.parse_dtree()
             self.expect_op("}")
         self.expect_kw("action")
@@ -535,14 +605,14 @@ class _Parser:
     def parse_action_block(self) -> list[ast.ActionStmt]:
         self.expect_op("{")
         actions: list[ast.ActionStmt] = []
-        while not self.tok.is_op("}"):
+        while self.tok.text != "}":
             actions.append(self.parse_action())
         self.advance()
         return actions
 
     def parse_action(self) -> ast.ActionStmt:
         name = self.expect_ident("an output symbol, option or basic behavior")
-        if self.tok.is_op("="):
+        if self.tok.text == "=":
             self.advance()
             value = self.parse_expression()
             self.expect_op(";")
@@ -550,7 +620,7 @@ class _Parser:
         explicit = None
         if self.tok.is_kw("option") or self.tok.is_kw("behavior"):
             explicit = self.advance().text
-        if not self.tok.is_op("("):
+        if self.tok.text != "(":
             raise self.error("'=' or '('")
         args = self.parse_call_args()
         self.expect_op(";")
@@ -559,13 +629,13 @@ class _Parser:
     def parse_call_args(self) -> list[ast.CallArg]:
         self.expect_op("(")
         args: list[ast.CallArg] = []
-        if not self.tok.is_op(")"):
+        if self.tok.text != ")":
             while True:
                 name = self.expect_ident("a parameter name")
                 self.expect_op("=")
                 value = self.parse_expression()
                 args.append(ast.CallArg(name, value, self.span_from(name.span)))
-                if not self.tok.is_op(","):
+                if self.tok.text != ",":
                     break
                 self.advance()
         self.expect_op(")")
@@ -575,35 +645,71 @@ class _Parser:
 
     def parse_expression(self) -> ast.Expr:
         """``?:`` is non-associative: its else-branch may not itself be an unparenthesised ``?:``."""
+        self.enter_expression()
+        try:
+            return self.parse_conditional()
+        finally:
+            self.expression_depth -= 1
+
+    def enter_expression(self) -> None:
+        self.expression_depth += 1
+        if self.expression_depth > MAX_EXPRESSION_DEPTH:
+            raise _TooDeepError(
+                self.tok,
+                f"expressions nest deeper than {MAX_EXPRESSION_DEPTH} levels here "
+                "(parentheses, unary operators, calls)",
+            )
+
+    def parse_conditional(self) -> ast.Expr:
         condition = self.parse_binary(0)
-        if not self.tok.is_op("?"):
+        if self.tok.text != "?":
             return condition
         op = self.advance()
         then = self.parse_expression()
         self.expect_op(":")
         otherwise = self.parse_binary(0)
-        if self.tok.is_op("?"):
+        if self.tok.text == "?":
             raise self.error("an operator or ')' (nested ?: needs parentheses)")
         return ast.CondOp(condition, then, otherwise, _expr_span(condition).to(_expr_span(otherwise)), op.span)
 
     def parse_binary(self, level: int) -> ast.Expr:
-        if level == len(BINARY_LEVELS):
-            return self.parse_unary()
-        operators = BINARY_LEVELS[level]
-        left = self.parse_binary(level + 1)
-        while self.tok.type is TokenType.OPERATOR and self.tok.text in operators:
-            op = self.advance()
-            right = self.parse_binary(level + 1)
-            left = ast.BinaryOp(op.text, left, right, _expr_span(left).to(_expr_span(right)), op.span)
-            if level in NONASSOC_LEVELS and self.tok.type is TokenType.OPERATOR and self.tok.text in operators:
+        """Binary operators of ``level`` and tighter, left-associative (precedence climbing).
+
+        The same trees and errors as one recursive-descent function per level of
+        :data:`BINARY_LEVELS`, without its six calls per operand (the parser's hottest path).
+        """
+        return self.climb(self.parse_unary(), level)
+
+    def climb(self, left: ast.Expr, min_level: int) -> ast.Expr:
+        """Extend ``left`` with the operators of ``min_level`` and tighter that follow it."""
+        while True:
+            token = self.tok
+            if token.type is not TokenType.OPERATOR:
+                return left
+            level = _LEVEL_OF.get(token.text)
+            if level is None or level < min_level:
+                return left
+            self.advance()
+            # the right operand takes every operator that binds tighter than this one
+            right = self.climb(self.parse_unary(), level + 1)
+            left = ast.BinaryOp(token.text, left, right, _expr_span(left).to(_expr_span(right)), token.span)
+            following = self.tok
+            if (
+                level in NONASSOC_LEVELS
+                and following.type is TokenType.OPERATOR
+                and _LEVEL_OF.get(following.text) == level
+            ):
                 raise self.error("an operator of another kind (comparisons do not chain)")
-        return left
 
     def parse_unary(self) -> ast.Expr:
         token = self.tok
-        if token.is_op("-") or token.is_op("!"):
+        if token.text == "-" or token.text == "!":
             self.advance()
-            operand = self.parse_unary()
+            self.enter_expression()
+            try:
+                operand = self.parse_unary()
+            finally:
+                self.expression_depth -= 1
             return ast.UnaryOp(token.text, operand, token.span.to(_expr_span(operand)), token.span)
         return self.parse_primary()
 
@@ -620,11 +726,11 @@ class _Parser:
             return ast.Builtin(token.text, token.span)
         if token.type is TokenType.IDENTIFIER:
             self.advance()
-            if self.tok.is_op("("):
+            if self.tok.text == "(":
                 args = self.parse_call_args()
                 return ast.Call(ast.Name(token.text, token.span), args, self.span_from(token.span))
             return ast.Ident(token.text, token.span)
-        if token.is_op("("):
+        if token.text == "(":
             self.advance()
             inner = self.parse_expression()
             self.expect_op(")")

@@ -39,6 +39,8 @@ class OptionHeader:
 
 @dataclass
 class SymbolTable:
+    """The global symbol table: every declaration of the include closure, by name."""
+
     enums: dict[str, ir.Enumeration] = field(default_factory=dict)
     #: qualified element name -> enumeration name
     elements: dict[str, str] = field(default_factory=dict)
@@ -76,6 +78,7 @@ class Declarations:
         self.table = SymbolTable()
 
     def run(self) -> SymbolTable:
+        """Run both declaration passes over all files; returns the filled table."""
         for source in self.files:
             if source.namespace:
                 for item in source.namespace.items:
@@ -108,6 +111,7 @@ class Declarations:
         return True
 
     def check_enum_type(self, type_: ast.TypeRef) -> str | None:
+        """The enumeration an enum type names (reported if unknown); None for other types."""
         if type_.kind != "enum":
             return None
         assert type_.enum is not None
@@ -116,6 +120,7 @@ class Declarations:
         return type_.enum.text
 
     def check_range_unit(self, kind: Kind, what: str, range_span: Span | None, unit_span: Span | None) -> None:
+        """Warn about a range or unit on a boolean or enum symbol or parameter (ignored)."""
         # The original prints X2537 for these but does not count it (§1.7): a warning here.
         if kind is Kind.DECIMAL:
             return
@@ -128,6 +133,7 @@ class Declarations:
                 )
 
     def parameters(self, owner: str, decls: list[ast.ParamDecl], what: str) -> tuple[ir.Parameter, ...]:
+        """The qualified parameters of ``owner``: ``owner`` + ``.`` + the declared name in full."""
         params: list[ir.Parameter] = []
         seen: dict[str, Span] = {}
         for decl in decls:
@@ -154,6 +160,7 @@ class Declarations:
                     decl.unit if kind is Kind.DECIMAL else None,
                     decl.doc,
                     decl.name.span,
+                    owner,
                 )
             )
         return tuple(params)
@@ -161,6 +168,7 @@ class Declarations:
     # ------------------------------------------------------------------ pass 1
 
     def declare_enum(self, decl: ast.EnumDecl, namespace: str) -> None:
+        """Pass 1: declare an enumeration and its qualified elements."""
         if not self.key(decl.name, "enum"):
             return
         elements = []
@@ -180,6 +188,7 @@ class Declarations:
     # ------------------------------------------------------------------ pass 2
 
     def declare_namespace(self, source: ast.SourceFile) -> None:
+        """Pass 2: declare a namespace's symbols, constants or basic behaviors."""
         namespace = source.namespace
         assert namespace is not None
         name = namespace.name.text
@@ -214,6 +223,7 @@ class Declarations:
                 )
 
     def declare_symbol(self, decl: ast.SymbolDecl, namespace: str) -> None:
+        """Pass 2: declare an input, output or internal symbol."""
         kind = _kind(decl.type)
         enum = self.check_enum_type(decl.type)
         klass = "input" if decl.io == "input" else "output"
@@ -257,6 +267,7 @@ class Declarations:
             )
 
     def declare_option(self, source: ast.SourceFile) -> None:
+        """Pass 2: declare an option's name and parameters, for calls from other files."""
         decl = source.option
         assert decl is not None
         stem = os.path.splitext(os.path.basename(source.path))[0]

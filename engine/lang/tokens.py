@@ -26,6 +26,8 @@ from engine.types import Span
 
 
 class TokenType(enum.Enum):
+    """The kinds of token (``value`` is how messages name them)."""
+
     IDENTIFIER = "identifier"
     KEYWORD = "keyword"
     NUMBER = "number"
@@ -88,9 +90,11 @@ class Token(NamedTuple):
     span: Span
 
     def is_op(self, text: str) -> bool:
+        """Whether this is the operator ``text``."""
         return self.type is TokenType.OPERATOR and self.text == text
 
     def is_kw(self, text: str) -> bool:
+        """Whether this is the keyword ``text``."""
         return self.type is TokenType.KEYWORD and self.text == text
 
     def describe(self) -> str:
@@ -113,46 +117,31 @@ def decode_source(data: bytes) -> str:
         return data.decode("latin-1")
 
 
-class _Positions:
-    """Offsets -> (line, column), for offsets visited in increasing order.
-
-    Tokens come in source order, so the line is tracked incrementally: the newlines between the
-    last offset and the next one are counted with ``str.count`` (C speed) instead of searching a
-    line table per token; this was the tokenizer's largest cost on 200 KB behavior sets.
-    """
-
-    __slots__ = ("line", "line_start", "offset", "text")
-
-    def __init__(self, text: str) -> None:
-        self.text = text
-        self.line = 1
-        self.line_start = 0
-        self.offset = 0
-
-    def position(self, offset: int) -> tuple[int, int]:
-        if offset < self.offset:  # rare: restart (only an error span could look back)
-            self.line, self.line_start, self.offset = 1, 0, 0
-        newlines = self.text.count("\n", self.offset, offset)
-        if newlines:
-            self.line += newlines
-            self.line_start = self.text.rfind("\n", self.offset, offset) + 1
-        self.offset = offset
-        return self.line, offset - self.line_start + 1
+def _span_at(text: str, file: str, start: int, end: int) -> Span:
+    """The span of ``text[start:end]``, lines counted from the beginning (for the rare tokens)."""
+    line = text.count("\n", 0, start) + 1
+    col = start - (text.rfind("\n", 0, start) + 1) + 1
+    newlines = text.count("\n", start, end)
+    if not newlines:
+        return Span(file, line, col, line, col + end - start, start, end)
+    return Span(file, line, col, line + newlines, end - text.rfind("\n", start, end), start, end)
 
 
-#: One pattern for every token start; ``lastgroup`` names the rule that matched. The order is
-#: the tokenizer's priority: a ``//`` comment only counts with its newline (else ``/`` is an
-#: operator), ``/*`` opens a comment before ``/`` is an operator, two-character operators win.
+#: One pattern for every token start; ``lastgroup`` names the rule that matched. Semantically the
+#: order is the tokenizer's priority: a ``//`` comment only counts with its newline (else ``/`` is
+#: an operator), ``/*`` opens a comment before ``/`` is an operator, two-character operators win;
+#: rules that cannot start alike are ordered by frequency (blanks and words first).
 _TOKEN = re.compile(
     r"""(?P<space>[ \t\r\n\f\v]+)
+      | (?P<word>[A-Za-z_][A-Za-z0-9_.\-]*)
+      | (?P<range>\[[^\]]*\])
+      | (?P<operator><=|>=|==|!=|&&|\|\||[%!<>\[\]{}();|+\-*=,?:])
+      | (?P<number>[0-9]+(?:\.[0-9]*)?)
+      | (?P<parameter>@[A-Za-z_][A-Za-z0-9_.]*)
+      | (?P<string>"[^"]*")
       | (?P<line_comment>//[^\n]*\n)
       | (?P<block_comment>/\*)
-      | (?P<word>[A-Za-z_][A-Za-z0-9_.\-]*)
-      | (?P<parameter>@[A-Za-z_][A-Za-z0-9_.]*)
-      | (?P<number>[0-9]+(?:\.[0-9]*)?)
-      | (?P<string>"[^"]*")
-      | (?P<range>\[[^\]]*\])
-      | (?P<operator><=|>=|==|!=|&&|\|\||[%!<>\[\]{}();|+\-*/=,?:])""",
+      | (?P<slash>/)""",
     re.VERBOSE,
 )
 _KIND = {
@@ -161,7 +150,10 @@ _KIND = {
     "string": TokenType.STRING,
     "range": TokenType.RANGE,
     "operator": TokenType.OPERATOR,
+    "slash": TokenType.OPERATOR,
 }
+#: Rules whose text may span lines (the others never contain a newline).
+_MULTILINE = frozenset({"string", "range"})
 
 
 def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
@@ -169,66 +161,102 @@ def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
 
     An illegal character is reported and skipped; an unterminated comment is reported at its
     start and ends the token stream. The list always ends with an EOF token.
+
+    This is the front end's hottest loop (one pass per token of a 200-file set): the current
+    line and its start are tracked from the newlines of blanks, comments and multi-line tokens,
+    so a one-line token's span is plain arithmetic, and tokens and spans are built with
+    ``tuple.__new__`` (what their NamedTuple constructors call, without the extra call).
     """
-    positions = _Positions(text)
     tokens: list[Token] = []
     append = tokens.append
     match_token = _TOKEN.match
+    new = tuple.__new__
+    count = text.count
+    keywords = KEYWORDS
+    keyword, identifier = TokenType.KEYWORD, TokenType.IDENTIFIER
     pos = 0
     length = len(text)
-
-    def span(start: int, end: int) -> Span:
-        line, col = positions.position(start)
-        if text.find("\n", start, end) < 0:  # most tokens: the end is on the same line
-            return Span(file, line, col, line, col + end - start, start, end)
-        end_line = line + text.count("\n", start, end)
-        end_col = end - text.rfind("\n", start, end)
-        return Span(file, line, col, end_line, end_col, start, end)
+    line = 1
+    line_start = 0  # offset of the first character of `line`
 
     while pos < length:
         match = match_token(text, pos)
         if match is None:
             end = pos + 1
-            diagnostics.add("illegal-character", f"illegal character {text[pos]!r} encountered", span(pos, end))
+            diagnostics.add(
+                "illegal-character", f"illegal character {text[pos]!r} encountered", _span_at(text, file, pos, end)
+            )
             pos = end
             continue
         rule = match.lastgroup
         end = match.end()
-        if rule == "space" or rule == "line_comment":
+        if rule == "space":
+            newlines = count("\n", pos, end)
+            if newlines:
+                line += newlines
+                line_start = text.rfind("\n", pos, end) + 1
             pos = end
             continue
         if rule == "word":
             word = match.group()
-            if word in KEYWORDS:
-                append(Token(TokenType.KEYWORD, word, span(pos, end)))
+            if word in keywords:
+                kind = keyword
             else:
+                kind = identifier
                 # keyword-run rule: a run that is no keyword lexes as the identifier before any '-'
                 dash = word.find("-")
                 if dash >= 0:
                     word, end = word[:dash], pos + dash
-                append(Token(TokenType.IDENTIFIER, word, span(pos, end)))
+            col = pos - line_start + 1
+            append(new(Token, (kind, word, new(Span, (file, line, col, line, col + end - pos, pos, end)))))
+            pos = end
+            continue
+        if rule == "line_comment":
+            line += 1
+            line_start = end
             pos = end
             continue
         if rule == "block_comment":
             if text.startswith("/***", pos):
-                kind, body = TokenType.INITIAL_COMMENT, pos + 4
+                comment, body = TokenType.INITIAL_COMMENT, pos + 4
             elif text.startswith("/**", pos):
-                kind, body = TokenType.DOC_COMMENT, pos + 3
+                comment, body = TokenType.DOC_COMMENT, pos + 3
             else:
-                kind, body = None, pos + 2
+                comment, body = None, pos + 2
             close = text.find("*/", body)
             if close < 0:
-                diagnostics.add("unterminated-comment", "end-of-comment missing: '*/' never comes", span(pos, pos + 2))
+                diagnostics.add(
+                    "unterminated-comment",
+                    "end-of-comment missing: '*/' never comes",
+                    _span_at(text, file, pos, pos + 2),
+                )
                 pos = length
                 break
-            if kind is not None:
-                append(Token(kind, text[pos : close + 2], span(pos, close + 2)))
-            pos = close + 2
+            end = close + 2
+        elif rule not in _MULTILINE:  # a one-line token
+            assert rule is not None
+            col = pos - line_start + 1
+            span = new(Span, (file, line, col, line, col + end - pos, pos, end))
+            append(new(Token, (_KIND[rule], match.group(), span)))
+            pos = end
             continue
-        assert rule is not None
-        append(Token(_KIND[rule], match.group(), span(pos, end)))
+        else:
+            comment = _KIND[rule]
+        # a token that may span lines: a comment, a string or a range
+        col = pos - line_start + 1
+        newlines = count("\n", pos, end)
+        if newlines:
+            end_line = line + newlines
+            end_start = text.rfind("\n", pos, end) + 1
+            span = Span(file, line, col, end_line, end - end_start + 1, pos, end)
+            line, line_start = end_line, end_start
+        else:
+            span = Span(file, line, col, line, col + end - pos, pos, end)
+        if comment is not None:
+            append(Token(comment, text[pos:end], span))
         pos = end
-    tokens.append(Token(TokenType.EOF, "", span(min(pos, length), min(pos, length))))
+    at = min(pos, length)
+    tokens.append(Token(TokenType.EOF, "", _span_at(text, file, at, at)))
     return tokens
 
 

@@ -34,7 +34,8 @@ import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from engine.planning.strips import Fact, PlanningError
+from engine.errors import PlanningError
+from engine.planning.strips import Fact
 
 #: Float slack for "held for d seconds" on a tick grid (0.3 s = 15 ticks of 20 ms, give or take).
 _EPS = 1e-9

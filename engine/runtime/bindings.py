@@ -30,7 +30,7 @@ from functools import partial
 from operator import attrgetter
 from typing import Any, ClassVar
 
-from engine.ir.model import Parameter
+from engine.ir.model import Parameter, short_name
 from engine.types import Kind, Ms, Value
 
 __all__ = ["BasicBehavior", "Bindings", "InputBinding", "OutputBinding"]
@@ -44,10 +44,10 @@ def _parameters(owner: str, params: Iterable[Parameter | tuple[str, Kind]]) -> t
     result = []
     for p in params:
         if isinstance(p, Parameter):
-            result.append(Parameter(_qualify(owner, p.name), p.kind, p.enum))
+            result.append(Parameter(_qualify(owner, p.name), p.kind, p.enum, owner=owner))
         else:
             name, kind = p
-            result.append(Parameter(_qualify(owner, name), kind))
+            result.append(Parameter(_qualify(owner, name), kind, owner=owner))
     return tuple(result)
 
 
@@ -127,7 +127,8 @@ class BasicBehavior:
         self._names = tuple(p.name for p in params)
         for i, p in enumerate(params):
             self._index[p.name] = i
-            self._index.setdefault(p.short_name, i)
+            # the declared name: only the behavior's prefix goes ("walk.to.robot.x" -> "robot.x")
+            self._index.setdefault(short_name(p.name, self.name), i)
 
     def param(self, name: str) -> Value:
         """The current value of parameter ``name`` (qualified or short)."""

@@ -20,7 +20,7 @@ from collections.abc import Mapping
 from types import MappingProxyType
 
 from engine.errors import DebugError
-from engine.ir.model import Agent, Parameter
+from engine.ir.model import Agent, Parameter, short_name
 from engine.runtime.activation import Root
 from engine.runtime.checks import Policy, check_root
 from engine.runtime.storage import LoadedProgram, RootAction
@@ -230,7 +230,8 @@ class RootActions:
         """``given`` (qualified or short names) converted: qualified name -> engine value."""
         loaded = self._require()
         by_name = {p.name: p for p in declared}
-        by_name.update((p.short_name, p) for p in declared if p.short_name not in by_name)
+        # the declared name: only the owner's prefix goes (dots kept: "robot.x" of "walk.to")
+        by_name.update((short, p) for p in declared if (short := short_name(p.name, owner)) not in by_name)
         values: dict[str, Value] = {}
         for key, value in given.items():
             param = by_name.get(key)

@@ -62,6 +62,7 @@ class Box:
     h: float
 
     def corners(self) -> list[tuple[float, float]]:
+        """The rectangle's four corners (mm), counter-clockwise from the lower left."""
         hw, hh = self.w / 2.0, self.h / 2.0
         return [
             (self.x - hw, self.y - hh),
@@ -242,11 +243,13 @@ class Arena:
         return p.x, p.y, self.robot.angle
 
     def gripper_point(self) -> tuple[float, float]:
+        """Where the gripper closes, in the arena's frame (mm)."""
         x, y, h = self.pose()
         off = self.geom.gripper_offset
         return x + off * math.cos(h), y + off * math.sin(h)
 
     def distance_to_beacon(self, name: str) -> float:
+        """Distance from the robot's centre to beacon ``name`` (mm)."""
         x, y, _ = self.pose()
         bx, by = self.beacons[name]
         return math.hypot(bx - x, by - y)
@@ -348,6 +351,7 @@ class Arena:
     # -- scenes ----------------------------------------------------------------------------------
 
     def static_scene(self) -> dict[str, object]:
+        """Walls, obstacles and beacons in the scene vocabulary of ``engine.host.Scene``."""
         return {
             "size": [self.layout.size, self.layout.size],
             "walls": [[list(a), list(b)] for a, b in self.walls],
@@ -362,4 +366,5 @@ class Arena:
         }
 
     def object_scene(self) -> dict[str, list[object]]:
+        """The book, the mug and the robot as they are now, in the scene vocabulary."""
         return {n: [round(it.x, 4), round(it.y, 4), it.held, it.present] for n, it in self.items.items()}

@@ -50,6 +50,7 @@ class PlanFromFacts(BasicBehavior):
         self.world = world
 
     def execute(self) -> None:
+        """Plan from the derived facts on the first tick of the activation only."""
         if self.time_of_execution == 0:
             self.world.plan_from_facts(REASONS[int(self.param("reason"))])
 
@@ -64,6 +65,7 @@ class CompleteOperator(BasicBehavior):
         self.world = world
 
     def execute(self) -> None:
+        """Tell the plan board that the monitor's operator is done."""
         self.world.complete_operator()
 
 

@@ -114,6 +114,7 @@ class Truth:
         self._last: tuple[tuple[str, ...], frozenset[Fact]] = ((), frozenset())
 
     def __call__(self) -> frozenset[Fact]:
+        """The facts that hold now, derived from the activation history."""
         arena = self.arena
         if arena.item_version != self._version:
             self._version = arena.item_version
@@ -173,6 +174,7 @@ class Agreement:
         return self.equal_outside_lag / self.outside_lag if self.outside_lag else 1.0
 
     def to_json(self) -> Mapping[str, object]:
+        """The event as plain JSON data (the studio's facts panel and recordings)."""
         return {
             "fraction": round(self.fraction, 5),
             "fraction_outside_lag": round(self.fraction_outside_lag, 5),

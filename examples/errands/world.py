@@ -356,6 +356,7 @@ class ErrandsWorld:
 
     @property
     def agents(self) -> tuple[ErrandsAgent, ...]:
+        """The one robot of the arena."""
         return self._agents
 
     @property
@@ -740,6 +741,7 @@ class ErrandsWorld:
         }
 
     def status(self) -> Scene:
+        """Plan progress, the delivered goals and the time, for the studio's top bar."""
         return {
             "time_ms": round(self.t * 1000),
             "finished": self.finished,

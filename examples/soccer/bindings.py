@@ -261,46 +261,55 @@ class SoccerSymbols:
                 self.pass_available, self.pass_x, self.pass_y = True, x, y
 
     def get_striker_known(self) -> bool:
+        """Whether a teammate announced itself striker this tick."""
         if self._team_at != self.wm.time_ms:
             self._team()
         return self.striker_known
 
     def get_striker_x(self) -> float:
+        """The announced striker's x (mm, field frame)."""
         if self._team_at != self.wm.time_ms:
             self._team()
         return self.striker_x
 
     def get_striker_y(self) -> float:
+        """The announced striker's y (mm, field frame)."""
         if self._team_at != self.wm.time_ms:
             self._team()
         return self.striker_y
 
     def get_team_ball_known(self) -> bool:
+        """Whether some teammate saw the ball recently."""
         if self._team_at != self.wm.time_ms:
             self._team()
         return self.team_ball_known
 
     def get_team_ball_x(self) -> float:
+        """The team's freshest ball estimate, x (mm, field frame)."""
         if self._team_at != self.wm.time_ms:
             self._team()
         return self.team_ball_x
 
     def get_team_ball_y(self) -> float:
+        """The team's freshest ball estimate, y (mm, field frame)."""
         if self._team_at != self.wm.time_ms:
             self._team()
         return self.team_ball_y
 
     def get_pass_available(self) -> bool:
+        """Whether a teammate stands free to receive a pass."""
         if self._pass_at != self.wm.time_ms:
             self._pass()
         return self.pass_available
 
     def get_pass_x(self) -> float:
+        """The pass target's x (mm, field frame)."""
         if self._pass_at != self.wm.time_ms:
             self._pass()
         return self.pass_x
 
     def get_pass_y(self) -> float:
+        """The pass target's y (mm, field frame)."""
         if self._pass_at != self.wm.time_ms:
             self._pass()
         return self.pass_y
@@ -415,6 +424,7 @@ class ActivationRecorder:
         self.hash = hashlib.blake2b(digest_size=16)
 
     def record(self) -> None:
+        """Count this tick's activations for the match report."""
         engine = self._engine
         active = engine.ran_options()
         self._active += active
@@ -476,6 +486,7 @@ class XabslController:
         return self.engine.fault
 
     def execute(self, now_ms: int) -> None:
+        """Copy the world model into the engine's inputs, tick the engine, send the team message."""
         wm, out = self.wm, self._out
         out["x"] = wm.x
         out["y"] = wm.y

@@ -43,10 +43,12 @@ class FieldDimensions:
 
     @property
     def half_length(self) -> float:
+        """Half the field's length (mm)."""
         return self.length / 2.0
 
     @property
     def half_width(self) -> float:
+        """Half the field's width (mm)."""
         return self.width / 2.0
 
     @property
@@ -56,10 +58,12 @@ class FieldDimensions:
 
     @property
     def wall_x(self) -> float:
+        """x of the walls behind the goals (mm)."""
         return self.half_length + self.border
 
     @property
     def wall_y(self) -> float:
+        """y of the side walls (mm)."""
         return self.half_width + self.border
 
     def posts(self) -> list[tuple[float, float]]:

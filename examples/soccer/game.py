@@ -131,14 +131,17 @@ class GameController:
 
     @property
     def may_move(self) -> bool:
+        """Whether robots may walk in the current game state."""
         return self.state in (_READY, _PLAYING)
 
     @property
     def may_kick(self) -> bool:
+        """Whether robots may kick in the current game state."""
         return self.state == _PLAYING
 
     @property
     def finished(self) -> bool:
+        """Whether the match is over."""
         return self.state == _FINISHED
 
     @property
@@ -148,6 +151,7 @@ class GameController:
 
     @property
     def half_time_left_ms(self) -> int:
+        """Milliseconds left in the current half."""
         return round(max(0, self._half_ns - self.play_ns) / 1e6)
 
     # ---------------------------------------------------------------------------- progress

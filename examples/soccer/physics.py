@@ -174,6 +174,7 @@ class SoccerPhysics:
         self.space.reindex_shapes_for_body(body)
 
     def robot_pose(self, index: int) -> tuple[float, float, float]:
+        """Robot ``index``'s pose: x, y (mm) and heading (rad)."""
         body = self.robots[index]
         x, y = body.position
         return x, y, body.angle
@@ -190,6 +191,7 @@ class SoccerPhysics:
         return p.x, p.y
 
     def robot_velocity(self, index: int) -> tuple[float, float, float]:
+        """Robot ``index``'s velocity: vx, vy (mm/s) and turn rate (rad/s)."""
         body = self.robots[index]
         vx, vy = body.velocity
         return vx, vy, body.angular_velocity
@@ -204,10 +206,12 @@ class SoccerPhysics:
         self.space.reindex_shapes_for_body(self.ball)
 
     def ball_position(self) -> tuple[float, float]:
+        """The ball's position (mm)."""
         p = _cp.cpBodyGetPosition(self._ball_ptr)
         return p.x, p.y
 
     def ball_velocity(self) -> tuple[float, float]:
+        """The ball's velocity (mm/s)."""
         v = _cp.cpBodyGetVelocity(self._ball_ptr)
         return v.x, v.y
 

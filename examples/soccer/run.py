@@ -145,6 +145,7 @@ class MatchStats:
         self._last_kick: list[int | None] = [a.robot.last_kick_ms for a in world.agents]
 
     def on_tick(self, now_ms: int) -> None:
+        """Collect the tick's statistics (possession, shots, passes)."""
         world = self.world
         game = world.game
         if game.state != GameState.PLAYING:
@@ -192,6 +193,7 @@ class MatchStats:
                 return
 
     def finish(self) -> None:
+        """Close the statistics at the end of the match."""
         score = self.world.game.score
         for team, stats in enumerate(self.teams):
             stats.goals = score[team]
@@ -212,6 +214,7 @@ class MatchReport:
     faults: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
+        """The statistics as JSON data (``xabsl run --json``)."""
         possession = [t.possession_ticks for t in self.teams]
         total = sum(possession) or 1
         return {

@@ -36,6 +36,7 @@ class ChaseBallController:
         self.motion = motion
 
     def execute(self, now_ms: int) -> None:
+        """Walk to the ball and kick it towards the opponent goal."""
         wm, motion = self.wm, self.motion
         state = wm.game_state
         if state == GameState.READY:

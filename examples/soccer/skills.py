@@ -63,6 +63,7 @@ class Stand(SoccerSkill):
     name: ClassVar[str] = "stand"
 
     def execute(self) -> None:
+        """Request no motion this tick."""
         self.motion.mode = _STAND
 
 
@@ -73,6 +74,7 @@ class Walk(SoccerSkill):
     parameters: ClassVar = (("vx", Kind.DECIMAL), ("vy", Kind.DECIMAL), ("rot", Kind.DECIMAL))
 
     def execute(self) -> None:
+        """Request the robot-frame velocity (the legs clamp it to their limits)."""
         v, b, m = self.parameter_values, self.parameter_offset, self.motion
         m.mode = _WALK
         m.vx, m.vy, m.vrot = v[b], v[b + 1], v[b + 2]
@@ -85,6 +87,7 @@ class Turn(SoccerSkill):
     parameters: ClassVar = (("rate", Kind.DECIMAL),)
 
     def execute(self) -> None:
+        """Request a turn on the spot at ``rate``."""
         m = self.motion
         m.mode = _WALK
         m.vx = m.vy = 0.0
@@ -102,6 +105,7 @@ class WalkTo(SoccerSkill):
     parameters: ClassVar = (("x", Kind.DECIMAL), ("y", Kind.DECIMAL), ("rot", Kind.DECIMAL))
 
     def execute(self) -> None:
+        """Request a walk to the field pose, converted from the team frame."""
         v, b, m = self.parameter_values, self.parameter_offset, self.motion
         m.mode = _WALK_TO
         m.target_x, m.target_y, m.target_rot = v[b], v[b + 1], v[b + 2]
@@ -119,6 +123,7 @@ class GoToBall(SoccerSkill):
     parameters: ClassVar = (("distance", Kind.DECIMAL), ("direction", Kind.DECIMAL))
 
     def execute(self) -> None:
+        """Request a walk to the point ``distance`` behind the ball, facing ``direction``."""
         v, b, m, wm = self.parameter_values, self.parameter_offset, self.motion, self.wm
         distance, direction = v[b], v[b + 1]
         a = direction * RAD_PER_DEG
@@ -139,6 +144,7 @@ class Dribble(SoccerSkill):
     parameters: ClassVar = (("direction", Kind.DECIMAL),)
 
     def execute(self) -> None:
+        """Request a walk into the ball, steering towards ``direction``."""
         wm, m = self.wm, self.motion
         turn = normalize_deg(self.parameter_values[self.parameter_offset] - wm.rotation)
         off_centre = wm.ball_rel_y
@@ -161,6 +167,7 @@ class Kick(SoccerSkill):
     parameters: ClassVar = (("direction", Kind.DECIMAL), ("strength", Kind.DECIMAL))
 
     def execute(self) -> None:
+        """Request a kick towards ``direction`` and creep to the point behind the ball."""
         v, b, m, wm = self.parameter_values, self.parameter_offset, self.motion, self.wm
         direction = v[b]
         m.kick_strength = v[b + 1]

@@ -156,14 +156,17 @@ class SoccerWorld:
 
     @property
     def agents(self) -> Sequence[SoccerAgent]:
+        """Every robot of both teams, blue first."""
         return self._agents
 
     @property
     def finished(self) -> bool:
+        """Whether the game controller ended the match."""
         return self.game.finished
 
     @property
     def time_ms(self) -> int:
+        """Simulated time since kick-off (ms)."""
         return self.game.time_ms
 
     def step(self, dt: float) -> None:

@@ -81,3 +81,20 @@ def test_unwritable_output_is_exit_2(tmp_path: Path, capsys: pytest.CaptureFixtu
 
 def test_demo_example_compiles_cleanly(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["compile", str(DEMO), "--werror"]) == 0
+
+
+def test_a_deep_decision_tree_writes_its_json(tmp_path: Path) -> None:
+    # orjson refuses documents nested deeper than 255 levels ("Recursion limit reached"): a
+    # 400-level else-if chain, well within the language's limit, crashed --json with a traceback.
+    levels = 400
+    chain = "if (state_time > 1) stay; else " * levels + "stay;"
+    (tmp_path / "o.xabsl").write_text(f"option o {{ initial state s {{ decision {{ {chain} }} action {{ }} }} }}\n")
+    source = tmp_path / "agents.xabsl"
+    source.write_text('include "o.xabsl";\nagent a("A", o);\n')
+    doc = tmp_path / "out.json"
+    assert main(["compile", str(source), "--json", str(doc)]) == 0
+    tree = json.loads(doc.read_text())["options"][0]["states"][0]["decision"]
+    depth = 0
+    while "if" in tree:
+        tree, depth = tree["else"], depth + 1
+    assert depth == levels and tree["stay"] is True

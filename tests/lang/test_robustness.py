@@ -98,3 +98,56 @@ def test_nesting_beyond_any_limit_is_a_diagnostic(compile_sources: Callable[...,
     compilation = compile_sources({"o.xabsl": option_with_decision("(" * depth + "true" + ")" * depth)})
     (error,) = compilation.errors
     assert error.code == "nesting-too-deep" and error.file == "o.xabsl"
+
+
+def _chain_option(levels: int, common: bool = False) -> str:
+    # one `if` per line, so that a diagnostic's line tells at which level the parser stopped
+    chain = "if (state_time > 1) stay;\nelse " * levels + "stay;"
+    if common:
+        branches = "if (state_time > 1) goto s;\nelse " * (levels - 1) + "if (state_time > 1) goto s;"
+        return f"option o {{\ncommon decision {{\n{branches}\n}}\ninitial state s {{ action {{ }} }} }}\n"
+    return f"option o {{ initial state s {{ decision {{\n{chain}\n}} action {{ }} }} }}\n"
+
+
+def test_decision_trees_nest_up_to_the_limit(compile_sources: Callable[..., Compilation]) -> None:
+    from engine.lang.parser import MAX_DECISION_DEPTH
+
+    compilation = compile_sources(
+        {"agents.xabsl": 'include "o.xabsl";\nagent a("A", o);\n', "o.xabsl": _chain_option(MAX_DECISION_DEPTH)}
+    )
+    assert compilation.program is not None
+
+
+def test_a_13000_deep_else_if_chain_fails_fast_at_the_limit(compile_sources: Callable[..., Compilation]) -> None:
+    # Issue 18: the parser recursed to the recursion limit (~12,000 levels, 1.3 s of CPU) before
+    # "nesting too deep"; it must stop at the limit's first level too many, and say only that.
+    from engine.lang.parser import MAX_DECISION_DEPTH
+
+    compilation = compile_sources({"o.xabsl": _chain_option(13_000)})
+    (error,) = compilation.diagnostics
+    assert error.code == "nesting-too-deep" and error.file == "o.xabsl"
+    assert error.span is not None and error.span.line == MAX_DECISION_DEPTH + 2
+    assert f"{MAX_DECISION_DEPTH}" in error.message
+
+
+def test_a_deep_common_decision_chain_fails_at_the_limit(compile_sources: Callable[..., Compilation]) -> None:
+    from engine.lang.parser import MAX_DECISION_DEPTH
+
+    (error,) = compile_sources({"o.xabsl": _chain_option(5_000, common=True)}).diagnostics
+    assert error.code == "nesting-too-deep"
+    assert error.span is not None and error.span.line == MAX_DECISION_DEPTH + 3
+
+
+def test_expressions_nest_up_to_the_limit_and_not_beyond(compile_sources: Callable[..., Compilation]) -> None:
+    from engine.lang.parser import MAX_EXPRESSION_DEPTH
+
+    agents = {"agents.xabsl": 'include "o.xabsl";\nagent a("A", o);\n'}
+    # the condition itself is one level: MAX - 1 parentheses and unary operators around `true`
+    inner = MAX_EXPRESSION_DEPTH - 1
+    for condition in ("(" * inner + "true" + ")" * inner, "!" * (inner - 1) + "(true)"):
+        compilation = compile_sources({**agents, "o.xabsl": option_with_decision(condition)})
+        assert compilation.program is not None, condition[:20]
+    for condition in ("(" * (inner + 1) + "true" + ")" * (inner + 1), "!" * (inner + 1) + "true"):
+        (error,) = compile_sources({"o.xabsl": option_with_decision(condition)}).diagnostics
+        assert error.code == "nesting-too-deep"
+        assert error.span is not None and error.span.col == option_with_decision("").index("(") + 3 + inner

@@ -40,7 +40,7 @@ export type Action =
   | { type: "assign"; symbol: string; value: string; span: Span | null };
 
 export interface Leaf {
-  goto: string | null;
+  to: string | null;
   stay: boolean;
   leaf: number;
   span: Span | null;

@@ -18,7 +18,7 @@ export function transitionsOf(option: Option): TransitionInfo[] {
   for (const state of option.states) {
     const walk = (tree: DecisionTree, path: string[]): void => {
       if (isLeaf(tree)) {
-        const to = tree.goto === null ? undefined : byName.get(tree.goto);
+        const to = tree.to === null ? undefined : byName.get(tree.to);
         if (!tree.stay && to !== undefined && to !== state.id) out.push({ from: state.id, to, leaf: tree.leaf, condition: path.length ? path.join(" && ") : "always" });
         return;
       }

@@ -3,7 +3,7 @@ import type { Option } from "../src/description";
 import type { Tick } from "../src/protocol";
 import { lastTransitionBefore, transitionsOf } from "../src/transitions";
 
-const leaf = (n: number, goto: string | null, stay = false) => ({ goto, stay, leaf: n, span: null });
+const leaf = (n: number, to: string | null, stay = false) => ({ to, stay, leaf: n, span: null });
 const option = {
   id: 3,
   name: "o",
