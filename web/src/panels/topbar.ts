@@ -67,8 +67,8 @@ export class TopBar {
       "header.topbar",
       {},
       h("span.brand", {}, "xabsl", h("b", {}, "studio")),
-      h("label.inline", {}, "Robot ", this.robotPicker),
-      h("label.inline", {}, "Agent ", this.agentPicker),
+      h("label.inline", {}, h("span.label-text", {}, "Robot "), this.robotPicker),
+      h("label.inline", {}, h("span.label-text", {}, "Agent "), this.agentPicker),
       h(
         "div.group",
         { role: "group", "aria-label": "Simulation" },
