@@ -49,8 +49,11 @@ $(STAMP): pyproject.toml | check-python
 run: $(STAMP) system-deps web
 	$(BIN)/xabsl serve examples/soccer
 
+# ruff (lint, docstrings of public names, formatting) and mypy (strict on engine/ and server/).
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
 
 test: $(STAMP) test-deps lint web web-test
 	$(BIN)/python -m pytest

@@ -317,6 +317,16 @@ async def websocket(ws: WebSocket) -> None:
     await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
 
 
+@router.websocket("/lsp")
+async def language_server(ws: WebSocket) -> None:
+    """The XABSL language server for the editor (docs/editors.md): LSP, one message per text frame."""
+    from lsp.bridge import serve_connection  # pygls is imported only when an editor connects
+
+    studio: Studio = ws.app.state.studio
+    await ws.accept()
+    await serve_connection(ws.receive_text, ws.send_text, studio.session.example.root)
+
+
 # -- session --------------------------------------------------------------------------------------
 
 
@@ -464,6 +474,86 @@ async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = 
     async with studio.write_lock:
         await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
         return await studio.after_write([path], None, 200, deleted=path)
+
+
+class TestForce(BaseModel):
+    """What the tester forced: an option or basic behavior and its parameters (enums by element name)."""
+
+    kind: str = Field(pattern="^(option|behavior)$")
+    name: str = Field(min_length=1, max_length=200)
+    params: dict[str, JsonValue] = Field(default_factory=dict)
+
+
+class TestDraftBody(BaseModel):
+    """Save as test: the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
+
+    name: str = Field(min_length=1, max_length=120)
+    robot: str = Field(min_length=1, max_length=120)
+    force: TestForce | None = None
+    overrides: dict[str, JsonValue] = Field(default_factory=dict)
+    active: list[tuple[str, str]] = Field(default_factory=list, max_length=500)
+    behaviors: list[str] = Field(default_factory=list, max_length=500)
+    duration: float = Field(5.0, gt=0, le=3600)
+    save: bool = False
+
+
+@router.post("/api/tests/draft", tags=["files"], responses=_errors(400, 409, 422))
+async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
+    """A behavior test file reproducing the tester's situation (text; with ``save``, also written).
+
+    The setup comes from the world's latest scene when the world plug-in can turn a scene into a
+    setup (``setup_from_scene``); the file goes to the example folder's ``tests/`` (409 if it exists).
+    """
+    from engine.files import write_atomically
+    from examples.testing.save import DraftError, draft_file_name, draft_test
+    from server.examples import world_names
+
+    session = studio.session
+    plugin = session.example
+    latest = session.ring.latest
+    scene = orjson.loads(latest.scene) if latest is not None else {}
+    status = orjson.loads(latest.status) if latest is not None else {}
+    gen = session.generation
+    agents = orjson.loads(gen.scene_bytes).get("agents", []) if gen is not None else []
+    names = [str(a.get("name")) for a in agents if isinstance(a, dict)]
+    if body.robot not in names:
+        raise HTTPException(409, f"no robot {body.robot!r} in this session")
+    example = getattr(plugin, "example", plugin)
+    describe = getattr(example, "setup_from_scene", None)
+    setup = describe(scene, status, names) if callable(describe) and scene else None
+    tests = Path(plugin.root) / "tests"
+    where = Path(getattr(plugin, "path", plugin.root))
+    world = getattr(plugin, "world", None)
+    if world is None and not (where / "studio.py").is_file() and plugin.name in world_names():
+        world = plugin.name  # a folder without studio.py served in a named world: name it
+    try:
+        file = draft_file_name(body.name)
+        text = draft_test(
+            name=body.name,
+            robot=body.robot,
+            tests_folder=tests,
+            example_path=where,
+            world=world,
+            options=getattr(plugin, "options", {}),
+            seed=session.seed,
+            setup=setup,
+            force=(body.force.kind, body.force.name, body.force.params) if body.force is not None else None,
+            overrides=body.overrides,
+            active=body.active,
+            behaviors=body.behaviors,
+            duration=body.duration,
+        )
+    except (DraftError, ValueError) as error:
+        raise HTTPException(422, str(error)) from None
+    path = tests / file
+    saved = False
+    if body.save:
+        if path.exists():
+            raise HTTPException(409, f"tests/{file} exists already")
+        tests.mkdir(exist_ok=True)
+        await asyncio.to_thread(write_atomically, path, text.encode("utf-8"))
+        saved = True
+    return {"text": text, "path": f"tests/{file}", "saved": saved}
 
 
 @router.post("/api/compile", tags=["files"], responses=_errors(400, 404, 413, 422))

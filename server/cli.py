@@ -101,9 +101,13 @@ def run(args: argparse.Namespace) -> int:
     from server.app import WEB_DIST, create_app
     from server.examples import ExampleError, load_example
     from server.protocol import MAX_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
-    from server.security import SecurityPolicy
+    from server.security import SecurityPolicy, TokenError
     from server.session import Session
 
+    try:
+        policy = SecurityPolicy.for_host(args.host, args.token, args.allow_origin)
+    except TokenError as error:
+        raise UsageError(f"--token: {error}") from None
     if not MIN_SPEED <= args.speed <= MAX_SPEED:
         raise UsageError(f"--speed must be in {MIN_SPEED:g}..{MAX_SPEED:g}")
     options: dict[str, Any] = dict(args.world_option)
@@ -140,7 +144,6 @@ def run(args: argparse.Namespace) -> int:
             )
             for diagnostic in comp.errors[:10]:
                 print("  " + diagnostic.format(), file=sys.stderr)
-    policy = SecurityPolicy.for_host(args.host, args.token, args.allow_origin)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
     app = create_app(session, policy, web_dist)
 

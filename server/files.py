@@ -7,6 +7,17 @@ the disk and refuses, before touching anything: empty paths, NUL, backslashes, a
 (symlinks followed) is not inside one of the behavior folders. Only ``.xabsl`` files are listed,
 created or written, so the studio cannot be used to drop other kinds of files.
 
+Names are checked before any system call: a segment over 255 bytes (UTF-8) or a path over
+4,096 bytes is a 400, never an ``OSError``. Only regular files are listed, read or written (a FIFO
+named ``*.xabsl`` would otherwise block the listing for ever), each at most
+:data:`MAX_FILE_BYTES`.
+
+Files are kept as they are: the text is returned exactly as stored (CR, CRLF and LF line ends
+untouched), decoded as UTF-8 or, when that fails, as latin-1; a save encodes with the encoding
+the file has on disk, so an unchanged save writes the same bytes. Text that the file's encoding
+cannot hold (a lone surrogate; a character beyond latin-1 in a latin-1 file) is a 400 (not 422,
+which a save answers when the saved file does not compile).
+
 A file's ``version`` is a hash of its bytes: ``If-Match`` compares it under a lock, so two editors
 saving the same file cannot overwrite each other silently (the second gets 409). Writes go
 through ``engine.files.write_atomically`` (temp file, fsync, rename).
@@ -14,17 +25,24 @@ through ``engine.files.write_atomically`` (temp file, fsync, rename).
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import os
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from engine.errors import ServerError
-from engine.files import write_atomically
+from engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
 
 SUFFIX = ".xabsl"
+#: The largest behavior file listed or opened (a real option file is a few kilobytes).
+MAX_FILE_BYTES = 16 * 1024 * 1024
+#: Longest name segment and path, in bytes of UTF-8 (the usual NAME_MAX and PATH_MAX).
+MAX_NAME_BYTES = 255
+MAX_PATH_BYTES = 4096
 
 
 class FileError(ServerError):
@@ -37,9 +55,41 @@ class FileError(ServerError):
         self.extra = extra
 
 
+def decode(data: bytes) -> tuple[str, str]:
+    """``(text, encoding)`` of a file's bytes: UTF-8 when they are, else latin-1 (never fails)."""
+    try:
+        return data.decode("utf-8"), "utf-8"
+    except UnicodeDecodeError:
+        return data.decode("latin-1"), "latin-1"
+
+
+def encode(text: str, encoding: str, path: str) -> bytes:
+    """``text`` in ``encoding``, or FileError(400) naming the first character it cannot hold."""
+    try:
+        return text.encode(encoding)
+    except UnicodeEncodeError as error:
+        char = text[error.start]
+        line = text.count("\n", 0, error.start) + 1
+        if 0xD800 <= ord(char) <= 0xDFFF:
+            why = f"a lone surrogate U+{ord(char):04X} (not valid Unicode)"
+        else:
+            why = f"U+{ord(char):04X} {char!r}, which {path} ({encoding}) cannot hold"
+        raise FileError(400, f"cannot save {path}: line {line} has {why}") from None
+
+
 def version_of(data: bytes) -> str:
     """The version of a file's content (16 hex digits of SHA-256)."""
     return hashlib.sha256(data).hexdigest()[:16]
+
+
+@contextmanager
+def _os_errors(path: str) -> Iterator[None]:
+    """A failed write, rename or unlink as a FileError (403 not permitted, else 409), never a 500."""
+    try:
+        yield
+    except OSError as error:
+        status = 403 if error.errno in (errno.EACCES, errno.EPERM, errno.EROFS) else 409
+        raise FileError(status, f"cannot change {path}: {error.strerror or error}") from None
 
 
 class BehaviorFiles:
@@ -63,8 +113,16 @@ class BehaviorFiles:
             raise FileError(400, "bad path: empty, NUL or backslash")
         if path.startswith("/") or (len(path) > 1 and path[1] == ":"):
             raise FileError(400, "bad path: absolute paths are not allowed")
+        try:
+            size = len(path.encode("utf-8"))
+        except UnicodeEncodeError:
+            raise FileError(400, "bad path: not valid Unicode (a lone surrogate)") from None
+        if size > MAX_PATH_BYTES:
+            raise FileError(400, f"bad path: over {MAX_PATH_BYTES} bytes")
         parts = tuple(path.split("/"))
         for part in parts:
+            if len(part.encode("utf-8")) > MAX_NAME_BYTES:
+                raise FileError(400, f"bad path: a name over {MAX_NAME_BYTES} bytes")
             if part in ("", ".", ".."):
                 raise FileError(400, "bad path: empty, '.' or '..' segments are not allowed")
             if part.startswith("."):
@@ -78,22 +136,28 @@ class BehaviorFiles:
             FileError: 400 bad path, 403 outside the behavior folders, 404 missing.
         """
         self.check_syntax(path)
+        try:
+            return self._resolve(path, must_exist, writable)
+        except OSError as error:  # ELOOP, EACCES...: the path cannot name a file we may use
+            raise FileError(400, f"bad path: {error.strerror or error}") from None
+
+    def _resolve(self, path: str, must_exist: bool, writable: bool) -> Path:
         if writable and not path.endswith(SUFFIX):
             raise FileError(400, f"only {SUFFIX} files can be written")
         candidate = self.root / path
         if must_exist:
             if not candidate.exists():
                 raise FileError(404, f"no such file: {path}")
-            real = candidate.resolve(strict=True)
+            real = Path(os.path.realpath(candidate, strict=True))
             if not real.is_file():
                 raise FileError(404, f"not a file: {path}")
         else:
             parent = candidate.parent
             if not parent.is_dir():
                 raise FileError(404, f"no such folder: {Path(path).parent.as_posix()}")
-            real = parent.resolve(strict=True) / candidate.name
-            if real.is_symlink():
-                real = real.resolve()
+            real = Path(os.path.realpath(parent, strict=True)) / candidate.name
+            if real.is_symlink():  # a link to a new name, a dangling link or a loop
+                real = Path(os.path.realpath(real))
         if not any(real.is_relative_to(folder) for folder in self.folders):
             raise FileError(403, f"{path} is outside the behavior folders")
         return real
@@ -115,22 +179,30 @@ class BehaviorFiles:
                         continue
                     real = Path(directory, name)
                     try:
-                        if not any(real.resolve().is_relative_to(f) for f in self.folders):
+                        if not any(Path(os.path.realpath(real)).is_relative_to(f) for f in self.folders):
                             continue  # a symlink out of the folders is not listed (nor served)
-                        data = real.read_bytes()
+                        data = read_regular(real, MAX_FILE_BYTES)
                     except OSError:
-                        continue
+                        continue  # not a regular file (a FIFO, a device), too large, unreadable
                     path = self.api_path(real)
                     found[path] = {"path": path, "version": version_of(data), "size": len(data)}
         return [found[p] for p in sorted(found)]
 
-    def read(self, path: str) -> tuple[str, str]:
-        """``(text, version)`` of a file."""
-        data = self.resolve(path).read_bytes()
+    def _bytes(self, real: Path, path: str) -> bytes:
+        """The content of a resolved file: a regular file of at most MAX_FILE_BYTES (else 404/413)."""
         try:
-            return data.decode("utf-8"), version_of(data)
-        except UnicodeDecodeError:
-            raise FileError(415, f"{path} is not UTF-8 text") from None
+            return read_regular(real, MAX_FILE_BYTES)
+        except FileTooLarge:
+            raise FileError(413, f"{path} is over {MAX_FILE_BYTES} bytes") from None
+        except NotRegularFile:
+            raise FileError(404, f"not a file: {path}") from None
+        except FileNotFoundError:
+            raise FileError(404, f"no such file: {path}") from None
+
+    def read(self, path: str) -> tuple[str, str]:
+        """``(text, version)`` of a file: its exact text (UTF-8, else latin-1), line ends untouched."""
+        data = self._bytes(self.resolve(path), path)
+        return decode(data)[0], version_of(data)
 
     def write(self, path: str, text: str, if_match: str | None) -> str:
         """Replace an existing file if its version is ``if_match``; returns the new version.
@@ -141,43 +213,48 @@ class BehaviorFiles:
         real = self.resolve(path, writable=True)
         if if_match is None:
             raise FileError(428, "If-Match (the version you edited) is required to overwrite a file")
-        data = text.encode("utf-8")
         with self._lock:
-            current = version_of(real.read_bytes())
+            old = self._bytes(real, path)
+            current = version_of(old)
             if current != if_match:
                 raise FileError(409, f"{path} changed since version {if_match}", version=current)
-            write_atomically(real, data)
+            data = encode(text, decode(old)[1], path)
+            with _os_errors(path):
+                write_atomically(real, data)
         return version_of(data)
 
     def create(self, path: str, text: str) -> str:
         """Create a new file (409 if it exists); returns its version."""
         real = self.resolve(path, must_exist=False, writable=True)
-        data = text.encode("utf-8")
+        data = encode(text, "utf-8", path)
         with self._lock:
-            if real.exists() or (self.root / path).is_symlink():
+            if os.path.lexists(real) or (self.root / path).is_symlink():
                 raise FileError(409, f"{path} exists already")
-            write_atomically(real, data)
+            with _os_errors(path):
+                write_atomically(real, data)
         return version_of(data)
 
     def delete(self, path: str, if_match: str | None) -> None:
+        """Delete a file (if ``if_match`` is given, only at that version, else 409)."""
         real = self.resolve(path, writable=True)
         with self._lock:
             if if_match is not None:
-                current = version_of(real.read_bytes())
+                current = version_of(self._bytes(real, path))
                 if current != if_match:
                     raise FileError(409, f"{path} changed since version {if_match}", version=current)
-            real.unlink()
+            with _os_errors(path):
+                real.unlink()
 
     def rename(self, path: str, new_path: str, if_match: str | None) -> str:
         """Move a file to ``new_path`` (409 if that exists); returns the file's version."""
         real = self.resolve(path, writable=True)
         target = self.resolve(new_path, must_exist=False, writable=True)
         with self._lock:
-            data = real.read_bytes()
-            current = version_of(data)
+            current = version_of(self._bytes(real, path))
             if if_match is not None and current != if_match:
                 raise FileError(409, f"{path} changed since version {if_match}", version=current)
-            if target.exists():
+            if os.path.lexists(target) or (self.root / new_path).is_symlink():
                 raise FileError(409, f"{new_path} exists already")
-            os.rename(real, target)
+            with _os_errors(new_path):
+                os.rename(real, target)
         return current

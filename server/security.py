@@ -29,12 +29,21 @@ from urllib.parse import parse_qs, urlsplit
 import orjson
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from engine.errors import ServerError
 from server.protocol import MAX_BODY_BYTES
 
 TOKEN_HEADER = "x-xabsl-token"
 MUTATING = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 #: Paths under /api that need no token (the schema is public documentation).
 PUBLIC_API = frozenset({"/api/openapi.json", "/api/docs", "/api/docs/oauth2-redirect"})
+
+#: The shortest token accepted off loopback (128 bits as URL-safe base64).
+MIN_TOKEN_CHARS = 22
+
+
+class TokenError(ServerError, ValueError):
+    """A token that must not be used: empty, or too short for a server off loopback."""
+
 
 _LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1", "[::1]"})
 
@@ -55,11 +64,53 @@ def new_token() -> str:
     return secrets.token_urlsafe(24)
 
 
-def _host_name(host_header: str) -> str:
-    """``example.org:8000`` -> ``example.org``; ``[::1]:8000`` -> ``::1``."""
+def check_token(token: str | None, loopback: bool) -> None:
+    """Refuse a token that would not protect anything.
+
+    An empty token (``--token "$UNSET"``) is refused everywhere; off loopback, where the token is
+    the only guard, one shorter than :data:`MIN_TOKEN_CHARS` is refused too.
+
+    Raises:
+        TokenError: with the message to show the user.
+    """
+    if token is None:
+        return
+    if not token.strip():
+        raise TokenError("the token is empty (an unset shell variable?): give a real one or leave --token out")
+    if not all("!" <= c <= "~" for c in token):
+        raise TokenError("the token must be printable ASCII without spaces (it travels in headers and URLs)")
+    if not loopback and len(token) < MIN_TOKEN_CHARS:
+        raise TokenError(
+            f"the token is {len(token)} characters; off loopback it must have at least {MIN_TOKEN_CHARS} "
+            "(leave --token out to get a generated one, or use python -c 'import secrets; "
+            "print(secrets.token_urlsafe())')"
+        )
+
+
+def _split_host(host_header: str) -> tuple[str, str] | None:
+    """``example.org:8000`` -> ``("example.org", "8000")``; ``[::1]`` -> ``("::1", "")``.
+
+    None for a header that is not ``name[:digits]`` (``127.0.0.1:evil``, spaces, stray brackets).
+    """
     if host_header.startswith("["):
-        return host_header[1 : host_header.find("]")] if "]" in host_header else host_header
-    return host_header.rsplit(":", 1)[0] if host_header.count(":") == 1 else host_header
+        end = host_header.find("]")
+        if end < 0:
+            return None
+        name, rest = host_header[1:end], host_header[end + 1 :]
+        if rest and not rest.startswith(":"):
+            return None
+        port = rest[1:]
+        if rest and not port:
+            return None
+    else:
+        name, sep, port = host_header.partition(":")
+        if sep and not port:
+            return None
+    if port and not (port.isascii() and port.isdigit()):
+        return None
+    if not name or any(c.isspace() or c in "/?#@[]" for c in name):
+        return None
+    return name, port
 
 
 @dataclass
@@ -77,15 +128,23 @@ class SecurityPolicy:
     allowed_origins: frozenset[str] = field(default_factory=frozenset)
     max_body: int = MAX_BODY_BYTES
 
+    def __post_init__(self) -> None:
+        check_token(self.token, self.loopback)
+
     @classmethod
     def for_host(cls, host: str, token: str | None, allowed_origins: Iterable[str] = ()) -> SecurityPolicy:
-        """The policy for a server bound to ``host``: off loopback a token is always required."""
+        """The policy for a server bound to ``host``: off loopback a token is always required.
+
+        Raises:
+            TokenError: an empty token, or a short one off loopback.
+        """
         loopback = is_loopback(host)
         if token is None and not loopback:
             token = new_token()
         return cls(token, loopback, frozenset(o.rstrip("/").lower() for o in allowed_origins))
 
     def token_ok(self, headers: dict[str, str], query: str) -> bool:
+        """True when no token is required or one of the presented ones is it (constant time)."""
         if self.token is None:
             return True
         given: list[str] = []
@@ -95,15 +154,30 @@ class SecurityPolicy:
         if TOKEN_HEADER in headers:
             given.append(headers[TOKEN_HEADER])
         given.extend(parse_qs(query).get("token", []))
-        return any(secrets.compare_digest(g.encode(), self.token.encode()) for g in given)
+        expected = self.token.encode()
+        ok = False
+        for candidate in given:
+            # Every candidate is compared (no early exit); an empty one never matches.
+            same = secrets.compare_digest(candidate.encode("utf-8", "surrogateescape"), expected)
+            ok = ok or (same and bool(candidate))
+        return ok
 
     def host_ok(self, headers: dict[str, str]) -> bool:
+        """On a loopback server: the ``Host`` is a loopback name with an optional numeric port."""
         if not self.loopback:
             return True
         host = headers.get("host")
-        return host is None or _host_name(host).lower() in _LOOPBACK_NAMES
+        if host is None:
+            return True
+        split = _split_host(host)
+        return split is not None and split[0].lower() in _LOOPBACK_NAMES
 
-    def origin_ok(self, headers: dict[str, str]) -> bool:
+    def origin_ok(self, headers: dict[str, str], scheme: str = "http") -> bool:
+        """True without ``Origin``, for an allowed one, or for the server's own origin.
+
+        ``scheme`` is the request's (``http``/``https``, or ``ws``/``wss`` for a handshake): an
+        ``https`` origin is not the same origin as an ``http`` server at the same host and port.
+        """
         origin = headers.get("origin")
         if origin is None:
             return True
@@ -113,6 +187,9 @@ class SecurityPolicy:
         parts = urlsplit(origin)
         if parts.scheme not in ("http", "https") or not parts.netloc:
             return False  # includes "null" (sandboxed frames, file:// pages)
+        own = {"ws": "http", "wss": "https"}.get(scheme, scheme)
+        if parts.scheme != own:
+            return False
         host = headers.get("host", "").lower()
         default = "80" if parts.scheme == "http" else "443"
         return _with_port(parts.netloc, default) == _with_port(host, default)
@@ -132,6 +209,7 @@ class SecurityMiddleware:
         self.policy = policy
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Check one request or handshake, then pass it on (or answer 401/403/413 here)."""
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
@@ -139,7 +217,9 @@ class SecurityMiddleware:
         query = scope.get("query_string", b"").decode("latin-1")
         policy = self.policy
         if scope["type"] == "websocket":
-            if not (policy.host_ok(headers) and policy.origin_ok(headers) and policy.token_ok(headers, query)):
+            scheme = scope.get("scheme", "ws")
+            allowed = policy.host_ok(headers) and policy.origin_ok(headers, scheme) and policy.token_ok(headers, query)
+            if not allowed:
                 # Closing before accepting makes the server answer the handshake with HTTP 403.
                 await send({"type": "websocket.close", "code": 1008})
                 return
@@ -155,7 +235,7 @@ class SecurityMiddleware:
             await _json(send, 401, "a token is required (Authorization: Bearer TOKEN or ?token=TOKEN)")
             return
         if method in MUTATING:
-            if not policy.origin_ok(headers):
+            if not policy.origin_ok(headers, scope.get("scheme", "http")):
                 await _json(send, 403, f"requests from origin {headers.get('origin')} are not allowed")
                 return
             length = headers.get("content-length")

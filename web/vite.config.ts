@@ -12,6 +12,7 @@ export default defineConfig({
     proxy: {
       "/api": server,
       "/ws": { target: server.replace(/^http/, "ws"), ws: true },
+      "/lsp": { target: server.replace(/^http/, "ws"), ws: true },
     },
   },
   test: { environment: "node", include: ["test/**/*.test.ts"] },

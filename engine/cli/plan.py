@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 from engine.cli import UsageError
 
@@ -34,12 +33,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 
 def _read(path: str) -> str:
+    from engine.planning.strips import read_pddl
+
     try:
-        return Path(path).read_text(encoding="utf-8")
+        return read_pddl(path)
     except FileNotFoundError:
         raise UsageError(f"no such file: {path}") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise UsageError(f"{path}: cannot read: {error}") from None
+    except OSError as error:
+        raise UsageError(f"{path}: cannot read: {error.strerror or error}") from None
+    except UnicodeDecodeError as error:
+        raise UsageError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
 
 
 def _one_line(text: object) -> str:
@@ -67,7 +70,7 @@ def _parse_error(path: str, error: Exception) -> UsageError:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Parse, ground and plan; print the layered plan; returns the exit status."""
+    """Parse, ground and plan; print the layered plan; 0 with a plan, 1 without, 2 for bad PDDL."""
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 

@@ -9,17 +9,21 @@ conformance kit (see :mod:`engine.trace.conformance`). For intermediate code,
 parameter order) from the sources, which the IC cannot carry.
 
 Exit status: 0 success; 1 the behavior does not compile, load or run (diagnostics, link or
-option-graph errors, a fault during the trace); 2 usage and input problems (a missing file, a
-malformed input line, an unknown or parameterized symbol in ``set``, a value of the wrong type,
-an unqualified enum element, an unknown agent), reported as one line on stderr.
+option-graph errors, a fault during the trace, a NaN or infinity it computed, which the JSON
+output cannot carry); 2 usage and input problems (a missing file or one that is not a regular
+file, a malformed input line, NaN, Infinity or a number beyond the double range, an unknown or
+parameterized symbol in ``set``, a value of the wrong type, an unqualified enum element, an
+unknown agent), reported as one line on stderr naming the line and the tick.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 from engine.cli import UsageError
@@ -91,13 +95,80 @@ def _load(args: argparse.Namespace) -> Program:
         raise UsageError(f"{path}: not a text file ({error.reason})") from None
 
 
+#: The largest input trace read (a 10,000-tick trace is about 1 MB).
+MAX_INPUT_BYTES = 256 * 1024 * 1024
+
+
+class _BadNumber(ValueError):
+    """A number in an input line that is not a finite double (NaN, Infinity, 1e999, 10**400)."""
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(f"{text} is not a finite number")
+    return value
+
+
+def _finite_int(text: str) -> int:
+    if len(text) > 400:  # int() itself refuses over 4,300 digits; no double has 400
+        raise _BadNumber(f"the integer {text[:20]}... ({len(text)} digits) is out of range")
+    value = int(text)
+    if len(text) > 300:
+        try:
+            float(value)
+        except OverflowError:
+            raise _BadNumber(f"the integer {text[:20]}... is out of range") from None
+    return value
+
+
+def _constant(text: str) -> Any:
+    raise _BadNumber(f"{text} is not a finite number")
+
+
+def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
+    """``(line number, tick number, parsed line)`` of every non-blank line of an input trace.
+
+    Only a regular file of at most MAX_INPUT_BYTES is read; NaN, Infinity and numbers beyond the
+    double range are refused (they would reach the output, which would then not be JSON).
+
+    Raises:
+        UsageError: naming the file, the line and the tick.
+    """
+    try:
+        from engine.files import read_regular
+
+        data = read_regular(path, MAX_INPUT_BYTES)
+    except OSError as error:
+        raise UsageError(f"{path}: cannot read: {error.strerror or error}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        raise UsageError(f"{path}:{line}: not UTF-8 text (byte 0x{data[error.start]:02x})") from None
+    tick = 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if not raw.strip():
+            continue
+        tick += 1
+        try:
+            line = json.loads(raw, parse_float=_finite_float, parse_int=_finite_int, parse_constant=_constant)
+        except json.JSONDecodeError as error:
+            raise UsageError(f"{path}:{number}: not JSON ({error.msg})") from None
+        except _BadNumber as error:
+            raise UsageError(f"{path}:{number}: tick {tick}: {error}") from None
+        except RecursionError:
+            raise UsageError(f"{path}:{number}: tick {tick}: nested too deeply") from None
+        yield number, tick, line
+
+
 def run(args: argparse.Namespace) -> int:
-    """Run one tick per input line and write the trace; returns the exit status."""
+    """Run one tick per input line and write the trace; the exit status as in the module docstring."""
     from engine.errors import EngineError
     from engine.files import write_atomically
     from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
-    if not os.path.isfile(args.inputs):
+    if not os.path.exists(args.inputs):
         raise UsageError(f"no such file: {args.inputs}")
     try:
         program = _load(args)
@@ -105,21 +176,26 @@ def run(args: argparse.Namespace) -> int:
             runner = TraceRunner(program)
         except EngineError as error:
             raise _BehaviorError(str(error).replace("\n", "; ")) from None
+        except ValueError as error:  # the host cannot bind a symbol (an IC without its declarations)
+            hint = " (for intermediate code, --declarations AGENTS_XABSL gives the declarations)"
+            raise _BehaviorError(f"{args.agents_file}: {error}{hint if args.declarations is None else ''}") from None
         if args.agent is not None:
             if args.agent not in {a.name for a in program.agents}:
                 raise UsageError(f"unknown agent {args.agent!r} (--agent)")
             runner.select_agent(args.agent)
-        with open(args.inputs, encoding="utf-8") as source:
-            lines = source.read().splitlines()
         records: list[str] = []
-        for number, text in enumerate(lines, start=1):
-            if not text.strip():
-                continue
+        for number, tick, line in _input_lines(args.inputs):
             try:
-                line: Any = json.loads(text)
-            except json.JSONDecodeError as error:
-                raise UsageError(f"{args.inputs}:{number}: not JSON ({error.msg})") from None
-            records.append(json.dumps(runner.tick(line), separators=(",", ":")))
+                output = runner.tick(line)
+            except TraceInputError as error:  # its message names the tick
+                raise UsageError(f"{args.inputs}:{number}: {error}") from None
+            try:
+                records.append(json.dumps(output, separators=(",", ":"), allow_nan=False))
+            except ValueError:  # finite inputs can still overflow to inf in the behavior's arithmetic
+                raise _BehaviorError(
+                    f"{args.inputs}:{number}: tick {tick}: the behavior computed a non-finite value "
+                    "(NaN or Infinity), which a JSON trace cannot carry"
+                ) from None
     except TraceInputError as error:
         raise UsageError(f"{args.inputs}: {error}") from None
     except (_BehaviorError, TraceFaultError) as error:

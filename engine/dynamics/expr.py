@@ -18,6 +18,9 @@ Grammar (precedence low to high; comparisons yield 1.0 or 0.0, like the Iverson 
     atom   := NUMBER | NAME | NAME '(' expr (',' expr)* ')' | '(' expr ')'
 
 Names are Unicode identifiers (``φ_a``, ``γ_book``, ``α_roam``). Functions: see :data:`FUNCTIONS`.
+Numbers are finite doubles. A tree deeper than :data:`MAX_DEPTH` (nested parentheses, a chain of
+thousands of ``+``) is refused at the column where it gets too deep, so every later walk over the
+tree, and the Python source it compiles to, stay well inside the interpreter's limits.
 
 :func:`linear_terms` splits an expression into bias, activation and "feature" terms; the model
 uses it to turn each drive into a row of the vectorised form T = S(k·(B@s + W@α − θ)) of §4.1.
@@ -27,10 +30,15 @@ from __future__ import annotations
 
 import math
 import re
+import reprlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 from engine.errors import DynamicsError
+
+#: The deepest expression tree accepted (a real drive or target is under 10 levels deep). The
+#: generated Python nests one parenthesis per level, and CPython's parser stops at 200.
+MAX_DEPTH = 64
 
 #: Function name -> (minimum arity, maximum arity or None for variadic, Python spelling).
 FUNCTIONS: Mapping[str, tuple[int, int | None, str]] = {
@@ -102,8 +110,18 @@ class ExprError(DynamicsError, ValueError):
         self.col = col
         self.reason = message
         where = f" at column {col + 1}" if col is not None else ""
-        caret = f"\n    {text}\n    {' ' * col}^" if col is not None else f"\n    {text}"
+        shown, at = _window(text, col if col is not None else 0)
+        caret = f"\n    {shown}\n    {' ' * at}^" if col is not None else f"\n    {shown}"
         super().__init__(f"{message}{where}{caret}")
+
+
+def _window(text: str, col: int, width: int = 50) -> tuple[str, int]:
+    """At most ``width`` characters of ``text`` either side of ``col``, and col's place in them."""
+    start = max(0, col - width)
+    shown = text[start : col + width]
+    prefix = "..." if start > 0 else ""
+    suffix = "..." if col + width < len(text) else ""
+    return prefix + shown + suffix, len(prefix) + col - start
 
 
 # --- tree ----------------------------------------------------------------------------------------
@@ -184,6 +202,12 @@ class _Parser:
         self.text = text
         self.toks = _tokenize(text)
         self.i = 0
+        self.depth = 0  # recursion depth of unary/power/atom, bounded by MAX_DEPTH
+
+    def enter(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise ExprError(f"nested too deeply (over {MAX_DEPTH} levels)", self.text, self.peek()[2])
 
     def peek(self) -> tuple[str, str, int]:
         return self.toks[self.i]
@@ -240,7 +264,9 @@ class _Parser:
         kind, value, col = self.peek()
         if kind == "op" and value in "+-":
             self.take()
+            self.enter()
             inner = self.unary()
+            self.depth -= 1
             return inner if value == "+" else Unary("-", inner, col)
         return self.power()
 
@@ -248,14 +274,22 @@ class _Parser:
         base = self.atom()
         if self.peek()[0] == "op" and self.peek()[1] == "**":
             _, _, col = self.take()
-            return Binary("**", base, self.unary(), col)
+            self.enter()
+            exponent = self.unary()
+            self.depth -= 1
+            return Binary("**", base, exponent, col)
         return base
 
     def atom(self) -> Node:
         kind, value, col = self.peek()
         if kind == "num":
             self.take()
-            return Num(float(value), col)
+            number = float(value)
+            if not math.isfinite(number):
+                raise ExprError(
+                    f"number {value[:20]}{'...' if len(value) > 20 else ''} is out of range", self.text, col
+                )
+            return Num(number, col)
         if kind == "name":
             self.take()
             if self.peek()[0] == "op" and self.peek()[1] == "(":
@@ -263,8 +297,10 @@ class _Parser:
             return Name(value, col)
         if kind == "op" and value == "(":
             self.take()
+            self.enter()
             node = self.expr()
             self.expect(")")
+            self.depth -= 1
             return node
         raise self.fail("a number, a name or '('")
 
@@ -273,11 +309,13 @@ class _Parser:
             known = ", ".join(sorted(FUNCTIONS))
             raise ExprError(f"unknown function {fn!r} (known: {known})", self.text, col)
         self.expect("(")
+        self.enter()
         args = [self.expr()]
         while self.peek()[0] == "op" and self.peek()[1] == ",":
             self.take()
             args.append(self.expr())
         self.expect(")")
+        self.depth -= 1
         lo, hi, _ = FUNCTIONS[fn]
         if len(args) < lo or (hi is not None and len(args) > hi):
             want = f"{lo}" if lo == hi else f"at least {lo}" if hi is None else f"{lo}..{hi}"
@@ -286,10 +324,46 @@ class _Parser:
 
 
 def parse(text: str) -> Node:
-    """Parse one expression; raise :class:`ExprError` with the column of the fault."""
+    """Parse one expression; raise :class:`ExprError` with the column of the fault.
+
+    The tree is at most :data:`MAX_DEPTH` deep (else "nested too deeply" at the column where it
+    gets too deep) and its numbers are finite.
+    """
     if not isinstance(text, str):
-        raise ExprError(f"expected an expression string, got {type(text).__name__}", repr(text))
-    return _Parser(text).parse()
+        raise ExprError(f"expected an expression string, got {type(text).__name__}", short_repr(text))
+    node = _Parser(text).parse()
+    _check_depth(node, text)
+    return node
+
+
+def _bounded_repr() -> reprlib.Repr:
+    r = reprlib.Repr()
+    r.maxlevel, r.maxstring, r.maxother, r.maxlist, r.maxdict, r.maxlong = 3, 60, 60, 6, 6, 40
+    return r
+
+
+_REPR = _bounded_repr()
+
+
+def short_repr(value: object) -> str:
+    """A bounded ``repr`` for messages (a model value may be a huge or deeply nested JSON value)."""
+    return _REPR.repr(value)
+
+
+def _check_depth(node: Node, text: str) -> None:
+    """Refuse a tree deeper than MAX_DEPTH (chains like ``1+1+...+1`` parse without recursion)."""
+    stack: list[tuple[Node, int]] = [(node, 1)]
+    while stack:
+        n, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise ExprError(f"nested too deeply (over {MAX_DEPTH} levels)", text, n.col)
+        if isinstance(n, Unary):
+            stack.append((n.operand, depth + 1))
+        elif isinstance(n, Binary):
+            stack.append((n.left, depth + 1))
+            stack.append((n.right, depth + 1))
+        elif isinstance(n, Call):
+            stack.extend((a, depth + 1) for a in n.args)
 
 
 # --- analysis ------------------------------------------------------------------------------------
@@ -305,6 +379,19 @@ def names(node: Node) -> list[Name]:
         return names(node.left) + names(node.right)
     if isinstance(node, Call):
         return [n for a in node.args for n in names(a)]
+    return []
+
+
+def constants(node: Node) -> list[Num]:
+    """Every numeric literal in ``node`` (after folding: every constant part), in source order."""
+    if isinstance(node, Num):
+        return [node]
+    if isinstance(node, Unary):
+        return constants(node.operand)
+    if isinstance(node, Binary):
+        return constants(node.left) + constants(node.right)
+    if isinstance(node, Call):
+        return [c for a in node.args for c in constants(a)]
     return []
 
 
@@ -357,7 +444,7 @@ def _eval_binary(op: str, a: float, b: float) -> float:
     if op == "/":
         return a / b if b != 0.0 else math.copysign(math.inf, a) if a else math.nan
     if op == "**":
-        return float(a**b)
+        return _pow(a, b)
     return float({"<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b, "==": a == b, "!=": a != b}[op])
 
 

@@ -32,8 +32,10 @@ A model file (``examples/errands/model/errands_dd.json`` is the reference)::
 
 Expressions use :mod:`engine.dynamics.expr`. Activations are read as ``α_<behavior>`` (ASCII
 spelling ``alpha_<behavior>``). Numeric fields accept a number or a constant expression over
-parameters. Every error is a :class:`ModelError` naming the file, the key path and, for
-expressions, the column.
+parameters; numbers must be finite doubles. Every error is a :class:`ModelError` naming the
+file, the key path and, for expressions, the column; a file that is not UTF-8, not JSON, nested
+more than :data:`MAX_JSON_DEPTH` deep, not a regular file or over :data:`MAX_MODEL_BYTES` is one
+too, naming the line and column where it can.
 
 Drives are compiled to the vectorised form of §4.1, T = S(k·(B@s + W@α − θ)): each drive is split
 by :func:`engine.dynamics.expr.linear_terms` into a bias, linear activation terms (a row of W:
@@ -66,11 +68,13 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from engine.dynamics import expr as ex
 from engine.errors import DynamicsError
+from engine.files import read_regular
 
 FORMAT = "xabsl-dd-model/1"
 
@@ -81,10 +85,29 @@ _TOP_KEYS = {
 _BEHAVIOR_KEYS = {"level", "init", "drive", "lambda", "k", "theta", "sigma", "let", "targets", "rates", "doc"}
 _ACTIVATION_KEYS = {"lambda", "k", "theta", "sigma"}
 _PLACEHOLDER = re.compile(r"\{(\w+)\}")
+#: The largest model file read (the errands model is 10 kB).
+MAX_MODEL_BYTES = 16 * 1024 * 1024
+#: The deepest JSON nesting read (a model nests 5 levels; the json module recurses per level).
+MAX_JSON_DEPTH = 64
+#: Integers with more digits are read as floats (then refused when not finite): Python's int()
+#: refuses over 4,300 digits with a ValueError that would not name the key.
+_MAX_INT_DIGITS = 400
 
 
 class ModelError(DynamicsError, ValueError):
     """A DD model file is invalid; the message names the file, the key and the problem."""
+
+
+class ModelSyntaxError(ModelError):
+    """A model text that is not UTF-8 or not JSON we read; ``pos`` is the offset in the text.
+
+    ``reason`` is the problem alone (``"not valid JSON: Expecting value"``), ``line`` and ``col``
+    are 1-based; the message adds the source and the place.
+    """
+
+    def __init__(self, source: str, reason: str, pos: int, line: int, col: int) -> None:
+        super().__init__(f"{source}: {reason} at line {line} column {col}")
+        self.reason, self.pos, self.line, self.col = reason, pos, line, col
 
 
 #: Evaluates features, targets and slow rates from (sensors, slow variables, activations).
@@ -249,10 +272,86 @@ def load_model(path: str | Path, dt: float | None = None) -> DDModel:
     """
     p = Path(path)
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as e:
-        raise ModelError(f"{p}: not valid JSON: {e}") from e
+        raw = read_regular(p, MAX_MODEL_BYTES)
+    except OSError as e:
+        raise ModelError(f"{p}: cannot read: {e.strerror or e}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line, col = _line_col(raw, e.start)
+        raise ModelSyntaxError(str(p), f"not UTF-8 text (byte 0x{raw[e.start]:02x})", e.start, line, col) from None
+    data = parse_model_json(text, str(p))
     return build_model(data, source=str(p), dt=dt)
+
+
+def parse_model_json(text: str, source: str = "<model>") -> Any:
+    """Parse a model file's text as JSON, within the limits every model reader keeps.
+
+    Nesting deeper than :data:`MAX_JSON_DEPTH` is refused before parsing (the json module would
+    recurse into a RecursionError), and integers of more than a few hundred digits are read as
+    floats (Python's int() refuses 4,300 digits; the builder then names the key of a non-finite one).
+
+    Raises:
+        ModelSyntaxError: not JSON, or nested too deeply; with the offset, line and column.
+    """
+    deep = _too_deep(text, MAX_JSON_DEPTH)
+    if deep is not None:
+        line, col = _line_col(text, deep)
+        raise ModelSyntaxError(source, f"JSON nested too deeply (over {MAX_JSON_DEPTH} levels)", deep, line, col)
+    try:
+        return json.loads(text, parse_int=_parse_int)
+    except json.JSONDecodeError as e:
+        raise ModelSyntaxError(source, f"not valid JSON: {e.msg}", e.pos, e.lineno, e.colno) from None
+    except RecursionError:  # _too_deep bounds the nesting; kept so no input can leak one
+        raise ModelSyntaxError(source, "JSON nested too deeply", 0, 1, 1) from None
+
+
+def _parse_int(digits: str) -> int | float:
+    return int(digits) if len(digits) <= _MAX_INT_DIGITS else float(digits)
+
+
+def _line_col(data: bytes | str, offset: int) -> tuple[int, int]:
+    """1-based line and column of ``offset`` in ``data``."""
+    newline = b"\n" if isinstance(data, bytes) else "\n"
+    line = data.count(newline, 0, offset) + 1  # type: ignore[arg-type]
+    start = data.rfind(newline, 0, offset) + 1  # type: ignore[arg-type]
+    return line, offset - start + 1
+
+
+def _too_deep(text: str, limit: int) -> int | None:
+    """The offset where JSON ``text`` nests deeper than ``limit``, or None (strings skipped)."""
+    if text.count("[") + text.count("{") <= limit:
+        return None
+    depth = 0
+    in_string = escaped = False
+    for i, ch in enumerate(text):
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            if depth > limit:
+                return i
+        elif ch in "]}":
+            depth -= 1
+    return None
+
+
+_show = ex.short_repr
+
+
+def _elide(text: str, limit: int) -> str:
+    """``text``, or its start and end around "..." when longer than ``limit`` characters."""
+    if len(text) <= limit:
+        return text
+    half = (limit - 3) // 2
+    return f"{text[:half]}...{text[-half:]}"
 
 
 def build_model(data: Mapping[str, object], source: str = "<model>", dt: float | None = None) -> DDModel:
@@ -266,7 +365,9 @@ class _Builder:
         self.source = source
 
     def err(self, key: str, msg: str) -> ModelError:
-        return ModelError(f"{self.source}: {key}: {msg}")
+        # Keys and names come from the file and may be megabytes long: keep each line readable.
+        lines = [_elide(line, 300) for line in msg.split("\n")]
+        return ModelError(f"{self.source}: {_elide(key, 200)}: " + "\n".join(lines))
 
     def table(self, key: str, value: object, allowed: set[str] | None = None) -> dict[str, object]:
         if not isinstance(value, dict):
@@ -283,27 +384,35 @@ class _Builder:
             ex.check_names(node, str(text), lambda n: n in self.params or known(n))
         except ex.ExprError as e:
             raise self.err(key, str(e)) from None
-        return ex.fold(ex.substitute(node, self.param_nodes))
+        folded = ex.fold(ex.substitute(node, self.param_nodes))
+        for const in ex.constants(folded):
+            if not math.isfinite(const.value):
+                where = ex.ExprError(f"a constant part is {const.value!r} (not finite)", str(text), const.col)
+                raise self.err(key, str(where))
+        return folded
 
     def number(self, key: str, value: object) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float | str):
-            raise self.err(key, f"expected a number or a parameter expression, got {value!r}")
+            raise self.err(key, f"expected a number or a parameter expression, got {_show(value)}")
         if isinstance(value, int | float):
-            v = float(value)
+            try:
+                v = float(value)
+            except OverflowError:
+                raise self.err(key, f"{_show(value)} is out of the double range") from None
         else:
             node = self.parse_expr(key, value, lambda n: n in self.params)
             if not isinstance(node, ex.Num):
-                raise self.err(key, f"{value!r} is not constant")
+                raise self.err(key, f"{_show(value)} is not constant")
             v = node.value
         if not math.isfinite(v):
-            raise self.err(key, f"{value!r} is not finite")
+            raise self.err(key, f"{_show(value)} is not finite")
         return v
 
     def range_of(self, key: str, value: object) -> tuple[float, float]:
         if value is None:
             return (-math.inf, math.inf)
         if not (isinstance(value, list) and len(value) == 2):
-            raise self.err(key, f"expected [lo, hi], got {value!r}")
+            raise self.err(key, f"expected [lo, hi], got {_show(value)}")
         lo, hi = (self.number(f"{key}[{i}]", v) for i, v in enumerate(value))
         if not lo <= hi:
             raise self.err(key, f"empty range [{lo:g}, {hi:g}]")
@@ -312,7 +421,7 @@ class _Builder:
     def build(self, dt_override: float | None) -> DDModel:
         d = self.table("<top>", self.data, _TOP_KEYS)
         if d.get("format") != FORMAT:
-            raise self.err("format", f"expected {FORMAT!r}, got {d.get('format')!r}")
+            raise self.err("format", f"expected {FORMAT!r}, got {_show(d.get('format'))}")
         name = str(d.get("name", "dd"))
         self.params: dict[str, float] = {}
         self.param_nodes: dict[str, ex.Node] = {}
@@ -479,10 +588,10 @@ class _Builder:
         # Features: every non-linear drive subterm, shared between behaviors by canonical text.
         feature_nodes: dict[str, ex.Node] = {}
         for row in drives:
-            for key_, (_, node) in row.items():
+            for key_, (_, term) in row.items():
                 if key_ is not None and key_[0] == "feature" and key_[1] not in feature_nodes:
-                    assert node is not None
-                    feature_nodes[key_[1]] = node
+                    assert term is not None
+                    feature_nodes[key_[1]] = term
         fnames = list(feature_nodes)
         Bm = np.zeros((n, len(fnames)))
         Wm = np.zeros((n, n))

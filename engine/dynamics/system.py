@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -113,10 +113,12 @@ class TickRecord:
 
     @property
     def d_oct(self) -> dict[str, np.ndarray]:
+        """Per operator with s > 0, its OCT pull dt·s·c·(Z − α) on each behavior."""
         return {op: np.array(v) for op, v in self._d_oct.items()}
 
     @property
     def targets(self) -> np.ndarray:
+        """Target values as a behavior x actuator matrix (NaN where a behavior has no target)."""
         m = self.model
         tmat = np.full((m.n, len(m.actuators)), np.nan)
         tmat[m.pair_behavior, m.pair_actuator] = self._tgt
@@ -124,6 +126,7 @@ class TickRecord:
 
     @property
     def contributions(self) -> np.ndarray:
+        """Each behavior's contribution to each actuator's change (behavior x actuator)."""
         m = self.model
         cmat = np.zeros((m.n, len(m.actuators)))
         cmat[m.pair_behavior, m.pair_actuator] = self._contrib
@@ -176,7 +179,7 @@ class DDSystem:
         """
         m = self.model
         self.kernel_source = _kernel_source(m)
-        namespace: dict[str, Callable[..., tuple[list[float], ...]]] = {"tanh": math.tanh}
+        namespace: dict[str, Callable[..., Any]] = {"tanh": math.tanh}
         # The source holds only numbers from the model and fixed names: nothing user-written runs.
         exec(compile(self.kernel_source, f"<dd-kernel:{m.name}>", "exec"), namespace)
         self._kernel = namespace["_kernel"]
@@ -279,7 +282,8 @@ class DDSystem:
         if isinstance(sensors, np.ndarray):
             if sensors.shape != (len(m.sensors),):
                 raise ValueError(f"expected {len(m.sensors)} sensor values, got shape {sensors.shape}")
-            return sensors.astype(float).tolist()
+            values: list[float] = sensors.astype(float).tolist()
+            return values
         if len(sensors) == len(m.sensors):
             # Fast path, once per tick: same size and every model name present means no extras.
             try:

@@ -146,14 +146,31 @@ def fact(name: str, *args: str) -> Fact:
 # --- loading -------------------------------------------------------------------------------------
 
 
+#: The largest PDDL file read (a real domain or problem is a few kilobytes).
+MAX_PDDL_BYTES = 16 * 1024 * 1024
+
+
+def read_pddl(path: str | Path) -> str:
+    """The text of a PDDL file: a regular file of at most :data:`MAX_PDDL_BYTES`, UTF-8.
+
+    Raises:
+        OSError: missing, unreadable, not a regular file (``engine.files.NotRegularFile``) or too large.
+        UnicodeDecodeError: not UTF-8.
+    """
+    from engine.files import read_regular
+
+    return read_regular(path, MAX_PDDL_BYTES).decode("utf-8")
+
+
 def load_task(domain_path: str | Path, problem_path: str | Path) -> Task:
     """Parse a PDDL domain and problem file and ground them.
 
     Raises:
+        OSError, UnicodeDecodeError: a file that cannot be read (see :func:`read_pddl`).
         UnsupportedPDDLError: a requirement or construct outside STRIPS + typing.
         PlanningError: a problem inconsistent with its domain (unknown type or predicate).
     """
-    return parse_task(Path(domain_path).read_text(), Path(problem_path).read_text())
+    return parse_task(read_pddl(domain_path), read_pddl(problem_path))
 
 
 def parse_task(domain_text: str, problem_text: str) -> Task:

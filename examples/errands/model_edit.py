@@ -17,7 +17,7 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from engine.dynamics.model import DDModel, ModelError, build_model
+from engine.dynamics.model import DDModel, ModelError, ModelSyntaxError, build_model, parse_model_json
 from engine.files import write_atomically
 from engine.host import WorldCommandError
 
@@ -121,9 +121,9 @@ def check(world: ErrandsWorld, text: str) -> tuple[list[dict[str, Any]], DDModel
     """Diagnostics for model ``text`` (empty when clean) and the compiled model (None when not)."""
     file = world.model_name
     try:
-        data = json.loads(text)
-    except json.JSONDecodeError as error:
-        return [_diagnostic(file, text, f"not valid JSON: {error.msg}", None, error.pos, error.pos)], None
+        data = parse_model_json(text, file)  # bounded nesting and integers (issue 18)
+    except ModelSyntaxError as error:
+        return [_diagnostic(file, text, error.reason, None, error.pos, error.pos)], None
     if not isinstance(data, dict):
         return [_diagnostic(file, text, "a model is a JSON object", None, 0, 0)], None
     try:
@@ -143,7 +143,11 @@ def check(world: ErrandsWorld, text: str) -> tuple[list[dict[str, Any]], DDModel
 def source(world: ErrandsWorld) -> dict[str, Any]:
     """The model file: its name (relative to the example), text and version."""
     data = world.model_path.read_bytes()
-    return {"path": world.model_name, "text": data.decode("utf-8"), "version": version_of(data)}
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise WorldCommandError(f"{world.model_name} is not UTF-8 text (byte {error.start})") from None
+    return {"path": world.model_name, "text": text, "version": version_of(data)}
 
 
 def save(world: ErrandsWorld, text: Any, version: Any) -> dict[str, Any]:
@@ -158,8 +162,13 @@ def save(world: ErrandsWorld, text: Any, version: Any) -> dict[str, Any]:
     current = version_of(path.read_bytes())
     if version != current:
         raise WorldCommandError(f"the model file changed on disk since it was opened (now version {current})")
+    try:
+        data = text.encode("utf-8")
+    except UnicodeEncodeError as error:
+        raise WorldCommandError(
+            f"the text has a lone surrogate at character {error.start} (not valid Unicode)"
+        ) from None
     diagnostics, model = check(world, text)
-    data = text.encode("utf-8")
     write_atomically(path, data)
     result: dict[str, Any] = {"path": world.model_name, "version": version_of(data), "saved": True}
     if model is None:

@@ -18,9 +18,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from engine.cli import UsageError
+from engine.files import write_atomically
 from examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, physics_rate, run_world, summary
 
 PERTURBATIONS = ("none", "teleport-mug", "remove-book", "block-cb")
@@ -93,8 +93,10 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("--duration must be positive")
     try:
         world = build_world(args.seed, plan=args.plan, dt=args.dt, noise=args.noise)
-    except ValueError as error:  # a tick the model's stability check rejects, or one that does not divide 1 s
-        raise UsageError(str(error)) from None
+    except ValueError as error:  # a bad model file (ModelError), a tick the stability check rejects, or
+        raise UsageError(str(error)) from None  # one that does not divide 1 s
+    except OSError as error:  # an unreadable model or PDDL file
+        raise UsageError(f"{error.filename or ''}: {error.strerror or error}") from None
     perturb(world, args.perturb)
     assert world.engine is not None  # build_world compiles and attaches the monitor
     if args.render:
@@ -102,7 +104,10 @@ def main(args: argparse.Namespace) -> int:
 
         program = world.engine.program
         text = option_graph(program, "execute_plan") + "\n" + state_machine(program.options["execute_plan"])
-        Path(args.render).write_text(text)
+        try:
+            write_atomically(args.render, text.encode("utf-8"))
+        except OSError as error:
+            raise UsageError(f"cannot write {args.render}: {error.strerror or error}") from None
     recorder = None
     if args.record:
         from engine.record import Recorder

@@ -58,12 +58,12 @@ class FieldDimensions:
 
     @property
     def wall_x(self) -> float:
-        """x of the walls behind the goals (mm)."""
+        """The x of the walls behind the goals (mm)."""
         return self.half_length + self.border
 
     @property
     def wall_y(self) -> float:
-        """y of the side walls (mm)."""
+        """The y of the side walls (mm)."""
         return self.half_width + self.border
 
     def posts(self) -> list[tuple[float, float]]:

@@ -172,6 +172,18 @@ class GameController:
             # Carry the overshoot into the next state, so state changes do not lose time.
             self._enter(GameState(state + 1), referee, self.state_ns - self._durations_ns[state])
 
+    def set_state(self, state: GameState, kickoff_team: int | None = None) -> None:
+        """Put the game into ``state`` now (a test's setup, the studio): no placement, the clocks go on.
+
+        ``kickoff_team`` (0 or 1) also says who kicks off next.
+        """
+        self.state = GameState(state)
+        self.state_ns = 0
+        if kickoff_team is not None:
+            if kickoff_team not in (0, 1):
+                raise ValueError(f"kickoff_team must be 0 or 1, got {kickoff_team!r}")
+            self.kickoff_team = kickoff_team
+
     def _enter(self, state: GameState, referee: Referee, carry_ns: int = 0) -> None:
         self.state = state
         self.state_ns = carry_ns

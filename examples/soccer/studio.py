@@ -9,7 +9,9 @@ and ``half_duration_s``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from engine.host import (
     DEFAULT_BEHAVIOR_HZ,
@@ -87,6 +89,21 @@ class SoccerExample:
             raise TypeError("the soccer example runs SoccerWorld robots")
         controller = XabslController(agent.perception, agent.motion, program, name=agent.name)
         return controller, controller.engine
+
+    def arrange(self, world: World, setup: Mapping[str, Any]) -> None:
+        """A behavior test's setup: robots, ball, game state (keys: ``examples.soccer.setup``)."""
+        from examples.soccer.setup import arrange
+        from examples.soccer.world import SoccerWorld
+
+        if not isinstance(world, SoccerWorld):
+            raise TypeError("the soccer setup arranges SoccerWorld matches")
+        arrange(world, setup)
+
+    def setup_from_scene(self, scene: Mapping[str, Any], status: Mapping[str, Any], names: list[str]) -> dict[str, Any]:
+        """The setup that reproduces a scene ("Save as test" in the studio)."""
+        from examples.soccer.setup import setup_from_scene
+
+        return setup_from_scene(scene, status, names)
 
 
 def example(path: Path, robots: int = 5, half_duration_s: float = 600.0) -> SoccerExample:

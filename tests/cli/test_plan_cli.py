@@ -63,3 +63,26 @@ def test_bad_pddl_exits_2_with_one_clear_line(tmp_path, capsys, domain_text, mes
 def test_missing_file_exits_2(capsys):
     assert main(["plan", "no/such/domain.pddl", PROBLEM]) == 2
     assert capsys.readouterr().err.strip() == "xabsl plan: no such file: no/such/domain.pddl"
+
+
+@pytest.mark.parametrize("kind", ["/dev/zero", "fifo", "folder", "too large", "latin-1"])
+def test_unreadable_inputs_exit_2_with_one_line(tmp_path, capsys, kind):
+    import os
+
+    from engine.planning.strips import MAX_PDDL_BYTES
+
+    path = tmp_path / "p.pddl"
+    if kind == "/dev/zero":
+        path = Path("/dev/zero")  # read without bound before: a MemoryError
+    elif kind == "fifo":
+        os.mkfifo(path)  # blocked forever before
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "too large":
+        with open(path, "wb") as handle:
+            handle.truncate(MAX_PDDL_BYTES + 1)
+    else:
+        path.write_bytes(b"(define (problem caf\xe9))")
+    assert main(["plan", DOMAIN, str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(path) in err, err

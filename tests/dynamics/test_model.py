@@ -194,3 +194,110 @@ def test_minimal_model_and_sensor_list_form():
     assert m.sensors == ("x",) and m.features == ("x",)
     assert m.pair_rate.tolist() == [2.0]
     assert np.isinf(m.sensor_ranges["x"][1])
+
+
+# -- issue 18: every broken model file is a ModelError naming the file, the key and the column -------
+
+
+def _write(tmp_path, data):
+    path = tmp_path / "m.json"
+    path.write_bytes(data if isinstance(data, bytes) else json.dumps(data, ensure_ascii=False).encode())
+    return path
+
+
+def _edit_drive(text):
+    return variant(lambda d: d["behaviors"]["roam"].__setitem__("drive", text))
+
+
+@pytest.mark.parametrize(
+    ("text", "column"),
+    [
+        ("(" * 163 + "1" + ")" * 163, None),  # RecursionError in the parser before
+        ("-" * 2000 + "1", None),
+        ("1" + "+1" * 5000, None),  # a left-deep chain: RecursionError in fold/to_python
+        ("2" + "**2" * 400, None),
+        ("max(" * 300 + "1" + ")" * 300, None),
+    ],
+)
+def test_deep_expressions_are_a_model_error_with_a_column(tmp_path, text, column):
+    with pytest.raises(ModelError) as refused:
+        load_model(_write(tmp_path, _edit_drive(text)))
+    message = str(refused.value)
+    assert str(tmp_path / "m.json") in message and "behaviors.roam.drive" in message
+    assert "nested too deeply" in message and "at column" in message
+
+
+@pytest.mark.parametrize(
+    ("value", "key"),
+    [
+        (10**400, "parameters.lambda_m"),  # OverflowError in float() before
+        ("1e999", "parameters.lambda_m"),
+        ("10 ** 400", "parameters.lambda_m"),  # OverflowError while constant-folding
+        ("(-8) ** 0.5", "parameters.lambda_m"),  # a complex number while folding
+        ("0 ** -1", "parameters.lambda_m"),
+    ],
+)
+def test_out_of_range_numbers_are_a_model_error_naming_the_key(tmp_path, value, key):
+    data = variant(lambda d: d["parameters"].__setitem__("lambda_m", value))
+    with pytest.raises(ModelError) as refused:
+        load_model(_write(tmp_path, data))
+    message = str(refused.value)
+    assert str(tmp_path / "m.json") in message and key in message, message
+    assert len(message) < 1000
+
+
+def test_an_integer_of_over_4300_digits_is_a_model_error(tmp_path):
+    text = json.dumps(RAW).replace('"lambda_m": 8.0', '"lambda_m": ' + "9" * 5000)
+    assert "9" * 5000 in text
+    with pytest.raises(ModelError) as refused:
+        load_model(_write(tmp_path, text.encode()))
+    message = str(refused.value)
+    assert "parameters.lambda_m" in message and len(message) < 1000
+
+
+def test_non_utf8_bytes_are_a_model_error_with_line_and_column(tmp_path):
+    data = json.dumps(RAW, indent=1).encode().replace(b'"roam"', b'"ro\xe9m"', 1)
+    with pytest.raises(ModelError) as refused:
+        load_model(_write(tmp_path, data))
+    message = str(refused.value)
+    assert str(tmp_path / "m.json") in message and "UTF-8" in message and "column" in message
+
+
+@pytest.mark.parametrize("depth", [2000, 100_000])
+def test_deeply_nested_json_is_a_model_error_with_a_column(tmp_path, depth):
+    data = b'{"format": "xabsl-dd-model/1", "doc": ' + b"[" * depth + b"]" * depth + b"}"
+    with pytest.raises(ModelError) as refused:
+        load_model(_write(tmp_path, data))
+    message = str(refused.value)
+    assert str(tmp_path / "m.json") in message and "nested" in message and "column" in message
+
+
+def test_nested_values_in_messages_are_shortened(tmp_path):
+    deep = []
+    for _ in range(40):  # within the nesting limit; its repr would be 4 kB
+        deep = [deep, "x" * 100]
+    data = variant(lambda d: d["parameters"].__setitem__("lambda_m", deep))
+    with pytest.raises(ModelError) as refused:
+        load_model(_write(tmp_path, data))
+    assert "parameters.lambda_m" in str(refused.value) and len(str(refused.value)) < 1000
+
+
+def test_a_model_path_that_is_not_a_regular_file_is_a_model_error(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / "fifo.json")
+    for path in (tmp_path / "fifo.json", tmp_path / "missing.json", "/dev/zero"):
+        with pytest.raises(ModelError) as refused:
+            load_model(path)
+        assert str(path) in str(refused.value)
+
+
+def test_xabsl_run_errands_reports_a_broken_model_without_a_traceback(tmp_path, monkeypatch, capsys):
+    import examples.errands.world as world
+    from engine.cli import main
+
+    broken = _write(tmp_path, _edit_drive("(" * 163 + "1" + ")" * 163))
+    monkeypatch.setattr(world, "_model", lambda path, dt: load_model(broken, dt=dt))
+    assert main(["run", "examples/errands", "--duration", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and str(broken) in err and "behaviors.roam.drive" in err

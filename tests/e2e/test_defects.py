@@ -349,7 +349,7 @@ def test_at_1024x700_no_tab_or_button_is_clipped(page: Any, desktop: None) -> No
     for bar in page.locator(".tabbar").all():
         bar_box = bar.bounding_box()
         assert bar_box is not None
-        for tab in bar.locator(".tab").all():
+        for tab in bar.locator(".tab:visible").all():  # a world shows only the panels it has
             box = tab.bounding_box()
             assert box is not None and inside(box, bar_box) and inside(box, window), f"{tab.inner_text()!r} clipped"
             assert tab.evaluate("t => t.scrollWidth <= t.clientWidth + 1"), f"{tab.inner_text()!r} text cut"

@@ -221,7 +221,7 @@ def test_policy_for_hosts() -> None:
     assert SecurityPolicy.for_host("::1", None).loopback
     generated = SecurityPolicy.for_host("0.0.0.0", None)
     assert generated.token and len(generated.token) >= 24 and not generated.loopback
-    assert SecurityPolicy.for_host("192.168.1.5", "given").token == "given"
+    assert SecurityPolicy.for_host("192.168.1.5", "given-" + "x" * 16).token == "given-" + "x" * 16
     policy = SecurityPolicy(token=None)
     assert policy.origin_ok({"host": "localhost:8000", "origin": "http://localhost:8000"})
     assert not policy.origin_ok({"host": "localhost:8000", "origin": "http://localhost:8001"})

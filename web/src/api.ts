@@ -144,3 +144,17 @@ export async function programStatus(): Promise<Record<string, ProgramStatus>> {
 export function clearGraphCache(): void {
   svgCache.clear();
 }
+
+/// "Save as test" (`POST /api/tests/draft`, docs/tests.md): the behavior test file reproducing the
+/// tester's situation; with `save`, also written to the example's `tests/` folder (409 if it exists).
+export interface TestDraft {
+  text: string;
+  path: string;
+  saved: boolean;
+}
+
+export async function draftTest(body: unknown): Promise<TestDraft> {
+  const { status, data } = await request<TestDraft & { detail?: string }>("POST", "tests/draft", body);
+  if (status === 409 || status === 422) throw new ApiError(data?.detail ?? `tests/draft: HTTP ${status}`, status, data);
+  return data;
+}

@@ -3,24 +3,31 @@
 /// the server, nothing saved), go to definition (F12, Ctrl+click), find references (Shift+F12),
 /// save (Ctrl+S) = PUT with If-Match -> hot reload, conflicts shown, never overwritten silently,
 /// and a new option from a template.
+///
+/// Files are edited as they are: each buffer keeps its file's line separator (CodeMirror's
+/// `lineSeparator` facet, so Enter inserts it and `sliceDoc()` joins with it), so a file with CR
+/// or CRLF line ends opens unmodified and a save writes exactly the edited text. `doc.toString()`
+/// (always "\n", one unit per line break, like document positions) stays what the language
+/// features and the as-you-type linter read.
 import { autocompletion, closeBrackets, closeBracketsKeymap, completionKeymap } from "@codemirror/autocomplete";
 import { defaultKeymap, history, historyKeymap, indentWithTab } from "@codemirror/commands";
 import { bracketMatching, HighlightStyle, indentOnInput, syntaxHighlighting } from "@codemirror/language";
 import { lintGutter, lintKeymap } from "@codemirror/lint";
 import { highlightSelectionMatches, searchKeymap } from "@codemirror/search";
-import { Compartment, EditorSelection, EditorState } from "@codemirror/state";
+import { EditorSelection, EditorState } from "@codemirror/state";
 import { drawSelection, EditorView, highlightActiveLine, highlightActiveLineGutter, keymap, lineNumbers } from "@codemirror/view";
 import { tags as t } from "@lezer/highlight";
-import { ApiError, compile, createFile, type FileEntry, listFiles, readFile, writeFile } from "../api";
-import { diagnosticsFor, homeProgram, type SetDiagnostic } from "../behaviorsets";
-import type { DescriptionIndex, Span } from "../description";
+import { ApiError, createFile, type FileEntry, listFiles, readFile, token, writeFile } from "../api";
+import { diagnosticsFor, type SetDiagnostic } from "../behaviorsets";
+import type { Span } from "../description";
 import type { CompileEvent, FileEvent } from "../protocol";
 import type { Session, SessionEvent } from "../session";
 import { h, toast } from "../ui";
-import { xabslCompletion } from "../xabsl/complete";
+import { toPosition, xabslCompletion } from "../xabsl/complete";
 import { xabsl } from "../xabsl/language";
 import { samePath, type ServerDiagnostic, xabslLinter } from "../xabsl/lint";
-import { definitionOf, findReferences, wordAt } from "../xabsl/navigate";
+import { LspClient, lspUrl, websocketTransport } from "../xabsl/lsp";
+import { definitionAt, lspHover, referencesAt, renameAt, toChanges } from "../xabsl/navigate";
 
 const highlight = HighlightStyle.define([
   { tag: [t.keyword, t.controlKeyword], color: "var(--tok-keyword)", fontWeight: "600" },
@@ -48,6 +55,16 @@ option ${name} {
 }
 `;
 
+/// The line separator of a file's text: the most frequent of CRLF, CR and LF ("\n" for none).
+/// The others, if the file mixes them, stay in the text as characters and round-trip too.
+export function lineSeparatorOf(text: string): string {
+  const crlf = text.split("\r\n").length - 1;
+  const cr = text.split("\r").length - 1 - crlf;
+  const lf = text.split("\n").length - 1 - crlf;
+  if (crlf >= cr && crlf >= lf && crlf > 0) return "\r\n";
+  return cr > lf ? "\r" : "\n";
+}
+
 interface Buffer {
   path: string;
   state: EditorState;
@@ -64,12 +81,12 @@ export class EditorPanel {
   private readonly banner: HTMLElement;
   private readonly refs: HTMLElement;
   private readonly title: HTMLElement;
-  private readonly completion = new Compartment();
+  /// completion, diagnostics, hover, definition, references and rename: the language server
+  private readonly lsp = new LspClient(websocketTransport(lspUrl(token)));
   private readonly buffers = new Map<string, Buffer>();
   private files: FileEntry[] = [];
   private current: Buffer | null = null;
   private lastDiagnostics: readonly ServerDiagnostic[] = [];
-  private completionGen = -2;
 
   constructor(private readonly session: Session) {
     this.tree = h("nav.file-tree", { "aria-label": "Behavior files" });
@@ -86,6 +103,7 @@ export class EditorPanel {
       h("button.primary#save", { title: "Save and hot reload (Ctrl+S)", onclick: () => void this.save() }, "Save"),
       h("button", { title: "Go to definition (F12)", onclick: () => this.goToDefinition() }, "Definition"),
       h("button", { title: "Find references (Shift+F12)", onclick: () => void this.references() }, "References"),
+      h("button", { title: "Rename everywhere (F2)", onclick: () => void this.rename() }, "Rename"),
       h("button", { title: "Create an option file from a template", onclick: () => void this.newOption() }, "New option…"),
     );
     this.element = h(
@@ -97,24 +115,11 @@ export class EditorPanel {
     this.view.contentDOM.setAttribute("aria-label", "XABSL source");
   }
 
-  private index(): DescriptionIndex | null {
-    const session = this.session;
-    const path = this.current?.path;
-    if (path) {
-      const entry = this.files.find((f) => f.path === path);
-      const home = homeProgram(path, entry?.programs ?? []);
-      for (const program of home ? [home, ...(entry?.programs ?? [])] : (entry?.programs ?? [])) {
-        const index = session.programs.get(program);
-        if (index) return index;
-      }
-    }
-    return session.indexOf(session.selectedRobot) ?? session.programs.values().next().value ?? null;
-  }
-
   private makeState(doc: string, path: string): EditorState {
     return EditorState.create({
       doc,
       extensions: [
+        EditorState.lineSeparator.of(lineSeparatorOf(doc)),
         lineNumbers(),
         highlightActiveLineGutter(),
         history(),
@@ -127,17 +132,15 @@ export class EditorPanel {
         autocompletion({ activateOnTyping: true }),
         xabsl(),
         syntaxHighlighting(highlight),
-        this.completion.of(xabslCompletion(this.index()?.description ?? null)),
+        xabslCompletion(this.lsp, () => path || null),
+        lspHover(this.lsp, () => path || null),
         lintGutter(),
-        xabslLinter(
-          () => (path ? path : null),
-          async (p, text) => this.own(p, (await compile(p, text)).diagnostics),
-          (result) => this.showCompile(result),
-        ),
+        xabslLinter(this.lsp, path || null, (result) => this.showCompile(result)),
         keymap.of([
           { key: "Mod-s", preventDefault: true, run: () => (void this.save(), true) },
           { key: "F12", run: () => (this.goToDefinition(), true) },
           { key: "Shift-F12", run: () => (void this.references(), true) },
+          { key: "F2", run: () => (void this.rename(), true) },
           ...closeBracketsKeymap,
           ...defaultKeymap,
           ...searchKeymap,
@@ -167,7 +170,7 @@ export class EditorPanel {
   private isDirty(b: Buffer | null): boolean {
     if (!b) return false;
     const state = b === this.current ? this.view.state : b.state;
-    return state.doc.toString() !== b.saved;
+    return state.sliceDoc() !== b.saved;
   }
 
   private markDirty(): void {
@@ -229,8 +232,6 @@ export class EditorPanel {
     }
     this.current = buffer;
     this.view.setState(buffer.state);
-    this.completionGen = -2;
-    this.syncCompletion();
     this.showBanner();
     for (const el of this.tree.querySelectorAll<HTMLElement>("[data-path]")) el.classList.toggle("open", el.dataset.path === path);
     this.markDirty();
@@ -264,13 +265,6 @@ export class EditorPanel {
   private own(path: string, diagnostics: readonly ServerDiagnostic[]): ServerDiagnostic[] {
     const programs = this.files.find((f) => f.path === path)?.programs ?? [...this.session.programs.keys()];
     return diagnosticsFor(path, diagnostics as readonly SetDiagnostic[], programs);
-  }
-
-  private syncCompletion(): void {
-    const gen = this.session.hello?.generation ?? -1;
-    if (gen === this.completionGen) return;
-    this.completionGen = gen;
-    this.view.dispatch({ effects: this.completion.reconfigure(xabslCompletion(this.index()?.description ?? null)) });
   }
 
   private showCompile(result: readonly ServerDiagnostic[] | Error): void {
@@ -330,16 +324,30 @@ export class EditorPanel {
     b.version = file.version;
     b.saved = file.text;
     b.conflict = null;
-    this.view.dispatch({ changes: { from: 0, to: this.view.state.doc.length, insert: file.text } });
+    this.replaceText(b, file.text);
     this.showBanner();
     this.markDirty();
+  }
+
+  /// Put a file's new text from disk into its buffer: as an undoable change when its line
+  /// separator is the buffer's, else as a fresh state (the separator is fixed per state).
+  private replaceText(b: Buffer, text: string): void {
+    const state = b === this.current ? this.view.state : b.state;
+    if (state.lineBreak === lineSeparatorOf(text)) {
+      const tr = state.update({ changes: { from: 0, to: state.doc.length, insert: text } });
+      if (b === this.current) this.view.dispatch(tr);
+      else b.state = tr.state;
+      return;
+    }
+    b.state = this.makeState(text, b.path);
+    if (b === this.current) this.view.setState(b.state);
   }
 
   /// Save the current file: PUT with If-Match; the server compiles and hot-reloads.
   async save(overwrite = false): Promise<void> {
     const b = this.current;
     if (!b) return;
-    const text = this.view.state.doc.toString();
+    const text = this.view.state.sliceDoc(); // joined with the file's own line separator
     const version = overwrite && b.conflict ? b.conflict.version : b.version;
     try {
       const { status, result, conflict } = await writeFile(b.path, text, version);
@@ -351,6 +359,7 @@ export class EditorPanel {
       }
       b.version = result.version;
       b.saved = text;
+      this.lsp.saved(b.path);
       b.conflict = null;
       this.showBanner();
       this.markDirty();
@@ -369,46 +378,79 @@ export class EditorPanel {
   }
 
   goToDefinition(): void {
-    const state = this.view.state;
-    const text = state.doc.toString();
-    const w = wordAt(text, state.selection.main.head);
-    if (!w) return;
-    const def = definitionOf(w.word, text, this.index());
-    if (!def) {
-      toast(`No definition found for ${w.word}`, "info");
-      return;
-    }
-    if (def.kind === "local") {
-      this.view.dispatch({ selection: EditorSelection.single(def.from, def.to), effects: EditorView.scrollIntoView(def.from, { y: "center" }) });
-    } else {
-      this.openSpan(def.span);
+    const path = this.current?.path;
+    if (!path) return;
+    void definitionAt(this.lsp, path, this.view.state, this.view.state.selection.main.head).then(
+      (place) => (place ? void this.open(place.path, place) : toast("No definition found here", "info")),
+      (error: Error) => toast(`No definition: ${error.message}`, "error"),
+    );
+  }
+
+  /// The text of `path`: its buffer when open, else the file.
+  private async textOf(path: string): Promise<string | null> {
+    const open = this.buffers.get(path);
+    if (open) return (open === this.current ? this.view.state : open.state).doc.toString();
+    try {
+      return (await readFile(path)).text;
+    } catch {
+      return null; // a file deleted meanwhile
     }
   }
 
   private async references(): Promise<void> {
+    const path = this.current?.path;
+    if (!path) return;
     const state = this.view.state;
-    const w = wordAt(state.doc.toString(), state.selection.main.head);
-    if (!w) return;
-    const texts = new Map<string, string>();
-    await Promise.all(
-      this.files.map(async (f) => {
-        const open = this.buffers.get(f.path);
-        if (open) texts.set(f.path, (open === this.current ? this.view.state : open.state).doc.toString());
-        else {
-          try {
-            texts.set(f.path, (await readFile(f.path)).text);
-          } catch {
-            /* a file deleted meanwhile */
-          }
-        }
-      }),
-    );
-    const refs = findReferences(w.word, texts);
+    const word = state.wordAt(state.selection.main.head);
+    const name = word ? state.sliceDoc(word.from, word.to) : "";
+    const refs = await referencesAt(this.lsp, path, state, state.selection.main.head).catch(() => []);
+    const texts = new Map<string, string | null>();
+    for (const r of refs) if (!texts.has(r.path)) texts.set(r.path, await this.textOf(r.path));
     this.refs.hidden = false;
     this.refs.replaceChildren(
-      h("div.section-title", {}, `${refs.length} reference${refs.length === 1 ? "" : "s"} to ${w.word}`, h("button.icon", { title: "Close", onclick: () => (this.refs.hidden = true) }, "×")),
-      ...refs.map((r) => h("button.ref", { onclick: () => void this.open(r.path, { line: r.line, col: r.col }) }, h("span.ref-loc", {}, `${r.path}:${r.line}`), h("code", {}, r.lineText))),
+      h("div.section-title", {}, `${refs.length} reference${refs.length === 1 ? "" : "s"} to ${name}`, h("button.icon", { title: "Close", onclick: () => (this.refs.hidden = true) }, "×")),
+      ...refs.map((r) => h("button.ref", { onclick: () => void this.open(r.path, r) }, h("span.ref-loc", {}, `${r.path}:${r.line}`), h("code", {}, (texts.get(r.path) ?? "").split("\n")[r.line - 1]?.trim() ?? ""))),
     );
+  }
+
+  /// Rename the name at the cursor in every file of the behavior set (the files stay unsaved).
+  private async rename(): Promise<void> {
+    const path = this.current?.path;
+    if (!path) return;
+    const state = this.view.state;
+    const head = state.selection.main.head;
+    await this.lsp.sync(path, state.doc.toString());
+    const prepared = await this.lsp.prepareRename(path, toPosition(state.doc, head)).catch(() => null);
+    if (!prepared) {
+      toast("Nothing to rename here", "info");
+      return;
+    }
+    const newName = window.prompt(`Rename ${prepared.placeholder} to:`, prepared.placeholder);
+    if (!newName || newName === prepared.placeholder) return;
+    let edits;
+    try {
+      edits = await renameAt(this.lsp, path, state, head, newName);
+    } catch (error) {
+      toast(`Cannot rename: ${(error as Error).message}`, "error");
+      return;
+    }
+    if (!edits.size) {
+      toast("Nothing to rename here", "info");
+      return;
+    }
+    for (const [p, changes] of edits) {
+      if (!this.buffers.has(p)) {
+        await this.open(p);
+        await this.open(path);
+      }
+      const b = this.buffers.get(p);
+      if (!b) continue;
+      if (b === this.current) this.view.dispatch({ changes: toChanges(this.view.state.doc, changes) });
+      else b.state = b.state.update({ changes: toChanges(b.state.doc, changes) }).state;
+      void this.lsp.sync(p, (b === this.current ? this.view.state : b.state).doc.toString());
+    }
+    this.markDirty();
+    toast(`Renamed in ${edits.size} file${edits.size === 1 ? "" : "s"}; save them to keep it.`, "ok");
   }
 
   private async newOption(): Promise<void> {
@@ -451,8 +493,7 @@ export class EditorPanel {
       void readFile(b.path).then((file) => {
         b.version = file.version;
         b.saved = file.text;
-        if (b === this.current) this.view.dispatch({ changes: { from: 0, to: this.view.state.doc.length, insert: file.text } });
-        else b.state = this.makeState(file.text, b.path);
+        this.replaceText(b, file.text);
         this.markDirty();
       });
     } else {
@@ -468,7 +509,6 @@ export class EditorPanel {
   render(changes: Set<SessionEvent>): void {
     if (changes.has("hello")) {
       if (!this.files.length) void this.refreshFiles();
-      this.syncCompletion();
     }
   }
 

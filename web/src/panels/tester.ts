@@ -2,11 +2,13 @@
 /// declaration (types, ranges, units, enum choices), run it as the root of the selected robot
 /// (`force_option` / `force_behavior`), watch it, release. The simulation controls (pause, step,
 /// speed, reset) sit in the top bar and work from here too.
+import { ApiError, draftTest } from "../api";
 import type { Connection } from "../connection";
 import { type Parameter, parseRange, rangeText } from "../description";
 import { checkNumber } from "../params";
 import type { Session, SessionEvent } from "../session";
 import { h, setText, shortElement, toast } from "../ui";
+import { testDraftBody } from "./testdraft";
 
 type Target = { kind: "option" | "behavior"; name: string };
 
@@ -45,6 +47,11 @@ export class TesterPanel {
         h("button.primary#test-run", { title: "Force it as the root (Ctrl+Enter)", onclick: () => this.run() }, "▶ Run on robot"),
         h("button#test-release", { title: "Back to the robot's own root", onclick: () => this.release() }, "Release"),
         h("button", { title: "Restart every option of this robot's XABSL agent and clear a fault", onclick: () => this.resetAgent() }, "Reset agent"),
+        h(
+          "button#test-save",
+          { title: "Write a behavior test (tests/NAME.xabsl-test.toml) that reproduces this situation and asserts what is active now", onclick: () => void this.saveAsTest() },
+          "Save as test",
+        ),
       ),
       this.state,
     );
@@ -183,6 +190,35 @@ export class TesterPanel {
       .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
   }
 
+  /// "Save as test": the server writes tests/NAME.xabsl-test.toml in the example folder from the
+  /// tick in view (forced root, parameters, overrides, what is active); the file is also offered
+  /// as a download, and when the name is taken only the download is.
+  async saveAsTest(): Promise<void> {
+    const robot = this.session.selectedRobot;
+    const state = this.session.robotInView();
+    const index = this.session.indexOf(robot);
+    const name = this.session.robotInfo(robot)?.name;
+    if (!state || !index || !name) {
+      toast("Nothing to save: the robot has no XABSL behavior in view", "error");
+      return;
+    }
+    const body = testDraftBody(name, state, index);
+    const title = globalThis.prompt?.("Name of the test", body.name);
+    if (!title) return;
+    body.name = title;
+    try {
+      const draft = await draftTest({ ...body, save: true });
+      download(draft.path, draft.text);
+      toast(`Saved ${draft.path}: edit its assertions, run it with xabsl test`, "ok");
+    } catch (e) {
+      if (e instanceof ApiError && e.status === 409) {
+        const draft = await draftTest({ ...body, save: false }).catch(() => null);
+        if (draft) download(draft.path, draft.text);
+      }
+      toast(`Could not save the test: ${(e as Error).message}`, "error");
+    }
+  }
+
   private resetAgent(): void {
     const robot = this.session.selectedRobot;
     this.connection.command("reset_agent", { robot }).catch((e: Error) => toast(`Reset failed: ${e.message}`, "error"));
@@ -203,4 +239,10 @@ export class TesterPanel {
     setText(this.state, text);
     this.state.classList.toggle("forced", !!robot?.forced);
   }
+}
+
+function download(path: string, text: string): void {
+  const link = h("a", { href: URL.createObjectURL(new Blob([text], { type: "application/toml" })), download: path.split("/").pop() ?? "test.xabsl-test.toml" });
+  link.click();
+  URL.revokeObjectURL(link.href);
 }

@@ -1,14 +1,17 @@
-/// Server diagnostics -> CodeMirror `Diagnostic`s, and the as-you-type linter.
+/// Diagnostics -> CodeMirror `Diagnostic`s (the REST compile's and the language server's), and
+/// the as-you-type linter fed by the language server's published diagnostics.
 ///
 /// The compiler reports positions in the file as it read it: 1-based `line`/`col` (exclusive
 /// `end_col`) and `start`/`end` offsets in code points. The editor's document differs in two
 /// ways: CodeMirror normalises `\r\n` to `\n`, and JavaScript strings count UTF-16 units. Lines
 /// and columns survive both, so they are used first; offsets are the fallback (converted from
 /// code points), and everything is clamped into the document so a stale diagnostic never throws.
-import { type Diagnostic, linter } from "@codemirror/lint";
+import { type Diagnostic, setDiagnostics } from "@codemirror/lint";
 import type { Extension, Text } from "@codemirror/state";
-import type { EditorView } from "@codemirror/view";
+import { type EditorView, ViewPlugin, type ViewUpdate } from "@codemirror/view";
 import type { Span } from "../description";
+import { fromPosition } from "./complete";
+import type { LspClient, LspDiagnostic } from "./lsp";
 
 /// One diagnostic as the server sends it (engine/lang/diagnostics.py, `--format json`).
 export interface ServerDiagnostic {
@@ -86,33 +89,97 @@ export function toCodeMirror(diagnostics: readonly ServerDiagnostic[], doc: Text
   return out.sort((a, b) => a.from - b.from || a.to - b.to);
 }
 
-/// A compile function: the buffer's text for `path` in, the server's diagnostics out.
-export type CompileFn = (path: string, text: string) => Promise<readonly ServerDiagnostic[]>;
+/// The protocol's diagnostics of one document as CodeMirror diagnostics; a "did you mean" hint
+/// (the server's `data.replacement`) becomes an action that puts the suggested name in.
+export function lspToCodeMirror(diagnostics: readonly LspDiagnostic[], doc: Text): Diagnostic[] {
+  const out: Diagnostic[] = [];
+  for (const d of diagnostics) {
+    const from = fromPosition(doc, d.range.start);
+    let to = Math.max(from, fromPosition(doc, d.range.end));
+    if (to === from && to < doc.length) to = from + 1;
+    const replacement = d.data?.replacement;
+    const code = d.data?.original_code ? `${d.code} ${d.data.original_code}` : String(d.code ?? "xabsl");
+    out.push({
+      from,
+      to,
+      severity: d.severity === 1 ? "error" : d.severity === 2 ? "warning" : d.severity === 3 ? "info" : "hint",
+      message: d.message,
+      source: code,
+      ...(replacement
+        ? { actions: [{ name: `Change to '${replacement}'`, apply: (view: EditorView, a: number, b: number) => view.dispatch({ changes: { from: a, to: b, insert: replacement } }) }] }
+        : {}),
+    });
+  }
+  return out.sort((a, b) => a.from - b.from || a.to - b.to);
+}
 
-/// The as-you-type linter: after `delay` ms without typing, compile the buffer on the server
-/// (the other files as saved) and show what it says about this file.
-///
-/// `onResult` sees every answer (the editor shows counts and other files' problems).
+/// The protocol's diagnostics of `path` in the shape of the REST compile's (the status bar's).
+export function toServerDiagnostics(path: string, diagnostics: readonly LspDiagnostic[]): ServerDiagnostic[] {
+  return diagnostics.map((d) => ({
+    severity: d.severity === 1 ? "error" : d.severity === 2 ? "warning" : d.severity === 3 ? "info" : "hint",
+    code: String(d.code ?? ""),
+    ...(d.data?.original_code ? { original_code: d.data.original_code } : {}),
+    message: d.message,
+    file: path,
+    span: {
+      file: path,
+      line: d.range.start.line + 1,
+      col: d.range.start.character + 1,
+      end_line: d.range.end.line + 1,
+      end_col: d.range.end.character + 1,
+      start: 0,
+      end: 0,
+    },
+  }));
+}
+
+/// Diagnostics as you type, from the language server: the buffer's text goes to the server
+/// (after `delay` ms without typing); what it publishes for `path` is shown in the editor, and
+/// `onResult` sees the diagnostics of every file of the behavior set (the status bar).
 export function xabslLinter(
-  path: () => string | null,
-  compile: CompileFn,
+  client: LspClient,
+  path: string | null,
   onResult: (diagnostics: readonly ServerDiagnostic[] | Error) => void,
-  delay = 350,
+  delay = 150,
 ): Extension {
-  return linter(
-    async (view: EditorView) => {
-      const p = path();
-      if (!p) return [];
-      const doc = view.state.doc;
-      try {
-        const diagnostics = await compile(p, doc.toString());
-        onResult(diagnostics);
-        return toCodeMirror(diagnostics, view.state.doc.length === doc.length ? view.state.doc : doc, p);
-      } catch (error) {
-        onResult(error instanceof Error ? error : new Error(String(error)));
-        return [];
+  return ViewPlugin.fromClass(
+    class {
+      private timer: ReturnType<typeof setTimeout> | null = null;
+      private readonly unsubscribe: () => void;
+
+      constructor(readonly view: EditorView) {
+        this.unsubscribe = client.onDiagnostics((p) => {
+          if (p === path) this.show();
+        });
+        this.schedule(0);
+        if (path && client.diagnostics.has(path)) queueMicrotask(() => this.show());
+      }
+
+      show(): void {
+        if (!path) return;
+        const own = client.diagnostics.get(path) ?? [];
+        this.view.dispatch(setDiagnostics(this.view.state, lspToCodeMirror(own, this.view.state.doc)));
+        const all: ServerDiagnostic[] = [];
+        for (const [p, ds] of client.diagnostics) all.push(...toServerDiagnostics(p, ds));
+        onResult(all);
+      }
+
+      schedule(ms: number): void {
+        if (this.timer !== null) clearTimeout(this.timer);
+        this.timer = setTimeout(() => {
+          this.timer = null;
+          if (path) client.sync(path, this.view.state.doc.toString()).catch((error: Error) => onResult(error));
+        }, ms);
+      }
+
+      update(u: ViewUpdate): void {
+        if (u.docChanged) this.schedule(delay);
+      }
+
+      destroy(): void {
+        if (this.timer !== null) clearTimeout(this.timer);
+        this.unsubscribe();
       }
     },
-    { delay },
   );
 }

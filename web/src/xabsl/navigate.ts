@@ -1,95 +1,91 @@
-/// Go to definition and find references for XABSL names.
-///
-/// Names are global strings with dots (§1.1, §1.4), so a "word" is a maximal run of identifier
-/// characters including dots and a leading `@`. Definitions come from the description's spans
-/// (symbols, options, basic behaviors, enumerations, constants, agents); states and option
-/// parameters are looked up in the option being edited, whose text may be newer than the IR.
-import type { DescriptionIndex, Span } from "../description";
-import { currentOptionName } from "./complete";
+/// Go to definition, find references, rename and hover for XABSL, answered by the language
+/// server (`textDocument/definition`, `references`, `rename`, `hover`) — the compiler resolves
+/// the names, so a state, a parameter and a symbol of the same spelling are told apart.
+import type { EditorState, Extension, Text } from "@codemirror/state";
+import { type EditorView, hoverTooltip } from "@codemirror/view";
+import { fromPosition, toPosition } from "./complete";
+import type { LspClient, LspLocation, LspTextEdit } from "./lsp";
 
-const IDENT_CHAR = /[A-Za-z0-9_.@]/;
-
-/// The word at `pos` of `text` (or touching it from the left), with its offsets.
-export function wordAt(text: string, pos: number): { word: string; from: number; to: number } | null {
-  let from = pos;
-  let to = pos;
-  while (from > 0 && IDENT_CHAR.test(text[from - 1] as string)) from--;
-  while (to < text.length && IDENT_CHAR.test(text[to] as string)) to++;
-  let word = text.slice(from, to);
-  // A trailing dot ends a sentence in a comment, not a name.
-  while (word.endsWith(".")) {
-    word = word.slice(0, -1);
-    to--;
-  }
-  if (!word || !/^@?[A-Za-z_]/.test(word)) return null;
-  return { word, from, to };
-}
-
-export type Definition = { kind: "span"; span: Span; what: string } | { kind: "local"; from: number; to: number; what: string };
-
-function escape(text: string): string {
-  return text.replace(/[.*+?^${}()|[\]\\]/g, "\\$&");
-}
-
-/// Where `word` is defined: a span of some file, or an offset range of `text` itself.
-export function definitionOf(word: string, text: string, index: DescriptionIndex | null): Definition | null {
-  const option = currentOptionName(text);
-  if (word.startsWith("@")) {
-    const m = new RegExp(`(?:^|[;{\\s])(?:bool|float|enum\\s+[A-Za-z_][\\w.]*)?\\s*(${escape(word)})(?![\\w.])`, "m").exec(text);
-    if (m && m[1]) {
-      const from = m.index + m[0].length - m[1].length;
-      return { kind: "local", from, to: from + word.length, what: `parameter ${word}` };
-    }
-    const p = index?.optionByName.get(option ?? "")?.params.find((x) => `@${x.short_name}` === word);
-    return p?.span ? { kind: "span", span: p.span, what: `parameter ${word}` } : null;
-  }
-  const state = new RegExp(`\\bstate\\s+(${escape(word)})(?![\\w.])`).exec(text);
-  if (state && state[1] && option) {
-    const from = state.index + state[0].length - state[1].length;
-    return { kind: "local", from, to: from + word.length, what: `state ${word}` };
-  }
-  if (!index) return null;
-  const found =
-    (index.optionByName.get(word) && { span: index.optionByName.get(word)?.span, what: `option ${word}` }) ||
-    (index.behaviorByName.get(word) && { span: index.behaviorByName.get(word)?.span, what: `basic behavior ${word}` }) ||
-    (index.inputByName.get(word) && { span: index.inputByName.get(word)?.span, what: `input symbol ${word}` }) ||
-    (index.outputByName.get(word) && { span: index.outputByName.get(word)?.span, what: `${index.outputByName.get(word)?.internal ? "internal" : "output"} symbol ${word}` }) ||
-    (index.constantByName.get(word) && { span: index.constantByName.get(word)?.span, what: `constant ${word}` }) ||
-    (index.enumByName.get(word) && { span: index.enumByName.get(word)?.span, what: `enumeration ${word}` }) ||
-    null;
-  if (found?.span) return { kind: "span", span: found.span, what: found.what };
-  for (const e of index.description.enums) {
-    if (e.elements.includes(word) && e.span) return { kind: "span", span: e.span, what: `element ${word} of ${e.name}` };
-  }
-  const agent = index.description.agents.find((a) => a.name === word);
-  if (agent?.span) return { kind: "span", span: agent.span, what: `agent ${word}` };
-  return null;
-}
-
-export interface Reference {
+/// A place in a behavior file: its path, 1-based line and column (for the editor's `open`).
+export interface Place {
   path: string;
   line: number;
   col: number;
-  from: number;
-  to: number;
-  lineText: string;
 }
 
-/// Every whole-word occurrence of `word` in `files` (path -> text), outside comments' `//` tails.
-export function findReferences(word: string, files: ReadonlyMap<string, string>): Reference[] {
-  const out: Reference[] = [];
-  const re = new RegExp(`(?<![A-Za-z0-9_.@])${escape(word)}(?![A-Za-z0-9_.])`, "g");
-  for (const [path, text] of files) {
-    const lines = text.split("\n");
-    let offset = 0;
-    lines.forEach((lineText, i) => {
-      const code = lineText.split("//")[0] ?? "";
-      for (const m of code.matchAll(re)) {
-        const col = m.index ?? 0;
-        out.push({ path, line: i + 1, col: col + 1, from: offset + col, to: offset + col + word.length, lineText: lineText.trim() });
-      }
-      offset += lineText.length + 1;
-    });
+function place(client: LspClient, location: LspLocation): Place | null {
+  const path = client.pathOf(location.uri);
+  if (path === null) return null;
+  return { path, line: location.range.start.line + 1, col: location.range.start.character + 1 };
+}
+
+/// Where the name at `pos` is defined (null: nothing there, or nothing defines it).
+export async function definitionAt(client: LspClient, path: string, state: EditorState, pos: number): Promise<Place | null> {
+  await client.sync(path, state.doc.toString());
+  const found = await client.definition(path, toPosition(state.doc, pos));
+  const first = Array.isArray(found) ? found[0] : found;
+  return first ? place(client, first) : null;
+}
+
+/// Every occurrence of the name at `pos` in the behavior set (its declaration included).
+export async function referencesAt(client: LspClient, path: string, state: EditorState, pos: number): Promise<Place[]> {
+  await client.sync(path, state.doc.toString());
+  const found = (await client.references(path, toPosition(state.doc, pos))) ?? [];
+  return found.map((l) => place(client, l)).filter((p): p is Place => p !== null);
+}
+
+/// The edits renaming the name at `pos` to `newName`, by path (the server refuses invalid names).
+export async function renameAt(
+  client: LspClient,
+  path: string,
+  state: EditorState,
+  pos: number,
+  newName: string,
+): Promise<Map<string, LspTextEdit[]>> {
+  await client.sync(path, state.doc.toString());
+  const edit = await client.rename(path, toPosition(state.doc, pos), newName);
+  const out = new Map<string, LspTextEdit[]>();
+  for (const [uri, edits] of Object.entries(edit?.changes ?? {})) {
+    const p = client.pathOf(uri);
+    if (p !== null) out.set(p, edits);
   }
-  return out.sort((a, b) => a.path.localeCompare(b.path) || a.from - b.from);
+  return out;
+}
+
+/// The text edits of the protocol as CodeMirror changes of `doc`.
+export function toChanges(doc: Text, edits: readonly LspTextEdit[]): Array<{ from: number; to: number; insert: string }> {
+  return edits.map((e) => ({ from: fromPosition(doc, e.range.start), to: fromPosition(doc, e.range.end), insert: e.newText }));
+}
+
+/// Hover: the server's description (type, range, unit, doc comment; for an option its
+/// parameters and states) in a tooltip.
+export function lspHover(client: LspClient, path: () => string | null): Extension {
+  return hoverTooltip(async (view: EditorView, pos: number) => {
+    const p = path();
+    if (!p) return null;
+    try {
+      await client.sync(p, view.state.doc.toString());
+      const hover = await client.hover(p, toPosition(view.state.doc, pos));
+      if (!hover) return null;
+      const text = typeof hover.contents === "string" ? hover.contents : hover.contents.value;
+      const from = hover.range ? fromPosition(view.state.doc, hover.range.start) : pos;
+      const to = hover.range ? fromPosition(view.state.doc, hover.range.end) : pos;
+      return {
+        pos: from,
+        end: to,
+        above: true,
+        create: () => {
+          const dom = document.createElement("div");
+          dom.className = "cm-xabsl-hover";
+          dom.style.whiteSpace = "pre-wrap";
+          dom.style.maxWidth = "40em";
+          dom.style.padding = "4px 8px";
+          dom.textContent = text.replace(/\*\*|`/g, "");
+          return { dom };
+        },
+      };
+    } catch {
+      return null;
+    }
+  });
 }
