@@ -45,6 +45,12 @@ $(STAMP): pyproject.toml | check-python
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check -e '.[test,bench]'
 	touch $(STAMP)
 
+# The tests also need the optional Ray extra (the tournament's Ray test); `make run` does not.
+RAY_STAMP := $(VENV)/.ray-installed-stamp
+$(RAY_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet --disable-pip-version-check -e '.[test,bench,ray]'
+	touch $(RAY_STAMP)
+
 # The studio on http://127.0.0.1:8000 with the soccer example (Ctrl+C stops it).
 run: $(STAMP) system-deps web
 	$(BIN)/xabsl serve examples/soccer
@@ -55,7 +61,7 @@ lint: $(STAMP)
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
-test: $(STAMP) test-deps lint web web-test
+test: $(STAMP) $(RAY_STAMP) test-deps lint web web-test
 	$(BIN)/python -m pytest
 
 clean:

@@ -25,6 +25,7 @@ def register(subparsers: Any) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The flags of ``xabsl lsp``: the transport (stdio or websocket) and the agents file."""
     parser.add_argument("--stdio", action="store_true", help="speak on stdin/stdout (the default)")
     parser.add_argument("--ws", action="store_true", help="serve websocket clients instead of stdio")
     parser.add_argument("--host", default="127.0.0.1", help="websocket address (default 127.0.0.1)")
@@ -38,6 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Serve the language server until the client exits; the exit status."""
     from lsp.server import serve_stdio, serve_websocket
 
     if args.ws:

@@ -75,6 +75,7 @@ class LineIndex:
         self.starts = starts
 
     def position(self, offset: int, encoding: str = "utf-16") -> tuple[int, int]:
+        """The (line, character) of a text offset, characters counted in ``encoding``."""
         offset = max(0, min(offset, len(self.text)))
         line = bisect_right(self.starts, offset) - 1
         start = self.starts[line]
@@ -83,6 +84,7 @@ class LineIndex:
         return line, sum(_width(c, encoding) for c in self.text[start:offset])
 
     def offset(self, line: int, character: int, encoding: str = "utf-16") -> int:
+        """The text offset of a (line, character) position, characters counted in ``encoding``."""
         if line < 0:
             return 0
         if line >= len(self.starts):
@@ -164,11 +166,13 @@ class Analysis:
 
     @property
     def ok(self) -> bool:
+        """Whether the analysis found no error in any file."""
         return not any(d.is_error for ds in self.diagnostics.values() for d in ds) and not any(
             d.is_error for d in self.loose
         )
 
     def all_diagnostics(self) -> list[Diagnostic]:
+        """Every diagnostic of the analysis, per file first, then those without a file."""
         return [d for ds in self.diagnostics.values() for d in ds] + self.loose
 
     def occurrence_at(self, real: str, offset: int) -> Occurrence | None:
@@ -188,6 +192,7 @@ class Analysis:
         return [(f.real, o) for f in self.files for o in self.occurrences.get(f.real, []) if o.key == key]
 
     def option_at(self, real: str) -> ast.OptionDecl | None:
+        """The option declared in file ``real``, if it declares one."""
         state = self.by_real.get(real)
         return state.tree.option if state else None
 

@@ -166,11 +166,13 @@ class XabslLanguageServer(LanguageServer):
             folder = parent
 
     def project(self, agents: str) -> Project:
+        """The project of an agents file, made on first use."""
         if agents not in self.projects:
             self.projects[agents] = Project(agents)
         return self.projects[agents]
 
     def project_of(self, uri: str) -> tuple[Project, str]:
+        """The project a document belongs to, and the document's real path."""
         path = to_fs_path(uri) or uri
         real = os.path.realpath(path)
         return self.project(self.agents_for(real)), real
@@ -178,17 +180,21 @@ class XabslLanguageServer(LanguageServer):
     # ------------------------------------------------------------------ conversions
 
     def range_of(self, state: SourceState, start: int, end: int) -> lsp.Range:
+        """An LSP range for the offsets ``start``..``end`` of a source."""
         a = state.lines.position(start, self.encoding)
         b = state.lines.position(end, self.encoding)
         return lsp.Range(lsp.Position(*a), lsp.Position(*b))
 
     def location(self, analysis: Analysis, real: str, start: int, end: int) -> lsp.Location:
+        """An LSP location for the offsets ``start``..``end`` of file ``real``."""
         return lsp.Location(from_fs_path(real) or real, self.range_of(analysis.by_real[real], start, end))
 
     def offset_of(self, state: SourceState, position: lsp.Position) -> int:
+        """The text offset of an LSP position in a source."""
         return state.lines.offset(position.line, position.character, self.encoding)
 
     def diagnostic(self, analysis: Analysis, state: SourceState, d: Diagnostic) -> lsp.Diagnostic:
+        """A compiler diagnostic as an LSP diagnostic, with its related places."""
         span = d.span
         start, end = (span.start, span.end) if span else (0, 0)
         related = []
@@ -312,6 +318,7 @@ class XabslLanguageServer(LanguageServer):
 
     @staticmethod
     def parameter(analysis: Analysis, key: Key) -> ir.Parameter | None:
+        """The IR parameter a name key stands for (of an option, input symbol or basic behavior)."""
         table = analysis.table
         _, klass, owner, short = key
         params: Iterable[ir.Parameter] = ()

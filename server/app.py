@@ -658,6 +658,7 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     studio.hub = hub
     session.notify = hub.on_entry
     session.on_crash = hub.on_crash
+    session.on_breakpoint = hub.on_breakpoint
     await session.start()
     try:
         yield

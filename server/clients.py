@@ -33,9 +33,11 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from server.frames import Entry, FrameEncoder, Generation
 from server.messages import (
+    BreakpointEvent,
     Command,
     CrashEvent,
     HelloReason,
+    Hit,
     ProtocolError,
     Reply,
     Resync,
@@ -283,6 +285,19 @@ class Hub:
         for client in self.clients.values():
             if client.state is ClientState.LIVE and client.due(entry, ticks_per_second):
                 client.offer(entry)
+
+    def on_breakpoint(self, hit: Hit) -> None:
+        """A breakpoint hit and paused the simulation: tell every client (``event`` ``breakpoint``)."""
+        self.broadcast(
+            BreakpointEvent(
+                program=hit.key,
+                breakpoint=hit.breakpoint,
+                robot=hit.robot,
+                seq=hit.seq,
+                t=hit.t,
+                description=hit.description,
+            )
+        )
 
     def on_crash(self, crash: dict[str, Any]) -> None:
         """The simulation process ended unasked: tell every client (``event`` ``crash``)."""

@@ -636,3 +636,40 @@ def _merge(into: dict[str, Any], delta: dict[str, Any]) -> None:
     into["robots"] = merged
     if "status" not in delta and status is not None:
         into["status"] = status
+
+
+def recorded_ticks(
+    ring: Ring, seq: int, resume: tuple[int, dict[str, Any]] | None = None
+) -> Iterator[tuple[Entry, list[dict[str, Any]]]]:
+    """The ticks of ``seq``'s generation up to ``seq``, decoded: ``(entry, robots)`` oldest first.
+
+    ``robots`` are the frame's robot objects with every value merged in (``inputs``/``outputs``
+    by symbol id as a string). Decoding starts at the generation's oldest key frame in the ring,
+    or, with ``resume`` = ``(seq, decoded frame)`` of an earlier pass that is still in the ring,
+    after that tick (the frame given is not changed).
+    Nothing is yielded when ``seq`` has left the ring.
+    """
+    entries = ring.snapshot()
+    target = next((e for e in reversed(entries) if e.seq == seq), None)
+    if target is None:
+        return
+    gen = target.gen
+    state: dict[str, Any] | None = None
+    after = -1
+    if resume is not None and any(e.seq == resume[0] and e.gen is gen for e in entries):
+        after, state = resume[0], dict(resume[1])  # merging replaces robots, never mutates them
+    for entry in entries:
+        if entry.gen is not gen or entry.seq > seq or entry.seq <= after:
+            continue
+        if state is None:
+            if entry.full is None:
+                continue
+            state = orjson.loads(entry.full)
+        else:
+            _merge(state, orjson.loads(entry.delta))
+        yield entry, state["robots"]
+
+
+def decoded_frame(robots: list[dict[str, Any]]) -> dict[str, Any]:
+    """A frame dict around ``robots`` for :func:`recorded_ticks`' ``resume``."""
+    return {"robots": robots}

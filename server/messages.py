@@ -40,6 +40,7 @@ from server.protocol import DEFAULT_RATE, MAX_RATE, MAX_SPEED, MAX_STEP_TICKS, M
 
 if TYPE_CHECKING:
     from engine.ir.model import Program
+    from engine.runtime.breakpoints import Breakpoint
 
 __all__ = [
     "BEHAVIOR_NODE",
@@ -273,13 +274,15 @@ class Reload:
 @with_config(_STRICT)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Explain:
-    """Why ``option`` of ``robot``'s engine took its leaf in the last tick (an :class:`Explanation`)."""
+    """Why ``option`` of ``robot``'s engine took its leaf in the last tick or at tick ``seq`` (:class:`Explanation`)."""
 
     type: Literal["command"] = "command"
     id: CommandId | None = None
     op: Literal["explain"]
     robot: RobotId
     option: Ref
+    #: the tick (a ring buffer seq) to explain from recorded values; null: the live engine now
+    seq: Annotated[int, Field(ge=0, le=2**62), _INTEGRAL] | None = None
 
 
 @with_config(_STRICT)
@@ -317,6 +320,82 @@ class WorldCommand:
     args: dict[str, Any] = field(default_factory=dict)
 
 
+#: A breakpoint kind (``engine.runtime.breakpoints``).
+BreakpointKindName = Literal["enter_option", "leave_option", "enter_state", "leave_state", "leaf", "condition"]
+#: A breakpoint's id within its behavior set.
+BreakpointId = Annotated[int, Field(ge=1, le=2**31), _INTEGRAL]
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SetBreakpoint:
+    """Add a breakpoint to behavior set ``program`` (or replace breakpoint ``breakpoint``); see docs/studio.md.
+
+    ``program`` defaults to the behavior set of ``robot``, else the first one; ``robot`` null: any robot.
+    """
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["set_breakpoint"]
+    program: str | None = None
+    breakpoint: BreakpointId | None = None
+    kind: BreakpointKindName
+    option: str | None = None
+    state: str | None = None
+    leaf: Annotated[int, Field(ge=0, le=2**31), _INTEGRAL] | None = None
+    condition: Annotated[str, Field(max_length=2000)] | None = None
+    robot: RobotId | None = None
+    enabled: bool = True
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RemoveBreakpoint:
+    """Remove breakpoint ``breakpoint`` of behavior set ``program`` (default: the first)."""
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["remove_breakpoint"]
+    program: str | None = None
+    breakpoint: BreakpointId
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class EnableBreakpoint:
+    """Enable or disable breakpoint ``breakpoint`` of behavior set ``program`` (default: the first)."""
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["enable_breakpoint"]
+    program: str | None = None
+    breakpoint: BreakpointId
+    enabled: bool
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ListBreakpoints:
+    """The breakpoints of every behavior set (or of ``program``)."""
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["list_breakpoints"]
+    program: str | None = None
+
+
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class CheckCondition:
+    """Check ``condition`` against behavior set ``program``'s symbols (default: the first): diagnostics."""
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["check_condition"]
+    program: str | None = None
+    condition: Annotated[str, Field(max_length=2000)]
+
+
 Command = Annotated[
     Pause
     | Resume
@@ -334,9 +413,16 @@ Command = Annotated[
     | Explain
     | History
     | Status
-    | WorldCommand,
+    | WorldCommand
+    | SetBreakpoint
+    | RemoveBreakpoint
+    | EnableBreakpoint
+    | ListBreakpoints
+    | CheckCondition,
     Discriminator("op"),
 ]
+#: Breakpoint commands: the server process keeps (and persists) breakpoints, the simulation checks them.
+BreakpointCommand = SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition
 #: Commands that address one robot's engine (they have a ``robot`` field).
 RobotCommand = SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Explain
 ClientMessage = Annotated[Subscribe | Resync | Command, Discriminator("type")]
@@ -511,6 +597,21 @@ class CrashEvent:
 
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class BreakpointEvent:
+    """A breakpoint hit: the simulation paused after tick ``seq`` (time ``t``) of robot ``robot``."""
+
+    type: Literal["event"] = "event"
+    event: Literal["breakpoint"] = "breakpoint"
+    program: str
+    breakpoint: int
+    robot: int
+    seq: int
+    t: int
+    description: str
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class SessionInfo:
     """The session as a ``hello`` describes it."""
 
@@ -637,14 +738,46 @@ class HistoryChunk:
 
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class Comparison:
+    """One comparison inside a condition with the values of its two sides (``ball.distance (412.3) < 500``)."""
+
+    text: str
+    op: str
+    left: str
+    left_value: str
+    right: str
+    right_value: str
+    value: bool | None
+    shown: str
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Condition:
-    """One ``if`` on the path to the leaf an option's decision took, re-evaluated now."""
+    """One ``if`` on the path to the leaf an option's decision took, with the values it had."""
 
     text: str
     source: str
     value: bool | int | float | str | None
     branch: bool
     span: dict[str, Any] | None
+    comparisons: list[Comparison] = field(default_factory=list)
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class LastTransition:
+    """The last transition of the option up to the explained tick: when, from where to where, why."""
+
+    seq: int
+    t: int
+    decided_in: int
+    decided_in_name: str
+    target: int
+    target_name: str
+    leaf: int
+    conditions: list[Condition]
+    tree: dict[str, Any]
 
 
 @with_config(_SCHEMA)
@@ -662,6 +795,15 @@ class Explanation:
     stay: bool
     leaf_span: dict[str, Any] | None
     conditions: list[Condition]
+    #: the explained tick (null: the live engine now) and whether values are the recorded ones
+    seq: int | None = None
+    t: int | None = None
+    recorded: bool = False
+    #: the decision tree of ``decided_in``: ``{"if", "value", "taken", "then", "else"}`` or
+    #: ``{"leaf", "target", "stay", "taken"}`` (``taken``: on the path of this decision)
+    tree: dict[str, Any] = field(default_factory=dict)
+    #: the last transition up to this tick found in the ring buffer (null: none recorded)
+    last_transition: LastTransition | None = None
 
 
 @with_config(_SCHEMA)
@@ -724,6 +866,41 @@ class HistoryResult:
     chunks: int
 
 
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class BreakpointInfo:
+    """One breakpoint as ``list_breakpoints`` shows it (``problem``: why it is not checked now)."""
+
+    program: str
+    breakpoint: int
+    kind: str
+    option: str | None
+    state: str | None
+    leaf: int | None
+    condition: str | None
+    robot: int | None
+    enabled: bool
+    description: str
+    problem: str | None
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class BreakpointList:
+    """The result of ``list_breakpoints`` (and of the commands that change them)."""
+
+    breakpoints: list[BreakpointInfo]
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ConditionCheck:
+    """The result of ``check_condition``: diagnostics with line and column in the condition's text."""
+
+    ok: bool
+    diagnostics: list[dict[str, Any]]
+
+
 #: The ``result`` of a successful reply, per op (None: no result; ``status``: the session status).
 RESULTS: dict[str, Any] = {
     "pause": PausedResult,
@@ -743,10 +920,15 @@ RESULTS: dict[str, Any] = {
     "history": HistoryResult,
     "status": dict[str, Any],
     "world_command": Any,
+    "set_breakpoint": BreakpointList,
+    "remove_breakpoint": BreakpointList,
+    "enable_breakpoint": BreakpointList,
+    "list_breakpoints": BreakpointList,
+    "check_condition": ConditionCheck,
 }
 
-ServerEvent = FileEvent | CompileEvent | CrashEvent
-ServerMessage = Hello | Frame | Reply | HistoryChunk | FileEvent | CompileEvent | CrashEvent
+ServerEvent = FileEvent | CompileEvent | CrashEvent | BreakpointEvent
+ServerMessage = Hello | Frame | Reply | HistoryChunk | FileEvent | CompileEvent | CrashEvent | BreakpointEvent
 
 
 def encode(message: Reply | ServerEvent) -> bytes:
@@ -854,8 +1036,46 @@ class ReleaseOwner:
     op: Literal["release_owner"] = "release_owner"
 
 
-#: What the simulation carries out: the commands not handled in the server process, and two internal ones.
-WorkerCommand = Pause | Resume | Step | Speed | Reset | RobotCommand | Status | WorldCommand | Apply | ReleaseOwner
+@dataclass(frozen=True, slots=True)
+class SetBreakpoints:
+    """Internal: the breakpoints of behavior set ``key`` (all of them; the server keeps and stores them)."""
+
+    key: str
+    points: tuple[Breakpoint, ...]
+    op: Literal["set_breakpoints"] = "set_breakpoints"
+
+
+@dataclass(frozen=True, slots=True)
+class ExplainRecorded:
+    """Internal: explain decisions from recorded values (``explain`` with ``seq``, prepared by the server).
+
+    ``ticks`` holds the explained tick first, then the tick of the last transition (if any):
+    ``(seq, t, decided_in, leaf, active state, inputs by id, outputs by id, option params, state_time,
+    option_time)``; values as the ring buffer holds them (display values, enums as element indices).
+    """
+
+    robot: int
+    option: str
+    generation: int
+    ticks: tuple[tuple[Any, ...], ...]
+    op: Literal["explain_recorded"] = "explain_recorded"
+
+
+#: What the simulation carries out: the commands not handled in the server process, and internal ones.
+WorkerCommand = (
+    Pause
+    | Resume
+    | Step
+    | Speed
+    | Reset
+    | RobotCommand
+    | Status
+    | WorldCommand
+    | Apply
+    | ReleaseOwner
+    | SetBreakpoints
+    | ExplainRecorded
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -872,5 +1092,17 @@ class Stop:
     """End the simulation process."""
 
 
+@dataclass(frozen=True, slots=True)
+class Hit:
+    """A breakpoint hit in the tick of sample ``seq`` (sent after that sample); the simulation paused."""
+
+    key: str
+    breakpoint: int
+    robot: int
+    seq: int
+    t: int
+    description: str
+
+
 ToWorker = WorkerRequest | Stop
-FromWorker = Sample | NewGeneration | WorkerReply | Crash
+FromWorker = Sample | NewGeneration | WorkerReply | Crash | Hit

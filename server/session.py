@@ -31,27 +31,41 @@ import logging
 import multiprocessing
 import socket
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 from engine.emit.json import program_to_json
 from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorSource, Example
 from engine.ir.model import Program
 from engine.lang import Compilation, compile_file
-from server import worker
+from engine.lang.condition import check_condition
+from engine.runtime.breakpoints import Breakpoint, BreakpointError
+from server import frames, worker
+from server.breakpoints import BreakpointStore, validate
 from server.channel import Channel, ChannelClosed
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.messages import (
     Apply,
+    BreakpointCommand,
+    CheckCondition,
     Crash,
+    EnableBreakpoint,
+    Explain,
+    ExplainRecorded,
     FromWorker,
     HelloReason,
+    Hit,
+    ListBreakpoints,
     NewGeneration,
     Pause,
     ReleaseOwner,
+    RemoveBreakpoint,
     Reset,
     Resume,
     Sample,
+    SetBreakpoint,
+    SetBreakpoints,
     Status,
     Stop,
     ToWorker,
@@ -125,6 +139,7 @@ class Session:
         speed: real time x speed (0.1..20).
         behavior_hz, physics_hz: the loop's rates (``engine.host``).
         ring_seconds: how much history the ring buffer keeps.
+        state_dir: where breakpoints are stored (default: ``server.breakpoints.state_folder()``).
     """
 
     def __init__(
@@ -135,6 +150,7 @@ class Session:
         behavior_hz: int = DEFAULT_BEHAVIOR_HZ,
         physics_hz: int = DEFAULT_PHYSICS_HZ,
         ring_seconds: float = RING_SECONDS,
+        state_dir: Path | None = None,
     ) -> None:
         self.example = example
         self.seed = seed
@@ -164,6 +180,16 @@ class Session:
         self._restart_lock: asyncio.Lock | None = None
         for key in self.programs:
             self._store_compilation(key, self.compile(key))
+        #: called on the asyncio loop when a breakpoint hit (after the sample of its tick)
+        self.on_breakpoint: Callable[[Hit], None] = lambda hit: None
+        self.breakpoint_store = BreakpointStore(state_dir)
+        #: per (robot, option id): where the last live ``explain`` scan of the ring stopped
+        self._scans: dict[tuple[int, int], Scan] = {}
+        #: per behavior key: its breakpoints by id (stored per agents file)
+        self.breakpoints: dict[str, dict[int, Breakpoint]] = {
+            key: {p.id: p for p in self.breakpoint_store.load(state.source.agents_file)}
+            for key, state in self.programs.items()
+        }
 
     # -- compiling -------------------------------------------------------------------------------
 
@@ -222,6 +248,7 @@ class Session:
             seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
             generation=self.generation.number if self.generation is not None else 0,
             reason=reason,
+            breakpoints={key: tuple(points.values()) for key, points in self.breakpoints.items()},
         )
         ours, theirs = socket.socketpair()
         process = _context(self.example).Process(
@@ -251,6 +278,7 @@ class Session:
             self._ended()
             return
         latest: Entry | None = None
+        hits: list[Hit] = []
         for message in messages:
             if isinstance(message, Sample):
                 if self.generation is None or message.gen != self.generation.number:
@@ -267,6 +295,8 @@ class Session:
                 for key, error in message.errors.items():
                     if key in self.programs:
                         self.programs[key].error = error
+            elif isinstance(message, Hit):
+                hits.append(message)
             elif isinstance(message, Crash):
                 self.crash = {
                     "message": message.message,
@@ -279,6 +309,9 @@ class Session:
             if self._started is not None and not self._started.done():
                 self._started.set_result(None)
             self.notify(latest)
+        for hit in hits:
+            self.paused = True
+            self.on_breakpoint(hit)
 
     def _ended(self) -> None:
         """The simulation process closed its end: asked to (stop) or not (a crash)."""
@@ -360,7 +393,7 @@ class Session:
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand, owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand | BreakpointCommand, owner: str | None = None) -> Any:
         """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
@@ -371,6 +404,10 @@ class Session:
             return await self._restart(command)
         if isinstance(command, Status):
             return await self.status()
+        if isinstance(command, SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition):
+            return await self.breakpoint_command(command)
+        if isinstance(command, Explain):
+            return await self.explain(command, owner)
         ok, result, error = await self._send(command, owner)
         if not ok:
             raise CommandError(error)
@@ -430,6 +467,154 @@ class Session:
         with contextlib.suppress(ChannelClosed):
             channel.send(WorkerRequest(None, ReleaseOwner(), owner))
             self._watch_backlog()
+
+    # -- breakpoints ---------------------------------------------------------------------------------
+
+    def _breakpoint_key(self, program: str | None, robot: int | None = None) -> str:
+        if program is not None:
+            if program not in self.programs:
+                raise CommandError(f"unknown program {program!r} (programs: {', '.join(self.programs)})")
+            return program
+        if robot is not None and self.generation is not None:
+            robots = self.generation.structure.get("robots", [])
+            if not 0 <= robot < len(robots):
+                raise CommandError(f"robot must be a robot id in 0..{len(robots) - 1}")
+            key = robots[robot].get("program")
+            if key is None:
+                raise CommandError(f"robot {robot} runs no XABSL engine")
+            return str(key)
+        return next(iter(self.programs))
+
+    def breakpoint_list(self, key: str | None = None) -> dict[str, Any]:
+        """The ``list_breakpoints`` result (of behavior ``key``, or of all)."""
+        listed = []
+        for program, points in self.breakpoints.items():
+            if key is not None and program != key:
+                continue
+            running = self.programs[program].running
+            for point in sorted(points.values(), key=lambda p: p.id):
+                try:
+                    validate(running, point)
+                    problem = None
+                except BreakpointError as error:
+                    problem = str(error)
+                fields = point.as_dict()
+                fields["breakpoint"] = fields.pop("id")
+                listed.append({"program": program, **fields, "description": point.describe(), "problem": problem})
+        return {"breakpoints": listed}
+
+    async def breakpoint_command(self, command: BreakpointCommand) -> Any:
+        """Set, remove, enable, list breakpoints or check a condition (stored, then sent to the simulation).
+
+        Raises:
+            CommandError: an unknown program or breakpoint, names the behavior lacks, a bad condition.
+        """
+        if isinstance(command, ListBreakpoints):
+            return self.breakpoint_list(self._breakpoint_key(command.program) if command.program else None)
+        if isinstance(command, CheckCondition):
+            key = self._breakpoint_key(command.program)
+            running = self.programs[key].running
+            if running is None:
+                raise CommandError(f"the behavior {key} has not compiled yet")
+            checked = check_condition(running, command.condition)
+            return {"ok": checked.ok, "diagnostics": [d.as_dict() for d in checked.diagnostics]}
+        robot = command.robot if isinstance(command, SetBreakpoint) else None
+        key = self._breakpoint_key(command.program, robot)
+        points = self.breakpoints.setdefault(key, {})
+        try:
+            if isinstance(command, SetBreakpoint):
+                ident = command.breakpoint or max(points, default=0) + 1
+                point = Breakpoint(
+                    ident,
+                    command.kind,
+                    command.option,
+                    command.state,
+                    command.leaf,
+                    command.condition,
+                    command.robot,
+                    command.enabled,
+                )
+                validate(self.programs[key].running, point)
+                points[ident] = point
+            elif isinstance(command, RemoveBreakpoint):
+                if points.pop(command.breakpoint, None) is None:
+                    raise CommandError(f"no breakpoint {command.breakpoint} in {key}")
+            else:
+                point = points.get(command.breakpoint)  # type: ignore[assignment]
+                if point is None:
+                    raise CommandError(f"no breakpoint {command.breakpoint} in {key}")
+                points[command.breakpoint] = replace(point, enabled=command.enabled)
+        except BreakpointError as error:
+            raise CommandError(str(error)) from None
+        self.breakpoint_store.save(self.programs[key].source.agents_file, points.values())
+        if self.running:
+            ok, _, problem = await self._send(SetBreakpoints(key, tuple(points.values())), None)
+            if not ok:
+                raise CommandError(problem)
+        return self.breakpoint_list(key)
+
+    # -- explain ---------------------------------------------------------------------------------------
+
+    async def explain(self, command: Explain, owner: str | None) -> Any:
+        """``explain``: live (``seq`` null) or from the recorded values of tick ``seq``; with the last transition.
+
+        Raises:
+            CommandError: unknown robot or option, a tick no longer in the ring, or the option did
+                not run in it.
+        """
+        live: dict[str, Any] | None = None
+        if command.seq is None:
+            ok, result, error = await self._send(command, owner)
+            if not ok:
+                raise CommandError(error)
+            live = result
+            latest = self.ring.latest
+            if latest is None:
+                return live
+            seq = latest.seq
+        else:
+            seq = command.seq
+        option_id = live["option"] if live is not None else self._option_id(command.robot, command.option)
+        if live is not None:
+            # Live: continue the last scan of this robot and option (a full decode only the first time).
+            cache_key = (command.robot, option_id)
+            found = await asyncio.to_thread(
+                _recorded, self.ring, seq, command.robot, option_id, self._scans.get(cache_key)
+            )
+            if found is not None:
+                self._scans[cache_key] = found[3]
+        else:
+            found = await asyncio.to_thread(_recorded, self.ring, seq, command.robot, option_id)
+        if found is None:
+            if live is not None:
+                return {**live, "last_transition": None}
+            raise CommandError(f"tick {seq} is not in the ring buffer (or option {command.option} did not run in it)")
+        generation, at, transition, _ = found
+        if live is not None:
+            if transition is None:
+                return {**live, "last_transition": None}
+            ticks: tuple[tuple[Any, ...], ...] = (transition,)
+        else:
+            ticks = (at,) if transition is None else (at, transition)
+        name = _option_name(self, command.option, command.robot) if isinstance(command.option, int) else command.option
+        ok, results, error = await self._send(ExplainRecorded(command.robot, name, generation, ticks), owner)
+        if not ok:
+            raise CommandError(error)
+        if live is not None:
+            return {**live, "last_transition": _transition(results[0])}
+        decision: dict[str, Any] = results[0]
+        decision["last_transition"] = _transition(results[1]) if len(results) > 1 else None
+        return decision
+
+    def _option_id(self, robot: int, option: int | str) -> int:
+        if isinstance(option, int):
+            return option
+        key = self._breakpoint_key(None, robot)
+        program = self.generation.structure["programs"].get(key) if self.generation is not None else None
+        for item in program.get("options", []) if program else []:
+            if item.get("name") == option:
+                return int(item["id"])
+        raise CommandError(f"unknown option {option!r}")
 
     # -- hot reload ----------------------------------------------------------------------------------
 
@@ -519,6 +704,89 @@ def _store_partial(state: ProgramState, compilation: Compilation) -> None:
         log.exception("the partial program of %s cannot be described", state.source.key)
         state.partial_json = None
     state.partial = partial if state.partial_json is not None else None
+
+
+def _option_name(session: Session, option: int, robot: int) -> str:
+    key = session._breakpoint_key(None, robot)
+    program = session.generation.structure["programs"].get(key) if session.generation is not None else None
+    for item in program.get("options", []) if program else []:
+        if item.get("id") == option:
+            return str(item["name"])
+    raise CommandError(f"unknown option id {option}")
+
+
+#: path node fields (docs/protocol.md "path"): kind, depth, option id, active state, option_time,
+#: state_time, decided-in state, leaf, params
+_NODE = 9
+
+
+#: Where a scan of the ring stopped: (seq, decoded frame, generation, last transition tick or None,
+#: the option's tick at seq).
+Scan = tuple[int, dict[str, Any], int, tuple[Any, ...] | None, tuple[Any, ...]]
+
+
+def _recorded(
+    ring: frames.Ring, seq: int, robot: int, option: int, resume: Scan | None = None
+) -> tuple[int, tuple[Any, ...], Any, Scan] | None:
+    """For tick ``seq``: generation, the option's decision, the last transition up to it, the scan's end.
+
+    The scan's end continues a later scan (``resume``) from where this one stopped.
+    """
+    if resume is not None and resume[0] == seq:
+        return resume[2], resume[4], resume[3], resume
+    at: tuple[Any, ...] | None = None
+    transition: tuple[Any, ...] | None = resume[3] if resume is not None else None
+    generation = resume[2] if resume is not None else None
+    frame: dict[str, Any] | None = None
+    last_seq = -1
+    resumed = (resume[0], resume[1]) if resume is not None else None
+    for entry, robots in frames.recorded_ticks(ring, seq, resumed):
+        if generation is not None and entry.gen.number != generation:
+            transition = None
+        generation = entry.gen.number
+        frame, last_seq = frames.decoded_frame(robots), entry.seq
+        if robot >= len(robots):
+            return None
+        state = robots[robot]
+        node = next((n for n in state.get("path", []) if n[0] == 0 and n[2] == option and len(n) >= _NODE), None)
+        if node is None:
+            if entry.seq == seq:
+                return None
+            continue
+        tick = (
+            entry.seq,
+            entry.t,
+            node[6],
+            node[7],
+            node[3],
+            state.get("inputs", {}),
+            state.get("outputs", {}),
+            list(node[8]),
+            float(node[5]),
+            float(node[4]),
+        )
+        if node[6] != node[3]:  # the decision left its state: a transition
+            transition = tick
+        if entry.seq == seq:
+            at = tick
+    if at is None or generation is None or frame is None:
+        return None
+    return generation, at, transition, (last_seq, frame, generation, transition, at)
+
+
+def _transition(result: dict[str, Any]) -> dict[str, Any]:
+    """A ``LastTransition`` from an explanation of the tick it fired in."""
+    return {
+        "seq": result["seq"],
+        "t": result["t"],
+        "decided_in": result["decided_in"],
+        "decided_in_name": result["decided_in_name"],
+        "target": result["target"],
+        "target_name": result["target_name"],
+        "leaf": result["leaf"],
+        "conditions": result["conditions"],
+        "tree": result["tree"],
+    }
 
 
 def _latest_world(latest: Entry | None) -> dict[str, Any]:

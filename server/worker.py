@@ -41,6 +41,7 @@ from typing import Any
 
 import orjson
 
+from engine.codegen.layout import default_value
 from engine.host import (
     DEFAULT_BEHAVIOR_HZ,
     DEFAULT_PHYSICS_HZ,
@@ -52,16 +53,21 @@ from engine.host import (
 )
 from engine.ir.model import Program, leaf_path
 from engine.runtime import DebugError, Debugger, Engine, EngineError
+from engine.runtime.breakpoints import Breakpoint, BreakpointHit, BreakpointSet
+from engine.runtime.debug import Explanation, Unknown, decision_tree, explain_decision, render, show_value
+from engine.types import Kind, Value
 from server.channel import Channel, ChannelClosed
 from server.frames import AgentSampler, ProgramCodec
 from server.messages import (
     Apply,
     Crash,
     Explain,
+    ExplainRecorded,
     ForceBehavior,
     ForceOption,
     FromWorker,
     HelloReason,
+    Hit,
     NewGeneration,
     OverrideInput,
     Pause,
@@ -73,6 +79,7 @@ from server.messages import (
     Resume,
     Sample,
     SelectAgent,
+    SetBreakpoints,
     Speed,
     Status,
     Step,
@@ -112,6 +119,8 @@ class WorkerConfig:
     generation: int = 0
     #: the ``hello`` reason of the first generation (``reset`` when restarted after a crash)
     reason: HelloReason = "connect"
+    #: per behavior key: its breakpoints (the server keeps and stores them)
+    breakpoints: dict[str, tuple[Breakpoint, ...]] = field(default_factory=dict)
 
 
 @dataclass(slots=True)
@@ -168,6 +177,14 @@ class Simulation:
         #: where generation messages and samples produced by commands go: ``emit(message,
         #: droppable) -> sent``; the process loop sends them, tests may collect them
         self.emit: Callable[[FromWorker, bool], bool] = _collect
+        #: the breakpoints checked after every tick while any is enabled (``armed``)
+        self.breakpoints = BreakpointSet()
+        for key, points in config.breakpoints.items():
+            self.breakpoints.replace(key, points)
+        #: hits of the last tick, sent after its sample (``take_hits``)
+        self.hits: list[Hit] = []
+        #: the codecs of recent generations (``explain_recorded`` of a tick before a reload)
+        self.codecs: dict[int, dict[str, ProgramCodec]] = {}
         self._build_world(self.seed)
 
     # -- world and generations ---------------------------------------------------------------------
@@ -230,6 +247,9 @@ class Simulation:
             input_ids.append(tuple(i for i, *_ in codec.inputs))
             output_ids.append(tuple(i for i, *_ in codec.outputs))
         self.samplers = samplers
+        self.codecs[self.generation_number] = codecs
+        for old in [n for n in self.codecs if n <= self.generation_number - 8]:
+            del self.codecs[old]
         programs = {key: running[1] for key, running in self.programs.items() if running is not None}
         for key, description in self.descriptions.items():
             programs.setdefault(key, description)
@@ -296,7 +316,10 @@ class Simulation:
         started = time.perf_counter()
         cpu = time.thread_time()
         self.loop.tick()
+        found = self._check_breakpoints() if self.breakpoints.armed else None
         sample = self.sample()
+        if found:
+            self._hits(found, sample)
         done = time.perf_counter()
         timing = self.timing
         timing.busy += done - started
@@ -304,6 +327,26 @@ class Simulation:
         timing.ticks += 1
         timing.add(done, self.loop.sim_seconds)
         return sample
+
+    def _check_breakpoints(self) -> list[BreakpointHit]:
+        hits = self.breakpoints.check(
+            (index, key, engine) for index, (key, engine) in enumerate(zip(self.keys, self.engines, strict=True))
+        )
+        if hits:
+            self.paused = True  # before the sample, so that it says so
+        return hits
+
+    def _hits(self, found: list[BreakpointHit], sample: Sample) -> None:
+        for hit in found:
+            key = self.keys[hit.robot] or ""
+            point = self.breakpoints.points.get(key, {}).get(hit.id)
+            description = point.describe() if point is not None else f"breakpoint {hit.id}"
+            self.hits.append(Hit(key, hit.id, hit.robot, sample.seq, sample.t, description))
+
+    def take_hits(self) -> list[Hit]:
+        """The hits of the ticks run since the last call (to send after their samples)."""
+        hits, self.hits = self.hits, []
+        return hits
 
     # -- commands ---------------------------------------------------------------------------------
 
@@ -345,9 +388,13 @@ class Simulation:
             if self.world.finished:
                 break
             sample = self.tick()
+            if self.hits:  # a breakpoint stops the steps too
+                break
             sent = self.emit(sample, True)
-        if sample is not None and not sent:  # the state a paused client looks at must arrive
+        if sample is not None and (not sent or self.hits):  # the state a paused client looks at must arrive
             self.emit(sample, False)
+        for hit in self.take_hits():
+            self.emit(hit, False)
         if sample is None:
             return {"seq": self.seq, "t": self._tick_time() if self.loop.ticks else 0}
         return {"seq": sample.seq, "t": sample.t}
@@ -418,6 +465,17 @@ class Simulation:
         _, engine, codec = self._robot(command.robot)
         option = self._named(command.option, codec.option_ids, "option")
         explanation = Debugger(engine).explain(option)
+        result = self._explanation(codec, option, explanation)
+        state = codec.program.options[option].state(explanation.decided_in)
+        result["tree"] = decision_tree(
+            state.decision, explanation.leaf, None, lambda node: node.text or render(node.condition)
+        )
+        _mark_values(result["tree"], explanation)
+        result.update(seq=None, t=None, recorded=False)
+        return result
+
+    @staticmethod
+    def _explanation(codec: ProgramCodec, option: str, explanation: Explanation) -> dict[str, Any]:
         states = codec.state_ids[option]
         ir_option = codec.program.options[option]
         decided = ir_option.state(explanation.decided_in)
@@ -448,10 +506,57 @@ class Simulation:
                     "value": _plain(c.value),
                     "branch": c.branch,
                     "span": c.span.as_dict() if c.span else None,
+                    "comparisons": [
+                        {
+                            "text": k.text,
+                            "op": k.op,
+                            "left": k.left,
+                            "left_value": k.left_value,
+                            "right": k.right,
+                            "right_value": k.right_value,
+                            "value": k.value,
+                            "shown": str(k),
+                        }
+                        for k in c.comparisons
+                    ],
                 }
                 for c in explanation.conditions
             ],
         }
+
+    def _op_explain_recorded(self, command: ExplainRecorded, owner: str | None) -> Any:
+        """Internal: explain decisions from values the server recorded (``explain`` with ``seq``)."""
+        index, engine, _ = self._robot(command.robot)
+        key = self.keys[index] or ""
+        codec = self.codecs.get(command.generation, {}).get(key)
+        if codec is None:
+            raise CommandError("that tick ran a version of the behavior this simulation no longer has")
+        option = self._named(command.option, codec.option_ids, "option")
+        ir_option = codec.program.options[option]
+        results = []
+        for seq, t, decided, leaf, _, inputs, outputs, params, state_time, option_time in command.ticks:
+            if not 0 <= decided < len(ir_option.states):
+                raise CommandError(f"option {option} has no state {decided}")
+            state = ir_option.states[decided]
+            values = RecordedValues(engine, codec, ir_option, inputs, outputs, params, state_time, option_time)
+            try:
+                explanation = explain_decision(ir_option, state, leaf, values, render)
+            except KeyError:
+                raise CommandError(f"state {option}.{state.name} has no leaf {leaf}") from None
+            result = self._explanation(codec, option, explanation)
+            result.update(
+                seq=seq,
+                t=t,
+                recorded=True,
+                tree=decision_tree(state.decision, leaf, values, _if_text),
+            )
+            results.append(result)
+        return results
+
+    def _op_set_breakpoints(self, command: SetBreakpoints, owner: str | None) -> Any:
+        """Internal: the breakpoints of one behavior (all of them, from the server)."""
+        self.breakpoints.replace(command.key, command.points)
+        return None
 
     def _op_status(self, command: Status, owner: str | None) -> Any:
         return self.status()
@@ -604,6 +709,110 @@ def _collect(message: FromWorker, droppable: bool) -> bool:
     return True
 
 
+def _if_text(node: Any) -> str:
+    return str(node.text or render(node.condition))
+
+
+def _mark_values(tree: dict[str, Any], explanation: Explanation) -> None:
+    """Put the explanation's condition values on the taken path of ``tree`` (live: re-evaluated ones)."""
+    node = tree
+    for condition in explanation.conditions:
+        if "if" not in node:
+            return
+        node["value"] = condition.value if isinstance(condition.value, bool) else None
+        node = node["then"] if condition.branch else node["else"]
+
+
+class RecordedValues:
+    """Values of a tick as the ring buffer recorded them (``debug.Values`` for ``explain_recorded``).
+
+    Plain inputs and outputs come from the recording (display values: decimals rounded to 3
+    digits, enums as element indices); an input with parameters (``abs(value = ...)``) is computed
+    by calling the host's function with recorded arguments.
+    """
+
+    def __init__(
+        self,
+        engine: Engine,
+        codec: ProgramCodec,
+        option: Any,
+        inputs: Mapping[str, Any],
+        outputs: Mapping[str, Any],
+        params: list[Any],
+        state_time: float,
+        option_time: float,
+    ) -> None:
+        self.engine = engine
+        self.codec = codec
+        self.option = option
+        self.inputs = inputs
+        self.outputs = outputs
+        self.params = params
+        self.state_time = float(state_time)
+        self.option_time = float(option_time)
+
+    def input(self, name: str, args: Mapping[str, Value]) -> Value:
+        """The recorded value; parameterized inputs through the host function."""
+        symbol = self.codec.program.inputs[name]
+        if not symbol.params:
+            recorded = self.inputs.get(str(symbol.index))
+            if recorded is None:
+                raise Unknown(f"{name} was not recorded")
+            return recorded  # type: ignore[no-any-return]
+        loaded = self.engine.loaded
+        slot = loaded.layout.inputs.get(name)
+        if slot is None:
+            raise Unknown(f"{name} is not bound now")
+        host = {p: self._host(kind, p, args) for p, kind in slot.params}
+        value: Value = loaded.input_reads[name](*host.values())
+        if symbol.kind is Kind.ENUM:
+            return self.codec.enum_index.get(symbol.enum or "", {}).get(int(value), -1)
+        return value
+
+    def _host(self, kind: Kind, param: str, args: Mapping[str, Value]) -> Value:
+        value = args.get(param, default_value(kind))
+        if kind is Kind.ENUM:  # recorded enums are element indices; the host wants its values
+            for element, index in self._element_indices().items():
+                if index == value:
+                    return self.engine.loaded.layout.enum_values.get(element, 0)
+        return value
+
+    def _element_indices(self) -> dict[str, int]:
+        return {e: i for enum in self.codec.program.enums.values() for i, e in enumerate(enum.elements)}
+
+    def output(self, name: str) -> Value:
+        """The recorded value."""
+        symbol = self.codec.program.outputs[name]
+        value = self.outputs.get(str(symbol.index))
+        if value is None:
+            raise Unknown(f"{name} was not recorded")
+        return value  # type: ignore[no-any-return]
+
+    def parameter(self, name: str) -> Value:
+        """The recorded parameter value."""
+        names = [p.name for p in self.option.params]
+        if name not in names or names.index(name) >= len(self.params):
+            raise Unknown(f"parameter {name} was not recorded")
+        return self.params[names.index(name)]  # type: ignore[no-any-return]
+
+    def element(self, element: str) -> Value:
+        """The element's index in its enumeration (how the recording holds enums)."""
+        return self._element_indices().get(element, -1)
+
+    def show(self, kind: Kind, enum: str | None, value: Value) -> str:
+        """Enum indices by element name."""
+        if kind is Kind.ENUM:
+            elements = self.codec.program.enums[enum].elements if enum in self.codec.program.enums else ()
+            if isinstance(value, int) and 0 <= value < len(elements):
+                return elements[value].rsplit(".", 1)[-1]
+            return f"{value}?"
+        return show_value(value)
+
+    def special(self, expression: Any) -> Value:
+        """``action_done`` and ``conflict`` are not recorded."""
+        raise Unknown("not recorded")
+
+
 def _plain(value: Any) -> Any:
     return value if isinstance(value, bool | int | float | str) or value is None else str(value)
 
@@ -662,6 +871,11 @@ def run(channel: WorkerChannel, sim: Simulation) -> None:
             channel.send(Crash(f"{type(error).__name__}: {error}", traceback.format_exc(), sim.seq, sim._tick_time()))
             _drain(channel)
             raise SystemExit(1) from None
+        if sim.hits:  # a breakpoint paused the simulation: its tick must arrive, then the hits
+            channel.send(sample)
+            for hit in sim.take_hits():
+                channel.send(hit)
+            continue
         channel.send(sample, droppable=True)
         next_due += 1.0 / (sim.behavior_hz * sim.speed)
         if time.perf_counter() - next_due > 0.25:

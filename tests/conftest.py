@@ -23,3 +23,11 @@ def compile_sources(tmp_path: Path) -> Callable[..., Compilation]:
         return compile_file(str(tmp_path / entry), base=str(tmp_path))
 
     return run
+
+
+@pytest.fixture(scope="session", autouse=True)
+def private_state_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Studio state (stored breakpoints) of the tests' servers goes to a temp folder, never the user's."""
+    import os
+
+    os.environ.setdefault("XABSL_STATE_DIR", str(tmp_path_factory.mktemp("xabsl-state")))

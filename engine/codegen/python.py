@@ -20,7 +20,10 @@ every bytecode of the prologue counts):
   to the functions that read them: a decision gets ``st``/``ot``/``tick`` and an action list
   ``st``/``ot``/``now``/``tick`` as far as its option's expressions use them;
 * an option with a single state has no ``D``/``A`` functions: its decision and actions are
-  written inline in ``O{i}`` (no dispatch and two calls less per execution);
+  written inline in ``O{i}`` (no dispatch and two calls less per execution); so has an option of
+  up to :data:`INLINE_STATES` states, whose ``O{i}`` selects the active state's decision and the
+  next state's actions with ``if s == 0: ... elif s == 1: ...`` (a comparison or two instead of
+  two calls through the ``DEC``/``ACT`` tuples; ``benchmarks/engine_tick.py``: ~10 % per tick);
 * an input symbol registered as an attribute of a host object is read as ``IA{k}.<attribute>``
   rather than called as ``I{k}()``;
 * a basic-behavior call does its activation bookkeeping inline (``BB{k}``/``BE{k}`` are the
@@ -368,9 +371,20 @@ class _OptionWriter:
         """One state: decision and actions are inlined into ``O{i}`` (nothing to dispatch)."""
         return len(self.option.states) == 1
 
+    @property
+    def inline(self) -> bool:
+        """Decisions and action lists are written into ``O{i}``, selected by ``if s == k`` chains.
+
+        True for options of up to :data:`INLINE_STATES` states (a comparison or two cost less
+        than the two calls through ``DEC``/``ACT`` they replace) whose decision trees are not
+        nested so deep that two more levels of indentation could reach CPython's limit.
+        """
+        states = self.option.states
+        return len(states) <= INLINE_STATES and all(_depth(s.decision) <= INLINE_DEPTH for s in states)
+
     def write(self) -> str:
         i = self.slot.index
-        if not self.single:
+        if not self.single and not self.inline:
             for state in self.option.states:
                 self.decide(state)
                 self.act(state)
@@ -540,7 +554,11 @@ class _OptionWriter:
                 e(f"    st = {st_now}")
             self.actions(state, "    ")
             return
-        e(f"    r = DEC{i}[s]({uses.decision_params})")
+        inline = self.inline
+        if inline:
+            self.dispatch("s", lambda state: self.tree(state, state.decision, self.writer(state), "        ", "r = "))
+        else:
+            e(f"    r = DEC{i}[s]({uses.decision_params})")
         e(f"    LF[{i}] = r")
         if uses.decision_st:
             # What ``state_time`` the decision saw, for the debugger's explanation (§2.12).
@@ -557,7 +575,45 @@ class _OptionWriter:
             if not uses.decision_st:
                 e("    else:")
                 e(f"        st = {st_now}")
-        e(f"    ACT{i}[n]({uses.action_params})")
+        if inline:
+            self.dispatch("n", lambda state: self.actions(state, "        "))
+        else:
+            e(f"    ACT{i}[n]({uses.action_params})")
+
+    def writer(self, state: State) -> _ExpressionWriter:
+        """A fresh expression writer for ``state``."""
+        return _ExpressionWriter(self.layout, self.option, state)
+
+    def dispatch(self, variable: str, body: Callable[[State], None]) -> None:
+        """``if {variable} == 0: body(state 0) elif ... else: body(last state)`` at the prologue's level."""
+        states = self.option.states
+        for k, state in enumerate(states):
+            if k == 0:
+                self.emit(f"    if {variable} == {state.index}:", state, state.span)
+            elif k < len(states) - 1:
+                self.emit(f"    elif {variable} == {state.index}:", state, state.span)
+            else:
+                self.emit("    else:", state, state.span)
+            body(state)
+
+
+#: Options with at most this many states are inlined into ``O{i}`` (see ``_OptionWriter.inline``).
+INLINE_STATES = 8
+#: ... if no decision tree is nested deeper than this (CPython allows 100 indentation levels).
+INLINE_DEPTH = 60
+
+
+def _depth(tree: DecisionTree) -> int:
+    """How deep ``if`` statements nest in ``tree`` (an ``else if`` chain counts once: it becomes ``elif``)."""
+    depth = 0
+    stack = [(tree, 0)]
+    while stack:
+        node, level = stack.pop()
+        while isinstance(node, If):
+            stack.append((node.then, level + 1))
+            node = node.otherwise
+        depth = max(depth, level)
+    return depth
 
 
 _CACHE: dict[tuple[int, tuple[object, ...]], GeneratedProgram] = {}

@@ -408,28 +408,37 @@ def make_bindings(perception: WorldModel, motion: MotionRequest) -> tuple[Bindin
 
 
 class ActivationRecorder:
-    """Counts, per option, the ticks it was active, and hashes the activation trace.
+    """Counts, per option, the ticks it was active and in which state, and hashes the activation trace.
 
-    After each tick it takes the engine's cheap per-tick views (``Engine.ran_options()``, one
-    ``bytes`` of active flags, and ``Engine.active_states()``), appends the flags to one
-    ``bytearray`` and feeds both to a hash; the counts are summed (numpy) on request.
+    After each tick it appends the engine's cheap per-tick views (``Engine.ran_options()``, one
+    ``bytes`` of active flags, and ``Engine.active_states()``) to two ``bytearray`` buffers; counts
+    (numpy) and the trace hash are computed from them on request, so a tick costs two appends.
     """
 
-    __slots__ = ("_active", "_engine", "hash", "option_names")
+    __slots__ = ("_active", "_engine", "_states", "option_names")
 
     def __init__(self, engine: Engine) -> None:
         self._engine = engine
         self.option_names: list[str] = list(engine.option_names)
         self._active = bytearray()
-        self.hash = hashlib.blake2b(digest_size=16)
+        self._states = bytearray()
 
     def record(self) -> None:
         """Count this tick's activations for the match report."""
         engine = self._engine
-        active = engine.ran_options()
-        self._active += active
-        self.hash.update(active)
-        self.hash.update(bytes(engine.active_states()))
+        self._active += engine.ran_options()
+        self._states += bytes(engine.active_states())
+
+    @property
+    def hash(self) -> hashlib._Hash:
+        """BLAKE2b (16 bytes) of the trace: per tick the active flags, then the active states."""
+        digest = hashlib.blake2b(digest_size=16)
+        n = len(self.option_names)
+        if self._active and n:
+            active = np.frombuffer(bytes(self._active), dtype=np.uint8).reshape(-1, n)
+            states = np.frombuffer(bytes(self._states), dtype=np.uint8).reshape(-1, n)
+            digest.update(np.hstack([active, states]).tobytes())
+        return digest
 
     def counts(self) -> dict[str, int]:
         """Ticks each option was active (options that never ran are left out)."""
@@ -438,6 +447,27 @@ class ActivationRecorder:
             return {}
         totals = np.frombuffer(bytes(self._active), dtype=np.uint8).reshape(-1, n).sum(axis=0, dtype=np.int64)
         return {name: int(c) for name, c in zip(self.option_names, totals, strict=True) if c}
+
+    def state_counts(self) -> dict[tuple[str, int], tuple[int, int]]:
+        """Per ``(option, state index)`` that ran: ticks active in it and how often it was entered.
+
+        A state is *entered* in a tick where its option ran in it after running in another state
+        (or not running) the tick before: the decisions the option took, as counts.
+        """
+        n = len(self.option_names)
+        if not self._active:
+            return {}
+        ran = np.frombuffer(bytes(self._active), dtype=np.uint8).reshape(-1, n).astype(bool)
+        states = np.frombuffer(bytes(self._states), dtype=np.uint8).reshape(-1, n).astype(np.int64)
+        previous = np.vstack([np.full((1, n), -1, dtype=np.int64), np.where(ran, states, -1)[:-1]])
+        entered = ran & (states != previous)
+        width = int(states.max()) + 1
+        keys = np.arange(n, dtype=np.int64)[None, :] * width + states
+        ticks = np.bincount(keys[ran], minlength=n * width)
+        entries = np.bincount(keys[entered], minlength=n * width)
+        return {
+            (self.option_names[k // width], k % width): (int(ticks[k]), int(entries[k])) for k in np.flatnonzero(ticks)
+        }
 
 
 class XabslController:

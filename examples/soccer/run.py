@@ -143,27 +143,27 @@ class MatchStats:
         self.world = world
         self.teams = (TeamStats(), TeamStats())
         self._last_kick: list[int | None] = [a.robot.last_kick_ms for a in world.agents]
+        self._agents = [(a.index, a.team_index, a.robot) for a in world.agents]
 
     def on_tick(self, now_ms: int) -> None:
         """Collect the tick's statistics (possession, shots, passes)."""
         world = self.world
-        game = world.game
-        if game.state != GameState.PLAYING:
+        if world.game.state != GameState.PLAYING:
             return
-        physics = world.physics
-        bx, by = physics.ball_position()
+        # The poses the world reads for the next tick's perception anyway (read once per step).
+        snap = world.pose_snapshot()
+        bx, by, xs, ys = snap.ball_x, snap.ball_y, snap.x, snap.y
         best, best_team = POSSESSION_DISTANCE, -1
-        agents = world.agents
-        for i, agent in enumerate(agents):
-            body = physics.robots[agent.index]
-            x, y = body.position
-            d = math.hypot(x - bx, y - by)
+        last_kick = self._last_kick
+        hypot = math.hypot
+        for i, (index, team, robot) in enumerate(self._agents):
+            d = hypot(xs[index] - bx, ys[index] - by)
             if d < best:
-                best, best_team = d, agent.team_index
-            kicked = agent.robot.last_kick_ms
-            if kicked != self._last_kick[i]:
-                self._last_kick[i] = kicked
-                self._count_kick(agent.team_index, agent.index, bx, by)
+                best, best_team = d, team
+            kicked = robot.last_kick_ms
+            if kicked != last_kick[i]:
+                last_kick[i] = kicked
+                self._count_kick(team, index, bx, by)
         if best_team >= 0:
             self.teams[best_team].possession_ticks += 1
 
@@ -212,6 +212,9 @@ class MatchReport:
     wall_seconds: float
     phases: dict[str, float] = field(default_factory=dict)
     faults: list[str] = field(default_factory=list)
+    #: per team, ``(option, state index) -> (ticks active, entries)`` summed over its robots
+    #: (``ActivationRecorder.state_counts``); not part of :meth:`as_dict`
+    states: tuple[dict[tuple[str, int], tuple[int, int]], ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         """The statistics as JSON data (``xabsl run --json``)."""
@@ -303,6 +306,7 @@ def play_match(
     stats.finish()
     digest = hashlib.blake2b(digest_size=16)
     activations: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    states: tuple[dict[tuple[str, int], tuple[int, int]], ...] = ({}, {})
     faults = []
     for agent in world.agents:
         controller = agent.controller
@@ -311,6 +315,10 @@ def play_match(
         counts = activations[agent.team_index]
         for name, ticks in controller.recorder.counts().items():
             counts[name] = counts.get(name, 0) + ticks
+        team_states = states[agent.team_index]
+        for key, (ticks, entries) in controller.recorder.state_counts().items():
+            had = team_states.get(key, (0, 0))
+            team_states[key] = (had[0] + ticks, had[1] + entries)
         if controller.fault is not None:
             faults.append(f"{agent.name}: {controller.fault}")
     return MatchReport(
@@ -323,6 +331,7 @@ def play_match(
         wall_seconds=run.wall_seconds,
         phases=run.phases.shares(),
         faults=faults,
+        states=states,
     )
 
 

@@ -254,7 +254,8 @@ class SoccerWorld:
 
     # -------------------------------------------------------------------------- agent hooks
 
-    def _refresh_snapshot(self) -> Snapshot:
+    def pose_snapshot(self) -> Snapshot:
+        """Every robot's pose and the ball's position now, read from physics once per step (reused in place)."""
         snap = self._snapshot
         if self._snapshot_steps != self._steps:
             self._snapshot_steps = self._steps
@@ -262,7 +263,7 @@ class SoccerWorld:
         return snap
 
     def _sense(self, agent: SoccerAgent, now_ms: int) -> None:
-        snap = self._refresh_snapshot()
+        snap = self.pose_snapshot()
         team = agent.team_index
         if self._delivered_ms[team] != now_ms:
             # Once per team and tick: deliver team messages, read what the referee says.
@@ -295,7 +296,7 @@ class SoccerWorld:
         index = agent.index
         # Sensing and acting see the same physics state (no step in between), so the pose read
         # for perception serves the legs too.
-        snap = self._refresh_snapshot()
+        snap = self.pose_snapshot()
         pose = (snap.x[index], snap.y[index], snap.theta[index])
         # ``game.may_move`` / ``game.may_kick``, without two property calls per robot and tick.
         state = game.state

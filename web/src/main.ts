@@ -40,6 +40,7 @@ function main(): void {
         if (hello.reason !== "connect" && hello.reason !== "resync") clearGraphCache();
         session.applyHello(hello);
         problems.refresh();
+        void optionView.breakpoints.refresh();
         // Fill the timeline with what the server buffered before we came (or before a reload).
         const t = hello.session.t;
         void connection
@@ -53,8 +54,10 @@ function main(): void {
         else if (event.event === "compile") {
           editor.compileEvent(event);
           problems.refresh();
-        }
-        else if (event.event === "crash")
+        } else if (event.event === "breakpoint") {
+          optionView.breakpoints.onHit(event);
+          center.activate("option");
+        } else if (event.event === "crash")
           toast(`The simulation stopped: ${event.message}. Reset (top bar) starts it again.`, "error", 15000);
       },
       link: (state, detail) => topbar.setLink(state, detail),
@@ -134,6 +137,10 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
+  optionView.breakpoints.onHitsChanged = () => {
+    timeline.markHits(optionView.breakpoints.hits);
+    pending.add("cursor"); // paused: no tick follows that would redraw
+  };
   // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
   const dynamics = new DynamicsPanel(session, connection);
   const plan = new PlanPanel(session, connection);

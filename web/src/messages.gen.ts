@@ -3,6 +3,59 @@
 
 export const PROTOCOL_VERSION = 1;
 
+/** A breakpoint hit: the simulation paused after tick `seq` (time `t`) of robot `robot`. */
+export interface BreakpointEvent {
+  type: "event";
+  event: "breakpoint";
+  program: string;
+  breakpoint: number;
+  robot: number;
+  seq: number;
+  t: number;
+  description: string;
+}
+
+/** One breakpoint as `list_breakpoints` shows it (`problem`: why it is not checked now). */
+export interface BreakpointInfo {
+  program: string;
+  breakpoint: number;
+  kind: string;
+  option: string | null;
+  state: string | null;
+  leaf: number | null;
+  condition: string | null;
+  robot: number | null;
+  enabled: boolean;
+  description: string;
+  problem: string | null;
+}
+
+/** The result of `list_breakpoints` (and of the commands that change them). */
+export interface BreakpointList {
+  breakpoints: BreakpointInfo[];
+}
+
+/** Check `condition` against behavior set `program`'s symbols (default: the first): diagnostics. */
+export interface CheckCondition {
+  type: "command";
+  id?: number | string | null;
+  op: "check_condition";
+  program?: string | null;
+  condition: string;
+}
+
+/** One comparison inside a condition with the values of its two sides (`ball.distance (412.3) < 500`). */
+export interface Comparison {
+  text: string;
+  op: string;
+  left: string;
+  left_value: string;
+  right: string;
+  right_value: string;
+  value: boolean | null;
+  shown: string;
+}
+
 /** A behavior set was compiled after a file change (`ok`: a `hello` with reason reload follows). */
 export interface CompileEvent {
   type: "event";
@@ -12,13 +65,20 @@ export interface CompileEvent {
   diagnostics: Record<string, unknown>[];
 }
 
-/** One `if` on the path to the leaf an option's decision took, re-evaluated now. */
+/** One `if` on the path to the leaf an option's decision took, with the values it had. */
 export interface Condition {
   text: string;
   source: string;
   value: CommandValue | null;
   branch: boolean;
   span: Record<string, unknown> | null;
+  comparisons?: Comparison[];
+}
+
+/** The result of `check_condition`: diagnostics with line and column in the condition's text. */
+export interface ConditionCheck {
+  ok: boolean;
+  diagnostics: Record<string, unknown>[];
 }
 
 /** The simulation process stopped (`seq`/`t` of its last tick); `reset` restarts it. */
@@ -30,13 +90,24 @@ export interface CrashEvent {
   t: number | null;
 }
 
-/** Why `option` of `robot`'s engine took its leaf in the last tick (an `Explanation`). */
+/** Enable or disable breakpoint `breakpoint` of behavior set `program` (default: the first). */
+export interface EnableBreakpoint {
+  type: "command";
+  id?: number | string | null;
+  op: "enable_breakpoint";
+  program?: string | null;
+  breakpoint: number;
+  enabled: boolean;
+}
+
+/** Why `option` of `robot`'s engine took its leaf in the last tick or at tick `seq` (`Explanation`). */
 export interface Explain {
   type: "command";
   id?: number | string | null;
   op: "explain";
   robot: number;
   option: number | string;
+  seq?: number | null;
 }
 
 /** The result of `explain`. */
@@ -51,6 +122,11 @@ export interface Explanation {
   stay: boolean;
   leaf_span: Record<string, unknown> | null;
   conditions: Condition[];
+  seq?: number | null;
+  t?: number | null;
+  recorded?: boolean;
+  tree?: Record<string, unknown>;
+  last_transition?: LastTransition | null;
 }
 
 /** Why a robot's engine stopped (until `reset_agent`). */
@@ -138,6 +214,27 @@ export interface HistoryResult {
   chunks: number;
 }
 
+/** The last transition of the option up to the explained tick: when, from where to where, why. */
+export interface LastTransition {
+  seq: number;
+  t: number;
+  decided_in: number;
+  decided_in_name: string;
+  target: number;
+  target_name: string;
+  leaf: number;
+  conditions: Condition[];
+  tree: Record<string, unknown>;
+}
+
+/** The breakpoints of every behavior set (or of `program`). */
+export interface ListBreakpoints {
+  type: "command";
+  id?: number | string | null;
+  op: "list_breakpoints";
+  program?: string | null;
+}
+
 /** The input symbol `symbol` of `robot`'s engine reads `value`. */
 export interface OverrideInput {
   type: "command";
@@ -195,6 +292,15 @@ export interface Reload {
 /** The result of `reload`, per behavior set. */
 export interface ReloadResult {
   programs: Record<string, ProgramCompile>;
+}
+
+/** Remove breakpoint `breakpoint` of behavior set `program` (default: the first). */
+export interface RemoveBreakpoint {
+  type: "command";
+  id?: number | string | null;
+  op: "remove_breakpoint";
+  program?: string | null;
+  breakpoint: number;
 }
 
 /** The answer to a command (and the error answer to a bad message: `id` then may be null). */
@@ -286,6 +392,26 @@ export interface SessionInfo {
   token_required: boolean;
 }
 
+/**
+ * Add a breakpoint to behavior set `program` (or replace breakpoint `breakpoint`); see docs/studio.md.
+ *
+ * `program` defaults to the behavior set of `robot`, else the first one; `robot` null: any robot.
+ */
+export interface SetBreakpoint {
+  type: "command";
+  id?: number | string | null;
+  op: "set_breakpoint";
+  program?: string | null;
+  breakpoint?: number | null;
+  kind: "enter_option" | "leave_option" | "enter_state" | "leave_state" | "leaf" | "condition";
+  option?: string | null;
+  state?: string | null;
+  leaf?: number | null;
+  condition?: string | null;
+  robot?: number | null;
+  enabled?: boolean;
+}
+
 /** Run at real time x `speed`. */
 export interface Speed {
   type: "command";
@@ -355,11 +481,11 @@ export type PathNode = OptionNode | BehaviorNode;
 
 export type HelloReason = "connect" | "reload" | "reset" | "resync";
 
-export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand;
+export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition;
 
 export type ClientMessage = Subscribe | Resync | Command;
 
-export type ServerEvent = FileEvent | CompileEvent | CrashEvent;
+export type ServerEvent = FileEvent | CompileEvent | CrashEvent | BreakpointEvent;
 
 export type ServerMessage = Hello | Frame | Reply | HistoryChunk | ServerEvent;
 
@@ -382,4 +508,9 @@ export interface CommandResults {
   history: HistoryResult;
   status: Record<string, unknown>;
   world_command: unknown;
+  set_breakpoint: BreakpointList;
+  remove_breakpoint: BreakpointList;
+  enable_breakpoint: BreakpointList;
+  list_breakpoints: BreakpointList;
+  check_condition: ConditionCheck;
 }

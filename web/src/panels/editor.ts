@@ -2,7 +2,7 @@
 /// completion from the IR (reconfigured on every hello), diagnostics as you type (compiled on
 /// the server, nothing saved), go to definition (F12, Ctrl+click), find references (Shift+F12),
 /// save (Ctrl+S) = PUT with If-Match -> hot reload, conflicts shown, never overwritten silently,
-/// and a new option from a template.
+/// and a new option (the New option dialog, panels/newoption.ts).
 ///
 /// Files are edited as they are: each buffer keeps its file's line separator (CodeMirror's
 /// `lineSeparator` facet, so Enter inserts it and `sliceDoc()` joins with it), so a file with CR
@@ -17,7 +17,7 @@ import { highlightSelectionMatches, searchKeymap } from "@codemirror/search";
 import { EditorSelection, EditorState } from "@codemirror/state";
 import { drawSelection, EditorView, highlightActiveLine, highlightActiveLineGutter, keymap, lineNumbers } from "@codemirror/view";
 import { tags as t } from "@lezer/highlight";
-import { ApiError, createFile, type FileEntry, listFiles, readFile, token, writeFile } from "../api";
+import { type FileEntry, listFiles, readFile, token, writeFile } from "../api";
 import { diagnosticsFor, type SetDiagnostic } from "../behaviorsets";
 import type { Span } from "../description";
 import type { CompileEvent, FileEvent } from "../protocol";
@@ -28,6 +28,7 @@ import { xabsl } from "../xabsl/language";
 import { samePath, type ServerDiagnostic, xabslLinter } from "../xabsl/lint";
 import { LspClient, lspUrl, websocketTransport } from "../xabsl/lsp";
 import { definitionAt, lspHover, referencesAt, renameAt, toChanges } from "../xabsl/navigate";
+import { NewOptionDialog } from "./newoption";
 
 const highlight = HighlightStyle.define([
   { tag: [t.keyword, t.controlKeyword], color: "var(--tok-keyword)", fontWeight: "600" },
@@ -43,17 +44,6 @@ const highlight = HighlightStyle.define([
   { tag: t.invalid, color: "#ff5555", textDecoration: "underline wavy" },
 ]);
 
-const template = (name: string): string => `/** ${name}: what this option decides, in one sentence. */
-option ${name} {
-  initial state start {
-    decision {
-      else stay;
-    }
-    action {
-    }
-  }
-}
-`;
 
 /// The line separator of a file's text: the most frequent of CRLF, CR and LF ("\n" for none).
 /// The others, if the file mixes them, stay in the text as characters and round-trip too.
@@ -88,7 +78,14 @@ export class EditorPanel {
   private current: Buffer | null = null;
   private lastDiagnostics: readonly ServerDiagnostic[] = [];
 
+  /// The New option dialog (it writes the file and the include line, then opens the file here).
+  private readonly newOptionDialog: NewOptionDialog;
+
   constructor(private readonly session: Session) {
+    this.newOptionDialog = new NewOptionDialog(session, async (path) => {
+      await this.refreshFiles();
+      await this.open(path, { line: 2, col: 8 });
+    });
     this.tree = h("nav.file-tree", { "aria-label": "Behavior files" });
     this.title = h("span.file-title", {}, "No file open");
     this.status = h("div.editor-status", { role: "status", "aria-live": "polite" });
@@ -104,7 +101,7 @@ export class EditorPanel {
       h("button", { title: "Go to definition (F12)", onclick: () => this.goToDefinition() }, "Definition"),
       h("button", { title: "Find references (Shift+F12)", onclick: () => void this.references() }, "References"),
       h("button", { title: "Rename everywhere (F2)", onclick: () => void this.rename() }, "Rename"),
-      h("button", { title: "Create an option file from a template", onclick: () => void this.newOption() }, "New option…"),
+      h("button", { title: "Create an option: name, parameters, folder; adds its include line to the agents file", onclick: () => void this.newOption() }, "New option…"),
     );
     this.element = h(
       "div.panel.editor-panel",
@@ -454,31 +451,9 @@ export class EditorPanel {
   }
 
   private async newOption(): Promise<void> {
-    const name = window.prompt("Name of the new option (letters, digits, _ and .):", "my_option");
-    if (!name) return;
-    if (!/^[A-Za-z_][A-Za-z0-9_.]*$/.test(name)) {
-      toast("An option name starts with a letter or _ and has letters, digits, _ and . only.", "error");
-      return;
-    }
-    const optionFile = this.files.find((f) => /\/options\/[^/]+\.xabsl$/.test(f.path)) ?? this.files[0];
-    const dir = optionFile ? optionFile.path.slice(0, optionFile.path.lastIndexOf("/")) : "behavior/options";
-    const path = `${dir}/${name}.xabsl`;
-    try {
-      await createFile(path, template(name));
-    } catch (error) {
-      if (!(error instanceof ApiError) || error.status !== 422) {
-        toast(`Cannot create ${path}: ${(error as Error).message}`, "error");
-        return;
-      }
-    }
-    await this.refreshFiles();
-    await this.open(path, { line: 2, col: 8 });
-    const agentsFile = this.files.find((f) => /agents\.xabsl$/.test(f.path) && f.path.split("/")[0] === path.split("/")[0]);
-    if (agentsFile) {
-      const include = `include "${path.slice(agentsFile.path.lastIndexOf("/") + 1)}";`;
-      toast(`Created ${path}. To use it, add ${include} to ${agentsFile.path} and call it from an option.`, "info", 8000);
-    }
+    await this.newOptionDialog.show();
   }
+
 
   /// React to other clients' writes: reload a clean buffer, flag a dirty one.
   fileEvent(event: FileEvent): void {

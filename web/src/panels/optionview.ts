@@ -7,8 +7,13 @@ import { type DescriptionIndex, leafPath, type Option, rangeText } from "../desc
 import type { Explanation, OptionNode } from "../protocol";
 import type { Session, SessionEvent } from "../session";
 import { lastTransitionBefore, transitionsOf } from "../transitions";
-import { formatMs, formatValue, h, setText, toggleClass } from "../ui";
+import { formatClock, formatMs, formatValue, h, setText, toggleClass } from "../ui";
+import { BreakpointsPanel } from "./breakpoints";
 import { SvgView } from "./svgview";
+
+type Why = Explanation;
+type WhyCondition = Explanation["conditions"][number];
+type WhyTree = Record<string, unknown>;
 
 export class OptionView {
   readonly element: HTMLElement;
@@ -33,6 +38,9 @@ export class OptionView {
   /// The last transition at the scrubbed moment: [cursor|agent|option] -> result.
   private pastKey = "";
   private past: { from: number; to: number; leaf: number; t: number } | null = null;
+  /// Breakpoints of the selected robot's behavior set (shown beside the machine).
+  readonly breakpoints: BreakpointsPanel;
+  private readonly menu: HTMLElement;
 
   constructor(
     private readonly session: Session,
@@ -60,7 +68,27 @@ export class OptionView {
       h("button", { title: "Fit: the whole machine, or at a legible size around the active state", onclick: () => this.view.fit() }, "Fit"),
       h("button", { title: "The whole machine, however small", onclick: () => this.view.fit(true) }, "Overview"),
     );
-    const side = h("div.option-side", {}, this.doc, this.info, this.why, this.transitions);
+    this.breakpoints = new BreakpointsPanel(session, connection, () => this.current());
+    const side = h("div.option-side", {}, this.doc, this.info, this.why, this.breakpoints.element, this.transitions);
+    // The state context: right-click a state for "break on enter / leave".
+    this.menu = h("div.context-menu", { role: "menu", hidden: true });
+    document.addEventListener("pointerdown", (ev) => {
+      if (!this.menu.contains(ev.target as Node)) this.menu.hidden = true;
+    });
+    this.view.element.addEventListener("contextmenu", (ev) => {
+      const node = (ev.target as Element).closest('g[id^="state_"]');
+      const option = this.current();
+      const state = node && option ? option.states[Number(node.id.slice(6))] : undefined;
+      if (!state) return;
+      ev.preventDefault();
+      const item = (label: string, kind: "enter_state" | "leave_state"): HTMLElement =>
+        h("button", { role: "menuitem", onclick: () => { this.menu.hidden = true; void this.breakpoints.add(kind, state.name); } }, label);
+      this.menu.replaceChildren(item(`Break on enter ${state.name}`, "enter_state"), item(`Break on leave ${state.name}`, "leave_state"));
+      this.menu.style.left = `${ev.clientX}px`;
+      this.menu.style.top = `${ev.clientY}px`;
+      this.menu.hidden = false;
+    });
+    document.body.append(this.menu);
     // At Fit state names stay legible (12 px on screen); a large machine is then centred on the
     // active state (or the initial one) and panned by hand, Overview shows all of it.
     this.view.minTextPx = 12;
@@ -132,6 +160,7 @@ export class OptionView {
     }
     setText(this.title, option ? option.name : "Option");
     setText(this.doc, option?.doc ?? "");
+    this.breakpoints.sync();
     if (option) {
       this.renderTransitions(option, k);
       this.highlight(option);
@@ -213,8 +242,11 @@ export class OptionView {
     if (this.info.textContent !== text) this.info.textContent = text;
   }
 
-  /// Why the decision of this tick took its leaf: the chain of conditions from the description
-  /// (branch taken), with the server's values when an explanation for this leaf is at hand.
+  /// Why the decision of the tick in view took its leaf: the chain of conditions (branch taken)
+  /// with their values and each comparison's operand values (`ball.distance (412.3) < 500`), the
+  /// decision tree with the path taken, and the last transition up to this tick with its values.
+  /// Live: the engine re-evaluates now; scrubbed back: the server evaluates the recorded values of
+  /// that tick (`explain` with `seq`).
   private renderWhy(option: Option, index: DescriptionIndex | null): void {
     const node = this.node(option);
     if (!node || node.leaf < 0) {
@@ -226,48 +258,88 @@ export class OptionView {
     }
     const decided = option.states[node.decidedIn];
     const target = option.states[node.state];
-    const ex = this.explanation && this.explanation.option === option.id && this.explanation.leaf === node.leaf && this.explanation.decided_in === node.decidedIn ? this.explanation : null;
-    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${ex ? JSON.stringify(ex.conditions.map((c) => c.value)) : ""}`;
+    const seq = this.session.isLive ? null : (this.session.view?.seq ?? null);
+    const e = this.explanation;
+    const ex = e && e.option === option.id && e.leaf === node.leaf && e.decided_in === node.decidedIn && (seq === null ? !e.recorded : e.seq === seq) ? e : null;
+    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}`;
     if (key === this.lastWhy) return;
     this.lastWhy = key;
     const path = decided ? leafPath(decided.decision, node.leaf) : null;
-    const rows = (path ?? []).map(({ node: ifNode, taken }, i) => {
-      const live = ex?.conditions[i];
-      const value = live ? formatValue(typeof live.value === "string" ? null : live.value) : "";
-      return h(
-        "li",
-        { class: taken ? "cond taken" : "cond not-taken", title: ifNode.doc ?? "" },
-        h("span.branch", {}, taken ? "if" : "else of"),
-        h("code", {}, ifNode.if),
-        live ? h("span.value", { class: `value ${String(live.value)}` }, value) : null,
-        ifNode.doc ? h("div.cond-doc.muted", {}, ifNode.doc) : null,
-      );
-    });
+    const rows = (path ?? []).map(({ node: ifNode, taken }, i) => this.conditionRow(ifNode.if, taken, ex?.conditions[i], ifNode.doc));
     const stays = node.decidedIn === node.state;
-    this.why.replaceChildren(
+    const name = (id: number): string => option.states[id]?.name ?? String(id);
+    const last = ex?.last_transition ?? null;
+    const parts: Array<Node | null> = [
       h("div.why-head", {}, h("strong", {}, "Decision of this tick: "), `${decided?.name ?? node.decidedIn} `, h("span.arrow", {}, stays ? "stays" : `→ ${target?.name ?? node.state}`), h("span.muted", {}, ` (leaf ${node.leaf})`)),
       rows.length ? h("ol.conditions", {}, ...rows) : h("div.muted", {}, "No condition: the decision always takes this leaf."),
-      h("div.muted.small", {}, ex ? "Values re-evaluated by the engine just now." : this.session.isLive ? "Asking the engine for values…" : "Scrubbed back: values are shown only for the live tick."),
-    );
+      ex?.tree && "if" in ex.tree ? h("details.why-tree", { open: true }, h("summary", {}, "Decision tree, path taken"), this.treeView(ex.tree as WhyTree, name)) : null,
+      last
+        ? h(
+            "div.last-transition",
+            {},
+            h("strong", {}, "Last transition: "),
+            `${last.decided_in_name} → ${last.target_name} at ${formatClock(last.t)} (leaf ${last.leaf})`,
+            h("ol.conditions", {}, ...last.conditions.map((c) => this.conditionRow(c.text || c.source, c.branch, c, null))),
+          )
+        : ex
+          ? h("div.muted.small", {}, "No transition of this option in the buffered history up to this tick.")
+          : null,
+      h("div.muted.small", {}, ex ? (ex.recorded ? `Values recorded at t = ${formatClock(ex.t ?? 0)} (decimals to 3 digits).` : "Values re-evaluated by the engine just now.") : "Asking the server for values…"),
+    ];
+    this.why.replaceChildren(...parts.filter((p): p is Node => p !== null));
     void index;
   }
 
-  /// Ask the server to explain the current decision (when the leaf changes, else once a second).
+  private conditionRow(text: string, taken: boolean, values: WhyCondition | undefined, doc: string | null): HTMLElement {
+    const value = values ? formatValue(typeof values.value === "string" ? null : values.value) : "";
+    const comparisons = values?.comparisons ?? [];
+    return h(
+      "li",
+      { class: taken ? "cond taken" : "cond not-taken", title: doc ?? "" },
+      h("span.branch", {}, taken ? "if" : "else of"),
+      h("code", {}, text),
+      values ? h("span.value", { class: `value ${String(values.value)}` }, value) : null,
+      comparisons.length ? h("ul.comparisons", {}, ...comparisons.map((k) => h("li", { class: `comparison ${String(k.value)}` }, h("code", {}, k.shown), h("span.muted", {}, ` = ${k.value === null ? "?" : String(k.value)}`)))) : null,
+      doc ? h("div.cond-doc.muted", {}, doc) : null,
+    );
+  }
+
+  /// The decision tree as nested boxes: conditions with their values, the taken path marked.
+  private treeView(tree: WhyTree, name: (id: number) => string): HTMLElement {
+    void name;
+    if (!("if" in tree)) {
+      const target = tree.stay ? "stay" : `goto ${String(tree.target)}`;
+      return h("div", { class: tree.taken ? "tree-leaf taken" : "tree-leaf" }, `${target} (leaf ${String(tree.leaf)})`);
+    }
+    const value = tree.value === null || tree.value === undefined ? "" : ` = ${String(tree.value)}`;
+    return h(
+      "div",
+      { class: tree.taken ? "tree-if taken" : "tree-if" },
+      h("div.tree-cond", {}, h("code", {}, String(tree.if)), h("span.muted", {}, value)),
+      h("div", { class: tree.branch === true ? "tree-branch taken" : "tree-branch" }, h("span.tree-label", {}, "then"), this.treeView(tree.then as WhyTree, name)),
+      h("div", { class: tree.branch === false ? "tree-branch taken" : "tree-branch" }, h("span.tree-label", {}, "else"), this.treeView(tree.else as WhyTree, name)),
+    );
+  }
+
+  /// Ask the server to explain the decision in view (live: when the leaf changes, else once a
+  /// second; scrubbed: once per tick, from the recorded values).
   private explain(force: boolean): void {
     const session = this.session;
     const option = this.current();
-    if (!option || !session.isLive || this.explaining || this.element.closest("[hidden]")) return;
+    if (!option || this.explaining || this.element.closest("[hidden]")) return;
     const node = this.node(option);
     if (!node || node.leaf < 0) return;
-    const key = `${session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}`;
+    const seq = session.isLive ? null : (session.view?.seq ?? null);
+    const key = `${session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}|${seq}`;
     const now = performance.now();
-    if (!force && key === this.explainKey && now - this.explainAt < 1000) return;
+    if (!force && key === this.explainKey && (seq !== null || now - this.explainAt < 1000)) return;
     this.explainKey = key;
     this.explainAt = now;
     this.explaining = true;
+    const args = seq === null ? { robot: session.selectedRobot, option: option.id } : { robot: session.selectedRobot, option: option.id, seq };
     this.connection
-      .command("explain", { robot: session.selectedRobot, option: option.id })
-      .then((ex) => {
+      .command("explain", args)
+      .then((ex: Why) => {
         this.explanation = ex;
       })
       .catch(() => {

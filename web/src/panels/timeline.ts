@@ -26,6 +26,8 @@ export class TimelinePanel {
   private t1 = 1;
   private width = 300;
   private dirty = true;
+  /// Breakpoint hits, marked on the axis (red) at their time.
+  private hits: ReadonlyArray<{ t: number; robot: number; description: string }> = [];
 
   constructor(
     private readonly session: Session,
@@ -42,6 +44,12 @@ export class TimelinePanel {
     new ResizeObserver(() => {
       this.dirty = true;
     }).observe(this.scroller);
+  }
+
+  /// Mark breakpoint hits (a red triangle and line at each hit's time).
+  markHits(hits: ReadonlyArray<{ t: number; robot: number; description: string }>): void {
+    this.hits = hits;
+    this.dirty = true;
   }
 
   private key(ev: KeyboardEvent): void {
@@ -192,6 +200,23 @@ export class TimelinePanel {
       drawRow(row, top, TEAM_ROW, row.label, 0, row.id === session.selectedRobot);
       top += TEAM_ROW;
     }
+    ctx.fillStyle = "#e53935";
+    ctx.strokeStyle = "rgba(229,57,53,0.6)";
+    for (const hit of this.hits) {
+      if (hit.t < this.t0 || hit.t > this.t1) continue;
+      const x = xOf(hit.t);
+      ctx.beginPath();
+      ctx.moveTo(x - 5, 0);
+      ctx.lineTo(x + 5, 0);
+      ctx.lineTo(x, 8);
+      ctx.closePath();
+      ctx.fill();
+      ctx.beginPath();
+      ctx.moveTo(x, 8);
+      ctx.lineTo(x, height);
+      ctx.stroke();
+    }
+    this.canvas.dataset.hits = String(this.hits.length);
     const cursor = session.cursor;
     if (cursor !== null) {
       const x = xOf(cursor);

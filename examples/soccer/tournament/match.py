@@ -1,0 +1,125 @@
+"""The match plan of a tournament and one match of it, as plain data a worker process returns.
+
+Colours: match ``k`` uses seed ``seed + k // 2``; in even matches the HOME version plays blue
+(team 0: it kicks off the first half), in odd ones red, so every seed is played once each way
+round and neither version keeps the kick-off or a field side (sides also swap at half time).
+
+A match is a pure function of its :class:`MatchSpec` and the two programs: whichever process,
+pool size or cluster plays it, the score, statistics and ``trace_hash`` are the same.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from engine.host import DEFAULT_BEHAVIOR_HZ
+from engine.ir.model import Program
+from examples.soccer.run import play_match
+
+#: The keys of a result's per-side dicts: the two versions, not the colours.
+SIDES = ("home", "away")
+
+
+@dataclass(frozen=True, slots=True)
+class MatchSpec:
+    """One planned match: its number, seed, who plays blue, its length and wall-time limit."""
+
+    index: int
+    seed: int
+    #: True: the HOME version plays blue (team 0); False: it plays red
+    home_blue: bool
+    half_duration_s: float
+    players: int = 5
+    timeout_s: float = 600.0
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return asdict(self)
+
+
+def plan(n: int, seed: int, duration_s: float, *, players: int = 5, timeout_s: float = 600.0) -> list[MatchSpec]:
+    """``n`` matches: seeds ``seed, seed, seed + 1, seed + 1, ...``, colours alternating."""
+    return [MatchSpec(k, seed + k // 2, k % 2 == 0, duration_s / 2.0, players, timeout_s) for k in range(n)]
+
+
+class MatchTimeout(Exception):
+    """A match ran longer (wall clock) than its ``timeout_s``."""
+
+
+class MatchInterrupted(Exception):
+    """The tournament was stopped (Ctrl+C) while this match ran."""
+
+
+def play(spec: MatchSpec, home: Program, away: Program, stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+    """Play ``spec`` and return its result as JSON-ready data; never raises for a failed match.
+
+    A result has ``index``, ``seed``, ``home_colour`` and ``ok``. A played match (``ok`` true)
+    adds, keyed by version (``home``/``away``, not colour): ``score``, ``teams`` (the statistics
+    of ``xabsl run --json``), ``activations`` (option -> robot ticks active), ``states``
+    (``"option/state"`` -> ``[robot ticks, entries]``), ``robot_ticks``; and ``trace_hash``,
+    ``sim_seconds``, ``cpu_seconds``, ``faults``. A failed one adds ``error`` instead.
+
+    Args:
+        spec: the match.
+        home: the HOME version's program.
+        away: the AWAY version's program.
+        stop: polled every simulated second; True ends the match as interrupted.
+    """
+    result: dict[str, Any] = {
+        "index": spec.index,
+        "seed": spec.seed,
+        "home_colour": "blue" if spec.home_blue else "red",
+    }
+    blue, red = (home, away) if spec.home_blue else (away, home)
+    deadline = time.perf_counter() + spec.timeout_s
+
+    def check(_time_ms: int, _game: Any) -> None:
+        if time.perf_counter() > deadline:
+            raise MatchTimeout(f"timed out after {spec.timeout_s:g} s (wall clock)")
+        if stop is not None and stop():
+            raise MatchInterrupted("interrupted")
+
+    cpu = time.process_time()
+    try:
+        report = play_match(
+            spec.seed, blue, red, players=spec.players, half_duration_s=spec.half_duration_s, progress=check
+        )
+    except MatchInterrupted:
+        result.update(ok=False, interrupted=True, error="interrupted")
+        return result
+    except Exception as error:  # a failing match is reported with its seed, never dropped
+        last = traceback.extract_tb(error.__traceback__)[-1:] if error.__traceback__ else []
+        where = f" ({last[0].filename}:{last[0].lineno})" if last and not isinstance(error, MatchTimeout) else ""
+        result.update(ok=False, error=f"{type(error).__name__}: {error}{where}")
+        return result
+    # Colour order (team 0 = blue) to version order.
+    order = (0, 1) if spec.home_blue else (1, 0)
+    data = report.as_dict()
+    colour_keys = ("home", "away")  # play_match's keys: home = blue = team 0
+    ticks = round(report.sim_seconds * DEFAULT_BEHAVIOR_HZ) * spec.players
+    result.update(
+        ok=True,
+        score={side: report.score[team] for side, team in zip(SIDES, order, strict=True)},
+        teams={side: data["teams"][colour_keys[team]] for side, team in zip(SIDES, order, strict=True)},
+        activations={side: report.activations[team] for side, team in zip(SIDES, order, strict=True)},
+        states={
+            side: _state_names(program, report.states[team])
+            for side, team, program in zip(SIDES, order, (home, away), strict=True)
+        },
+        robot_ticks={"home": ticks, "away": ticks},
+        trace_hash=report.trace_hash,
+        sim_seconds=round(report.sim_seconds, 3),
+        cpu_seconds=round(time.process_time() - cpu, 3),
+        faults=report.faults,
+    )
+    return result
+
+
+def _state_names(program: Program, counts: dict[tuple[str, int], tuple[int, int]]) -> dict[str, list[int]]:
+    """``(option, state index)`` keys as ``"option/state"`` names, sorted."""
+    named = {f"{option}/{program.options[option].states[index].name}": list(c) for (option, index), c in counts.items()}
+    return dict(sorted(named.items()))
