@@ -59,6 +59,7 @@ from server.messages import (
     openapi_schemas,
     parse_command,
 )
+from server.profile import router as profile_router
 from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
 from server.security import SecurityMiddleware, SecurityPolicy
 from server.session import CommandError, Session
@@ -698,6 +699,7 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     app.include_router(router)
     app.include_router(docs_router)
+    app.include_router(profile_router)
     _document_messages(app)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")

@@ -44,6 +44,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "write HTML documentation of a behavior set (option graph, options, symbols, search)",
     ),
     "trace": ("engine.cli.trace", "run a behavior under the conformance host: input trace in, activation trace out"),
+    "profile": (
+        "engine.cli.profile",
+        "profile a recording: time per option and state, transitions, oscillations, coverage",
+    ),
     "plan": ("engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
 }
 #: The entry-point group of the subcommands of other layers.

@@ -11,6 +11,7 @@ import { ActivationPanel } from "./panels/activation";
 import { EditorPanel } from "./panels/editor";
 import { FieldPanel } from "./panels/field";
 import { GraphPanel } from "./panels/graph";
+import { CoveragePanel } from "./panels/coverage";
 import { OptionView } from "./panels/optionview";
 import { PlotPanel } from "./panels/plot";
 import { SymbolsPanel } from "./panels/symbols";
@@ -141,6 +142,7 @@ function main(): void {
     timeline.markHits(optionView.breakpoints.hits);
     pending.add("cursor"); // paused: no tick follows that would redraw
   };
+  const coverage = new CoveragePanel(session, graph, () => ({ option: optionView.current(), element: optionView.element }));
   // Panels of worlds that announce them in their static scene (`panels`, see panels/world.ts).
   const dynamics = new DynamicsPanel(session, connection);
   const plan = new PlanPanel(session, connection);
@@ -172,6 +174,7 @@ function main(): void {
       { name: "activation", label: "Activation", key: "A", pane: activation.element },
       { name: "symbols", label: "Symbols", key: "S", pane: symbols.element },
       { name: "test", label: "Test", key: "X", pane: tester.element },
+      { name: "coverage", label: "Coverage", pane: coverage.element },
     ],
     forceAll,
   );
@@ -235,6 +238,7 @@ function main(): void {
       if (right.isActive("activation")) activation.render(changes);
       if (right.isActive("symbols")) symbols.render(changes);
       if (right.isActive("test")) tester.render(changes);
+      if (right.isActive("coverage")) coverage.render(changes);
       timeline.render(changes);
       plot.render(changes);
       stats.renderMs = stats.renderMs * 0.9 + (performance.now() - started) * 0.1;

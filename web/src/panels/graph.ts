@@ -76,6 +76,21 @@ export class GraphPanel {
     this.status.textContent = this.search.value.trim() ? `${m.length} match${m.length === 1 ? "" : "es"}` : "";
   }
 
+  /// Called after a new graph is shown (the coverage overlay of panels/coverage.ts re-applies).
+  onShown: () => void = () => {};
+
+  /// Make exactly `ids` carry class `name` (an overlay such as coverage), with hover texts by id.
+  overlay(name: string, ids: Iterable<string>, titles: Map<string, string>): void {
+    this.view.setClasses(name, ids);
+    for (const [id, text] of titles) {
+      const el = this.view.elementById(id);
+      if (!el) continue;
+      let title = el.querySelector(":scope > title");
+      if (!title) el.prepend((title = document.createElementNS("http://www.w3.org/2000/svg", "title")));
+      title.textContent = text;
+    }
+  }
+
   /// Centre the deepest active option.
   jump(): void {
     if (this.deepest) this.view.centerOn(this.deepest);
@@ -120,6 +135,7 @@ export class GraphPanel {
             if (!this.view.show(svg)) this.view.clear("The server sent an unreadable graph.");
             this.mark();
             this.highlight(true);
+            this.onShown();
             this.view.focusIfTiny(this.deepest);
           })
           .catch((error: Error) => {

@@ -1,0 +1,86 @@
+"""``xabsl profile``: time shares, activations, transitions, oscillations and coverage of a recording.
+
+``xabsl profile RECORDING [--agent NAME] [--html OUT] [--json] [--oscillation-ms 1000]``
+
+Prints rich tables (per team and agent), or the report document of docs/profile.md with
+``--json``; ``--html OUT`` also writes the self-contained HTML report. Exit status: 0 success,
+2 usage and I/O problems (no such file, not a recording, an unknown agent, a bad threshold).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+
+from engine.cli import UsageError
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add ``xabsl profile`` to the command line."""
+    parser = subparsers.add_parser(
+        "profile",
+        help="profile a recording: time per option and state, transitions, oscillations, coverage",
+        description=(
+            "Count a recording (xabsl run ... --record FILE.mcap): per agent and per team the share of time, "
+            "activations, mean and longest duration of every option and state, each option's transitions and "
+            "decision leaves, oscillations (an option or state re-entered within --oscillation-ms), and the "
+            "options, states, transitions and leaves never reached."
+        ),
+    )
+    parser.add_argument("recording", metavar="RECORDING", help="an .mcap recording")
+    parser.add_argument("--agent", action="append", metavar="NAME", help="profile only this agent (robot); repeatable")
+    parser.add_argument("--html", metavar="OUT", help="also write the HTML report (one self-contained file)")
+    parser.add_argument("--json", action="store_true", help="print the report as JSON (docs/profile.md)")
+    parser.add_argument(
+        "--oscillation-ms",
+        type=float,
+        default=1000.0,
+        metavar="MS",
+        help="an option or state re-entered within this many ms is an oscillation (default 1000)",
+    )
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Profile the recording; print tables or JSON; write the HTML report."""
+    import orjson
+
+    from engine.files import write_atomically
+    from engine.profile import ProfileError, profile
+    from engine.record import Recording, RecordingError
+
+    if not os.path.isfile(args.recording):
+        raise UsageError(f"no such file: {args.recording}")
+    if not math.isfinite(args.oscillation_ms) or args.oscillation_ms <= 0:
+        raise UsageError(f"--oscillation-ms must be a positive number, got {args.oscillation_ms}")
+    if args.html and os.path.isdir(args.html):
+        raise UsageError(f"--html names a folder: {args.html}")
+    try:
+        with Recording(args.recording) as recording:
+            report = profile(recording, args.agent, args.oscillation_ms)
+            descriptions = {}
+            for agent, section in report["agents"].items():
+                key = section["program"]
+                if key not in descriptions:
+                    gens = [g for (k, g) in recording.programs if k == key]
+                    descriptions[key] = recording.program(agent, max(gens)).description
+    except (ProfileError, RecordingError) as error:
+        raise UsageError(str(error)) from error
+    if args.html:
+        from engine.profile.html import html_report
+
+        try:
+            write_atomically(args.html, html_report(report, descriptions).encode("utf-8"))
+        except OSError as error:
+            raise UsageError(f"cannot write {args.html}: {error.strerror}") from error
+    if args.json:
+        sys.stdout.write(orjson.dumps(report, option=orjson.OPT_INDENT_2).decode("utf-8") + "\n")
+    else:
+        from engine.profile.terminal import print_report
+
+        print_report(report, details=bool(args.agent))
+        if args.html:
+            print(f"wrote {args.html}")
+    return 0
