@@ -398,7 +398,11 @@ class BenchController:
     """
 
     def __init__(
-        self, agent: BenchAgent, program: Program, user: BindingsModule | None, trace: InputTrace | None
+        self,
+        agent: BenchAgent,
+        program: Program,
+        user: BindingsModule | None = None,
+        trace: InputTrace | None = None,
     ) -> None:
         self.agent = agent
         self.program = program
