@@ -601,9 +601,10 @@ async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
 
 def _running(studio: Studio, key: str) -> Program:
     state = studio.session.programs.get(key)
-    if state is None or state.running is None:
+    shown = state.shown if state is not None else None
+    if shown is None:
         raise HTTPException(404, f"no running behavior {key!r}")
-    return state.running
+    return shown
 
 
 async def _svg(studio: Studio, request: Request, dot: str) -> Response:
@@ -624,10 +625,12 @@ _SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
 
 
 @router.get("/api/graph/{program}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
-async def graph(studio: StudioDep, request: Request, program: str, agent: str | None = None) -> Response:
-    """The option graph below an XABSL agent's root option (SVG)."""
+async def graph(
+    studio: StudioDep, request: Request, program: str, agent: str | None = None, root: str | None = None
+) -> Response:
+    """The option graph below an XABSL agent's root option, or below option ``root`` (a forced root) (SVG)."""
     try:
-        dot = option_graph_dot(_running(studio, program), agent)
+        dot = option_graph_dot(_running(studio, program), agent, root)
     except GraphError as error:
         raise HTTPException(404, str(error)) from None
     return await _svg(studio, request, dot)

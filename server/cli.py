@@ -72,6 +72,19 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="KEY=VALUE",
         help="an option of the world plug-in (VALUE as JSON, else text), e.g. half_duration_s=300",
     )
+    parser.add_argument(
+        "--bindings",
+        default=None,
+        metavar="FILE.py",
+        help="bench world: a Python module whose bind(bindings, robot) supplies input symbols, input "
+        "functions and basic behaviors (docs/own-behaviors.md)",
+    )
+    parser.add_argument(
+        "--inputs",
+        default=None,
+        metavar="FILE.jsonl",
+        help="bench world: an input trace (the xabsl trace format) played on every robot, on the session's clock",
+    )
     parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
     parser.add_argument("--compress", action="store_true", help="websocket per-message deflate")
     parser.add_argument(
@@ -119,6 +132,10 @@ def run(args: argparse.Namespace) -> int:
     options: dict[str, Any] = dict(args.world_option)
     if args.robots is not None:
         options["robots"] = args.robots
+    for flag in ("bindings", "inputs"):  # options of the bench world, absolute for the simulation process
+        value = getattr(args, flag)
+        if value is not None:
+            options[flag] = str(Path(value).expanduser().resolve())
     session: Session
     try:
         if args.replay is not None:
@@ -144,12 +161,21 @@ def run(args: argparse.Namespace) -> int:
                     folder, example.name, example.behavior_hz, example.physics_hz, cap_bytes=cap
                 )
     except ExampleError as error:
+        if (args.bindings or args.inputs) and "unexpected keyword argument" in str(error):
+            raise UsageError(
+                f"{args.path}: --bindings and --inputs are options of the bench world, and this folder runs in "
+                "a world of its own"
+            ) from None
         raise UsageError(str(error)) from None
     name = session.example.name
     for key, state in session.programs.items():
         comp = state.compilation
         if comp is not None and not comp.ok:
-            print(f"warning: behavior {key!r} has errors; its agents stand until it is fixed:", file=sys.stderr)
+            print(
+                f"warning: behavior {key!r} has {len(comp.errors)} errors; the studio shows them, "
+                "its robots stand until it compiles:",
+                file=sys.stderr,
+            )
             for diagnostic in comp.errors[:10]:
                 print("  " + diagnostic.format(), file=sys.stderr)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST

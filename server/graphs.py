@@ -46,8 +46,15 @@ class GraphCache:
         return svg, digest
 
 
-def option_graph_dot(program: Program, agent: str | None) -> str:
-    """The DOT of the option graph below the root of XABSL agent ``agent`` (default: the first)."""
+def option_graph_dot(program: Program, agent: str | None, root: str | None = None) -> str:
+    """The DOT of the option graph below the root of XABSL agent ``agent`` (default: the first).
+
+    ``root``: below that option instead (a robot's forced root).
+    """
+    if root is not None:
+        if root not in program.options:
+            raise GraphError(f"no option {root!r} in this behavior")
+        return option_graph(program, root)
     if not program.agents:
         return option_graph(program, None)
     chosen = next((a for a in program.agents if a.name == agent), None) if agent else program.agents[0]

@@ -649,13 +649,18 @@ class SessionInfo:
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RobotInfo:
-    """A robot of the world; ``program``: the behavior set its engine runs (``None``: no XABSL engine)."""
+    """A robot of the world; ``program``: the behavior set it runs (``None``: no XABSL behavior).
+
+    ``engine`` is false while its behavior set has errors and never compiled clean: ``program``
+    then names the set whose parsed part the studio shows, and the robot stands until it compiles.
+    """
 
     id: int
     name: str
     team: str
     number: int
     program: str | None
+    engine: bool = True
 
 
 @with_config(_SCHEMA)

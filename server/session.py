@@ -97,6 +97,15 @@ class ProgramState:
     running: Program | None = None
     running_json: dict[str, Any] | None = None
     error: str | None = None
+    #: while nothing compiled clean yet: what parsed (``Compilation.partial``) and its program JSON,
+    #: shown by the studio (graph, option views, symbols) until the behavior compiles
+    partial: Program | None = None
+    partial_json: dict[str, Any] | None = None
+
+    @property
+    def shown(self) -> Program | None:
+        """The program the studio shows: the running one, else what parsed of a broken one."""
+        return self.running if self.running is not None else self.partial
 
     def as_dict(self) -> dict[str, Any]:
         """The behavior set as ``GET /api/status`` shows it."""
@@ -106,6 +115,7 @@ class ProgramState:
             "agents_file": self.source.agents_file.name,
             "ok": comp is not None and comp.ok and self.error is None,
             "running": self.running is not None,
+            "partial": self.running is None and self.partial is not None,
             "error": self.error,
             "diagnostics": [d.as_dict() for d in comp.diagnostics] if comp is not None else [],
             "files": list(comp.files) if comp is not None else [],
@@ -199,6 +209,8 @@ class Session:
         if compilation.program is not None:
             state.running = compilation.program
             state.running_json = program_to_json(compilation.program, compilation.source_text)
+        else:
+            _store_partial(state, compilation)
 
     # -- the simulation process ----------------------------------------------------------------------
 
@@ -231,6 +243,11 @@ class Session:
                 if state.running is not None and state.running_json is not None
                 else None
                 for key, state in self.programs.items()
+            },
+            descriptions={
+                key: state.partial_json
+                for key, state in self.programs.items()
+                if state.running is None and state.partial_json is not None
             },
             seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
             generation=self.generation.number if self.generation is not None else 0,
@@ -624,6 +641,9 @@ class Session:
         state.compilation = compilation
         program = compilation.program
         if program is None:
+            if state.running is None:
+                # the partial shown stays the one of the hello (its ids), until it compiles clean
+                return "the behavior has errors; its robots start when it compiles"
             return "the behavior has errors; the running version is kept"
         program_json = program_to_json(program, compilation.source_text)
         if self.running:
@@ -640,6 +660,7 @@ class Session:
         state.error = None
         state.running = program
         state.running_json = program_json
+        state.partial = state.partial_json = None
         return None
 
     # -- status ----------------------------------------------------------------------------------------
@@ -690,6 +711,17 @@ class Session:
             "world": sim.get("world") or _latest_world(latest),
             "recording": self.live_recorder.stats() if self.live_recorder is not None else None,
         }
+
+
+def _store_partial(state: ProgramState, compilation: Compilation) -> None:
+    """Keep what parsed of a broken behavior for the studio to show (nothing when it cannot be described)."""
+    partial = compilation.partial
+    try:
+        state.partial_json = program_to_json(partial, compilation.source_text) if partial is not None else None
+    except Exception:  # a half-built program the emitter cannot describe: show no graph, keep serving
+        log.exception("the partial program of %s cannot be described", state.source.key)
+        state.partial_json = None
+    state.partial = partial if state.partial_json is not None else None
 
 
 def _option_name(session: Session, option: int, robot: int) -> str:

@@ -113,6 +113,8 @@ class WorkerConfig:
     physics_hz: int = DEFAULT_PHYSICS_HZ
     #: per behavior key: the running program and its program JSON (None: not compiled clean)
     programs: dict[str, tuple[Program, dict[str, Any]] | None] = field(default_factory=dict)
+    #: per behavior key that did not compile clean: the program JSON of what parsed (shown, not run)
+    descriptions: dict[str, dict[str, Any]] = field(default_factory=dict)
     #: the last seq and generation number sent (a restarted worker continues the numbering)
     seq: int = 0
     generation: int = 0
@@ -159,6 +161,7 @@ class Simulation:
         self.behavior_hz = config.behavior_hz
         self.physics_hz = config.physics_hz
         self.programs = dict(config.programs)
+        self.descriptions = dict(config.descriptions)
         self.errors: dict[str, str | None] = dict.fromkeys(self.programs)
         self.seq = config.seq
         self.generation_number = config.generation
@@ -221,9 +224,17 @@ class Simulation:
         output_ids: list[tuple[int, ...]] = []
         robots = []
         for index, (robot, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
-            program_key = key if engine is not None else None
+            # A robot of a behavior that does not compile keeps its key: the studio shows what parsed.
+            shown = key is not None and (engine is not None or key in self.descriptions)
             robots.append(
-                {"id": index, "name": robot.name, "team": robot.team, "number": robot.number, "program": program_key}
+                {
+                    "id": index,
+                    "name": robot.name,
+                    "team": robot.team,
+                    "number": robot.number,
+                    "program": key if shown else None,
+                    "engine": engine is not None,
+                }
             )
             if engine is None or key is None:
                 samplers.append(None)
@@ -241,6 +252,8 @@ class Simulation:
         for old in [n for n in self.codecs if n <= self.generation_number - 8]:
             del self.codecs[old]
         programs = {key: running[1] for key, running in self.programs.items() if running is not None}
+        for key, description in self.descriptions.items():
+            programs.setdefault(key, description)
         structure = {"programs": programs, "robots": robots}
         return NewGeneration(
             self.generation_number,
@@ -585,6 +598,8 @@ class Simulation:
         engine = self.engines[index]
         sampler = self.samplers[index]
         if engine is None or sampler is None:
+            if self.keys[index] in self.descriptions:
+                raise CommandError(f"robot {index} stands: its behavior has errors (it starts when it compiles)")
             raise CommandError(f"robot {index} runs no XABSL engine")
         return index, engine, sampler.codec
 
@@ -650,6 +665,7 @@ class Simulation:
             return f"the behavior does not run on this host: {error}"
         self.errors[key] = None
         self.programs[key] = (program, program_json)
+        self.descriptions.pop(key, None)
         self.emit(self.generation("reload"), False)
         self.emit(self.sample(), False)
         return None

@@ -64,6 +64,9 @@ def option_graph(program: ir.Program, root: str | None = None) -> str:
     lines = ["digraph option_graph {", "  " + _GRAPH_STYLE]
     behaviors: dict[str, ir.BasicBehavior] = {}
     edges: list[str] = []
+    # A partial program (a behavior with errors, engine.lang.Compilation.partial) lacks the options
+    # of files that do not parse: they are drawn dashed, so the graph still shows who calls them.
+    missing: list[str] = [root] if root and root not in program.options else []
     for name in names:
         option = program.options[name]
         tooltip = option.doc or name
@@ -79,6 +82,11 @@ def option_graph(program: ir.Program, root: str | None = None) -> str:
                 elif isinstance(action, ir.BehaviorCall) and ("b", action.behavior) not in called:
                     called.append(("b", action.behavior))
         for kind, callee in called:
+            if kind == "o" and callee not in program.options:
+                if callee not in missing:
+                    missing.append(callee)
+                edges.append(f"  {quote('o:' + name)} -> {quote('o:' + callee)} [style=dashed];")
+                continue
             if kind == "o":
                 callee_index = program.options[callee].index
                 target = quote("o:" + callee)
@@ -93,6 +101,11 @@ def option_graph(program: ir.Program, root: str | None = None) -> str:
         lines.append(
             f"  {quote('b:' + name)} [id={quote(f'behavior_{behavior.index}')}, label={quote(name)}, "
             f'shape=ellipse, style=filled, fillcolor="#f4f4f4", tooltip={quote(behavior.doc or name)}];'
+        )
+    for name in missing:
+        lines.append(
+            f"  {quote('o:' + name)} [id={quote('missing_' + name)}, label={quote(name + ' (does not compile)')}, "
+            f'shape=box, style="rounded,dashed", color="#c0392b", tooltip="this option\'s file has errors"];'
         )
     lines.extend(edges)
     lines.append("}")

@@ -63,6 +63,9 @@ class Compilation:
     sources: dict[str, str] = field(default_factory=dict)
     #: names of all options declared, also when the program has errors
     option_names: list[str] = field(default_factory=list)
+    #: what checked when there are errors: the options of the files without syntax errors that
+    #: built, every declared symbol and agent (for a studio that shows a broken behavior); never run it
+    partial: ir.Program | None = None
 
     def source_text(self, span: Span) -> str:
         """The source text of a span, whitespace runs collapsed to one blank."""
@@ -189,4 +192,5 @@ def _compile(path: str, base: str | None, overrides: Mapping[str, str] | None) -
         timings={"parse": parsed - started, "check": checked - parsed},
         sources={f.path: f.text for f in loaded.files},
         option_names=sorted(table.options, key=str.lower),
+        partial=program if diagnostics.errors else None,
     )

@@ -230,7 +230,7 @@ def test_errands_runs_live_with_the_plan_monitor_as_the_robots_engine(
         labels = {s.get("label") for s in scene["shapes"]}
         assert {"a", "b", "c"} <= labels and sum(s["shape"] == "rect" for s in scene["shapes"]) == 3
         assert hello["structure"]["robots"] == [
-            {"id": 0, "name": "robot", "team": "errands", "number": 1, "program": "behavior"}
+            {"id": 0, "name": "robot", "team": "errands", "number": 1, "program": "behavior", "engine": True}
         ]
         # The monitor plans, then drives the first operator: goto a c.
         frame = client.frame_after(lambda f: f["scene"]["op"] == "goto a c", timeout=30)

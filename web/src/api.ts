@@ -106,10 +106,11 @@ export async function compile(path: string, text: string): Promise<CompileResult
 const svgCache = new Map<string, Promise<string>>();
 
 /// An SVG of `/api/graph/...` (cached per address; the server caches by content hash too).
-export function graphSvg(program: string, option?: string | number, agent?: string): Promise<string> {
+export function graphSvg(program: string, option?: string | number, agent?: string, root?: string): Promise<string> {
   let path = `graph/${encodeURIComponent(program)}`;
   if (option !== undefined) path += `/${encodeURIComponent(String(option))}`;
-  if (agent) path += `?agent=${encodeURIComponent(agent)}`;
+  if (root) path += `?root=${encodeURIComponent(root)}`;
+  else if (agent) path += `?agent=${encodeURIComponent(agent)}`;
   let svg = svgCache.get(path);
   if (!svg) {
     svg = fetch(`api/${path}`, { headers: headers() }).then(async (r) => {
@@ -120,6 +121,23 @@ export function graphSvg(program: string, option?: string | number, agent?: stri
     svgCache.set(path, svg);
   }
   return svg;
+}
+
+/// One behavior set in `GET /api/status` (`programs`): the last compile and what runs.
+export interface ProgramStatus {
+  folder: string;
+  agents_file: string;
+  ok: boolean;
+  running: boolean;
+  partial?: boolean;
+  error: string | null;
+  diagnostics: ServerDiagnostic[];
+}
+
+/// The behavior sets of `GET /api/status`.
+export async function programStatus(): Promise<Record<string, ProgramStatus>> {
+  const { data } = await request<{ programs: Record<string, ProgramStatus> }>("GET", "status");
+  return data.programs;
 }
 
 /// Forget cached SVGs (a hot reload changes graphs).

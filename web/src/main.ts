@@ -24,6 +24,7 @@ import { DynamicsPanel } from "./panels/dynamics";
 import { FactsPanel } from "./panels/facts";
 import { PlanPanel } from "./panels/plan";
 import { panelsOf } from "./panels/world";
+import { ProblemBanner } from "./panels/banner";
 import { Session, type SessionEvent } from "./session";
 import { h, isTyping, toast } from "./ui";
 
@@ -40,6 +41,7 @@ function main(): void {
       hello: (hello) => {
         if (hello.reason !== "connect" && hello.reason !== "resync") clearGraphCache();
         session.applyHello(hello);
+        problems.refresh();
         void optionView.breakpoints.refresh();
         // Fill the timeline with what the server buffered before we came (or before a reload);
         // a replay: with the whole recording.
@@ -58,8 +60,10 @@ function main(): void {
       frame: (frame) => session.applyFrame(frame),
       event: (event) => {
         if (event.event === "file") editor.fileEvent(event);
-        else if (event.event === "compile") editor.compileEvent(event);
-        else if (event.event === "breakpoint") {
+        else if (event.event === "compile") {
+          editor.compileEvent(event);
+          problems.refresh();
+        } else if (event.event === "breakpoint") {
           optionView.breakpoints.onHit(event);
           center.activate("option");
         } else if (event.event === "crash")
@@ -135,6 +139,10 @@ function main(): void {
       right.activate("test");
     },
   });
+  const problems = new ProblemBanner((span) => {
+    center.activate("editor");
+    editor.openSpan(span);
+  });
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
@@ -189,8 +197,11 @@ function main(): void {
     " it decided · E edits, Ctrl+S hot-reloads · X runs an option by hand · drag the timeline to go back, L for live · ? for all keys",
     h("button.icon", { title: "Hide this hint", "aria-label": "hide hint", onclick: () => { hint.remove(); localStorage.setItem(HINT_KEY, "1"); } }, "×"),
   );
+  // The notices row under the top bar: the problem banner, then the first-visit hint.
+  const notices = h("div.notices", {}, problems.element);
   app.append(
     topbar.element,
+    notices,
     h(
       "main.workspace",
       {},
@@ -210,7 +221,7 @@ function main(): void {
     ),
   );
 
-  if (!localStorage.getItem(HINT_KEY)) topbar.element.after(hint);
+  if (!localStorage.getItem(HINT_KEY)) notices.append(hint);
 
   // -------------------------------------------------------------------------- render loop
   const pending = new Set<SessionEvent>();
@@ -253,7 +264,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 

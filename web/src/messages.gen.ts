@@ -356,13 +356,19 @@ export interface RobotFrame {
   overrides?: Record<string, WireValue> | null;
 }
 
-/** A robot of the world; `program`: the behavior set its engine runs (`None`: no XABSL engine). */
+/**
+ * A robot of the world; `program`: the behavior set it runs (`None`: no XABSL behavior).
+ *
+ * `engine` is false while its behavior set has errors and never compiled clean: `program`
+ * then names the set whose parsed part the studio shows, and the robot stands until it compiles.
+ */
 export interface RobotInfo {
   id: number;
   name: string;
   team: string;
   number: number;
   program: string | null;
+  engine?: boolean;
 }
 
 /** A replay: make tick `seq` of the recording the current one (a live session refuses it). */

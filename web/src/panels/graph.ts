@@ -13,6 +13,8 @@ export class GraphPanel {
   readonly search: HTMLInputElement;
   private readonly view = new SvgView("Option graph: drag to pan, wheel to zoom");
   private readonly status: HTMLElement;
+  /// says when the graph is the one below a forced root rather than the agent's
+  private readonly rootNote: HTMLElement;
   private key = "";
   private loading = "";
   private deepest: string | null = null;
@@ -39,6 +41,7 @@ export class GraphPanel {
       }
     });
     this.status = h("span.muted");
+    this.rootNote = h("span.graph-root");
     const toolbar = h(
       "div.toolbar",
       {},
@@ -48,6 +51,7 @@ export class GraphPanel {
       h("button", { title: "Zoom in (+)", onclick: () => this.view.zoomBy(1.25) }, "+"),
       h("button", { title: "Zoom out (−)", onclick: () => this.view.zoomBy(0.8) }, "−"),
       this.status,
+      this.rootNote,
     );
     this.element = h("div.panel.graph-panel", {}, toolbar, this.view.element);
     this.view.onClick = (id) => {
@@ -92,13 +96,20 @@ export class GraphPanel {
     if (this.deepest) this.view.centerOn(this.deepest);
   }
 
-  /// The XABSL agent whose option graph to show: the one whose root the robot runs.
-  private graphKey(): { program: string; agent: string | undefined } | null {
+  /// The XABSL agent whose option graph to show: the one whose root the robot runs; while an
+  /// option is forced as the robot's root, the graph below that option.
+  private graphKey(): { program: string; agent: string | undefined; root?: string } | null {
     const session = this.session;
     const program = session.programOf(session.selectedRobot);
     const index = session.indexOf(session.selectedRobot);
     if (!program || !index) return null;
-    const root = session.robotInView()?.path[0];
+    const robot = session.robotInView();
+    const forced = robot?.forced;
+    if (forced && forced[0] === 0) {
+      const name = index.optionById.get(forced[1])?.name;
+      if (name) return { program, agent: undefined, root: name };
+    }
+    const root = robot?.path[0];
     const rootName = root?.kind === "option" ? index.optionById.get(root.option)?.name : undefined;
     const agents = index.description.agents;
     const agent = agents.find((a) => a.root === rootName) ?? agents[0];
@@ -107,14 +118,15 @@ export class GraphPanel {
 
   render(changes: Set<SessionEvent>): void {
     const key = this.graphKey();
-    const k = key ? `${key.program}|${key.agent ?? ""}|${this.session.hello?.generation ?? 0}` : "";
+    const k = key ? `${key.program}|${key.agent ?? ""}|${key.root ?? ""}|${this.session.hello?.generation ?? 0}` : "";
     if (k !== this.key && k !== this.loading) {
       if (!key) {
         this.key = k;
         this.view.clear(this.session.hello ? "This robot has no XABSL behavior." : "Connecting…");
       } else {
         this.loading = k;
-        graphSvg(key.program, undefined, key.agent)
+        this.rootNote.textContent = key.root ? `forced root: ${key.root}` : "";
+        graphSvg(key.program, undefined, key.agent, key.root)
           .then((svg) => {
             if (this.loading !== k) return;
             this.loading = "";

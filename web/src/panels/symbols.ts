@@ -1,5 +1,10 @@
 /// Symbols of the selected robot: inputs and outputs (and internal symbols) with their values,
 /// units, ranges and doc comments; search; pin any to the plot; override an input (and release).
+/// Input functions are listed with the arguments and results of this tick's calls where the
+/// world reports them (the bench world's `calls`). In the bench world (its static scene has
+/// `bench`), "set…" sets the robot's own value of a plain input or of an input function
+/// without a binding (world commands `set_input`, `set_function`): it stays until set again and
+/// is marked "by hand"; inputs the user's bindings module supplies are overridden as elsewhere.
 /// Rows are built once per hello and robot; a tick only changes value texts.
 import type { Connection } from "../connection";
 import type { DescriptionIndex, InputSymbol, OutputSymbol } from "../description";
@@ -9,14 +14,44 @@ import type { Session, SessionEvent } from "../session";
 import { formatValue, h, setText, shortElement, toast, toggleClass } from "../ui";
 import type { PlotPanel } from "./plot";
 
+/// What the bench world says about the symbols (static scene `bench`).
+interface BenchInfo {
+  world_inputs: string[];
+  bound: string[];
+  functions: string[];
+}
+
+/// The bench world's per-robot part of a dynamic scene (`scene.bench[robot]`).
+interface BenchRobot {
+  calls?: Record<string, Array<[Array<number | boolean>, number | boolean]>>;
+  functions?: Record<string, number | boolean>;
+  hand?: string[];
+}
+
+/// How a value by hand reaches the robot: a debugger override, or the bench world's own value.
+type SetMode = "override" | "set_input" | "set_function";
+
+/// The text of an input function's calls in one tick: `f(1, 2) = 3; f(4, 5) = 6`.
+export function callsText(name: string, calls: BenchRobot["calls"], format: (v: number | boolean) => string): string {
+  const list = calls?.[name];
+  if (!list?.length) return "not called";
+  const short = name.split(".").pop() ?? name;
+  return list.map(([args, value]) => `${short}(${args.map((a) => (typeof a === "number" ? String(Math.round(a * 1000) / 1000) : String(a))).join(", ")}) = ${format(value)}`).join("; ");
+}
+
 interface SymbolRow {
-  kind: "input" | "output";
+  kind: "input" | "output" | "function";
   symbol: InputSymbol | OutputSymbol;
   el: HTMLElement;
   value: HTMLElement;
   pin: HTMLButtonElement;
   /// releases an override with one click (shown while the input is overridden)
   release: HTMLButtonElement | null;
+  /// "by hand" / "bound" mark (bench world)
+  mark: HTMLElement | null;
+  /// the calls of an input function
+  calls: HTMLElement | null;
+  mode: SetMode;
   text: string;
 }
 
@@ -38,40 +73,62 @@ export class SymbolsPanel {
     this.element = h("div.panel.symbols-panel", {}, h("div.toolbar", {}, this.search), this.list);
   }
 
+  /// The bench world's symbol facts (null: another world).
+  private bench(): BenchInfo | null {
+    const info = this.session.scene?.bench as BenchInfo | undefined;
+    return info && Array.isArray(info.bound) ? info : null;
+  }
+
   private build(index: DescriptionIndex | null): void {
     this.rows = [];
     const sections: HTMLElement[] = [];
-    const add = (title: string, kind: "input" | "output", symbols: Array<InputSymbol | OutputSymbol>): void => {
+    const bench = this.bench();
+    const add = (title: string, kind: "input" | "output" | "function", symbols: Array<InputSymbol | OutputSymbol>): void => {
       if (!symbols.length) return;
       sections.push(h("div.section-title", {}, title));
       for (const symbol of symbols) {
-        if (kind === "input" && (symbol as InputSymbol).params.length) continue; // functions are not streamed
         const value = h("span.value");
-        const pin = h("button.icon", { title: "Pin to the plot (P)", "aria-label": `pin ${symbol.name}` }, "plot");
-        pin.addEventListener("click", () => this.plot.toggle(this.session.selectedRobot, kind, symbol.id));
+        const pin = h("button.icon", { title: "Pin to the plot (P)", "aria-label": `pin ${symbol.name}`, hidden: kind === "function" }, "plot");
+        pin.addEventListener("click", () => this.plot.toggle(this.session.selectedRobot, kind === "output" ? "output" : "input", symbol.id));
+        const params = kind === "function" ? `(${(symbol as InputSymbol).params.map((p) => p.name.slice(symbol.name.length + 1) || p.name).join(", ")})` : "";
         const facts = [symbol.type === "enum" ? `enum ${symbol.enum}` : symbol.type === "boolean" ? "bool" : "", rangeText(symbol.range, symbol.unit)].filter((x) => x).join(" · ");
-        const override =
-          kind === "input"
-            ? h("button.icon", { title: "Override this input", "aria-label": `override ${symbol.name}`, onclick: () => this.editOverride(row) }, "set…")
-            : null;
+        const bound = bench?.bound.includes(symbol.name) ?? false;
+        const mode: SetMode = !bench || bound ? "override" : kind === "function" ? "set_function" : "set_input";
+        const settable = kind === "input" || (kind === "function" && mode === "set_function");
+        const override = settable
+          ? h(
+              "button.icon",
+              {
+                title: mode === "override" ? "Override this input" : "Set this robot's value: it stays until set again",
+                "aria-label": `${mode === "override" ? "override" : "set"} ${symbol.name}`,
+                onclick: () => this.editOverride(row),
+              },
+              "set…",
+            )
+          : null;
         const release =
           kind === "input"
             ? h("button.icon.release", { title: "Release the override: read the world's value again", "aria-label": `release ${symbol.name}`, hidden: true, onclick: () => this.releaseInput(symbol) }, "release")
             : null;
+        const mark = bench && kind !== "output" ? h("span.by-hand", { title: bound ? `from ${String((this.session.scene?.bench as { bindings?: string })?.bindings ?? "the bindings module")}` : "set by hand" }, bound ? "bound" : "") : null;
+        const calls = kind === "function" ? h("span.calls") : null;
         const el = h(
           "div.symbol-row",
           { role: "row", "data-symbol": symbol.name, "data-kind": kind, title: symbol.doc ?? "" },
-          h("span.name", {}, symbol.name, h("span.facts", {}, facts)),
+          h("span.name", {}, symbol.name, params, mark, h("span.facts", {}, facts)),
           value,
           h("span.actions", {}, pin, override, release),
+          calls,
           symbol.doc ? h("div.sdoc", {}, symbol.doc) : null,
         );
-        const row: SymbolRow = { kind, symbol, el, value, pin, release, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
+        const row: SymbolRow = { kind, symbol, el, value, pin, release, mark, calls, mode, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
         this.rows.push(row);
         sections.push(el);
       }
     };
-    add("Inputs", "input", index?.description.inputs ?? []);
+    const inputs = index?.description.inputs ?? [];
+    add("Inputs", "input", inputs.filter((s) => !s.params.length));
+    add("Input functions", "function", inputs.filter((s) => s.params.length));
     add("Outputs", "output", (index?.description.outputs ?? []).filter((s) => !(s as OutputSymbol).internal));
     add("Internal", "output", (index?.description.outputs ?? []).filter((s) => (s as OutputSymbol).internal));
     if (!sections.length) sections.push(h("div.empty", {}, this.session.hello ? "No symbols: this robot has no XABSL behavior." : "Connecting…"));
@@ -94,19 +151,43 @@ export class SymbolsPanel {
     }
     const robot = session.robotInView();
     const overrides = robot?.overrides ?? {};
+    const benchScene = (session.view?.scene?.bench as BenchRobot[] | undefined)?.[session.selectedRobot];
+    const hand = new Set(benchScene?.hand ?? []);
+    const worldInputs = new Set(this.bench()?.world_inputs ?? []);
     for (const row of this.rows) {
       if (row.el.hidden) continue;
+      const symbol = row.symbol;
+      const format = (v: number | boolean | null | undefined): string => formatValue(v, symbol.type, symbol.enum, index);
+      if (row.kind === "function") {
+        const set = benchScene?.functions?.[symbol.name];
+        setText(row.value, row.mode === "set_function" ? format(set ?? (symbol.type === "boolean" ? false : 0)) : "");
+        if (row.calls) setText(row.calls, benchScene ? callsText(symbol.name, benchScene.calls, format) : "not reported by this world");
+        if (row.mark && row.mode === "set_function") setText(row.mark, set !== undefined ? "by hand" : "");
+        continue;
+      }
       const values = row.kind === "input" ? robot?.inputs : robot?.outputs;
-      setText(row.value, formatValue(values?.[row.symbol.id], row.symbol.type, row.symbol.enum, index));
-      const overridden = row.kind === "input" && String(row.symbol.id) in overrides;
+      setText(row.value, format(values?.[symbol.id]));
+      const overridden = row.kind === "input" && String(symbol.id) in overrides;
       toggleClass(row.el, "overridden", overridden);
-      if (row.release && row.release.hidden === overridden) row.release.hidden = !overridden;
-      toggleClass(row.pin, "on", this.plot.has(session.selectedRobot, row.kind, row.symbol.id));
+      // a world input set by hand on the bench can follow the world again
+      const following = row.mode === "set_input" && hand.has(symbol.name) && worldInputs.has(symbol.name);
+      const releasable = overridden || following;
+      if (row.release && row.release.hidden === releasable) row.release.hidden = !releasable;
+      if (row.mark && row.mode === "set_input") setText(row.mark, hand.has(symbol.name) ? "by hand" : "");
+      toggleClass(row.pin, "on", this.plot.has(session.selectedRobot, row.kind, symbol.id));
     }
   }
 
   /// Release the override of `symbol` on robot `robotId` (the selected one by default).
   private releaseInput(symbol: InputSymbol | OutputSymbol, robotId = this.session.selectedRobot): void {
+    const overridden = String(symbol.id) in (this.session.robotInView()?.overrides ?? {});
+    if (!overridden && this.bench()?.world_inputs.includes(symbol.name)) {
+      this.connection
+        .command("world_command", { name: "follow_world", args: { robot: robotId, symbol: symbol.name } })
+        .then(() => toast(`${symbol.name} follows the world again`, "ok"))
+        .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
+      return;
+    }
     this.connection
       .command("release_input", { robot: robotId, symbol: symbol.id })
       .then(() => toast(`${symbol.name} reads the world again`, "ok"))
@@ -119,7 +200,8 @@ export class SymbolsPanel {
     const index = session.indexOf(session.selectedRobot);
     const symbol = row.symbol;
     const robotId = session.selectedRobot;
-    const current = session.robotInView()?.inputs[symbol.id];
+    const benchScene = (session.view?.scene?.bench as BenchRobot[] | undefined)?.[robotId];
+    const current = row.kind === "function" ? benchScene?.functions?.[symbol.name] : session.robotInView()?.inputs[symbol.id];
     let control: HTMLInputElement | HTMLSelectElement;
     if (symbol.type === "boolean") {
       control = h("select", {}, h("option", { value: "true" }, "true"), h("option", { value: "false" }, "false"));
@@ -149,10 +231,12 @@ export class SymbolsPanel {
         }
         value = checked.value;
       }
-      this.connection
-        .command("override_input", { robot: robotId, symbol: symbol.id, value })
-        .then(() => toast(`${symbol.name} overridden on ${session.robotInfo(robotId)?.name}`, "ok"))
-        .catch((e: Error) => toast(`Override failed: ${e.message}`, "error"));
+      const name = session.robotInfo(robotId)?.name;
+      const sent =
+        row.mode === "override"
+          ? this.connection.command("override_input", { robot: robotId, symbol: symbol.id, value }).then(() => `${symbol.name} overridden on ${name}`)
+          : this.connection.command("world_command", { name: row.mode, args: { robot: robotId, symbol: symbol.name, value } }).then(() => `${symbol.name} set on ${name}: it stays until set again`);
+      sent.then((text) => toast(text, "ok")).catch((e: Error) => toast(`Set failed: ${e.message}`, "error"));
       editor.remove();
     };
     const release = (): void => {
@@ -163,8 +247,8 @@ export class SymbolsPanel {
       "div.override-editor",
       {},
       control,
-      h("button.primary", { onclick: apply }, "Override"),
-      h("button", { onclick: release, title: "Back to the world's value" }, "Release"),
+      h("button.primary", { onclick: apply }, row.mode === "override" ? "Override" : "Set"),
+      row.mode === "override" ? h("button", { onclick: release, title: "Back to the world's value" }, "Release") : null,
       h("button", { onclick: () => editor.remove() }, "Cancel"),
       problem,
     );

@@ -1,4 +1,5 @@
-/// The top bar: robot picker, simulation controls (pause/resume, step, speed, reset), the game
+/// The top bar: robot picker, the XABSL agent the selected robot runs (any agent of its behavior
+/// set, `select_agent`; a forced root is shown beside it), simulation controls (pause/resume, step, speed, reset), the game
 /// clock and score, the link-health indicator, the theme switch and the keyboard help.
 import type { Connection, LinkState } from "../connection";
 import type { Hello } from "../protocol";
@@ -11,6 +12,8 @@ const QUIET_MS = 1500;
 export class TopBar {
   readonly element: HTMLElement;
   readonly robotPicker: HTMLSelectElement;
+  readonly agentPicker: HTMLSelectElement;
+  private agentKey = "";
   private readonly pauseButton: HTMLButtonElement;
   private readonly speed: HTMLSelectElement;
   private readonly clock: HTMLElement;
@@ -34,6 +37,16 @@ export class TopBar {
   ) {
     this.robotPicker = h("select#robot-picker", { "aria-label": "Robot", title: "Selected robot (1..9, 0)" });
     this.robotPicker.addEventListener("change", () => session.selectRobot(Number(this.robotPicker.value)));
+    this.agentPicker = h("select#agent-picker", { "aria-label": "XABSL agent", title: "The XABSL agent the selected robot runs" });
+    this.agentPicker.addEventListener("change", () => {
+      const robot = session.selectedRobot;
+      const agent = this.agentPicker.value;
+      connection
+        .command("select_agent", { robot, agent })
+        .then(() => toast(`${session.robotInfo(robot)?.name} runs agent ${agent}`, "ok"))
+        .catch((e: Error) => toast(`Agent: ${e.message}`, "error"));
+      this.agentPicker.blur();
+    });
     this.pauseButton = h("button#pause", { title: "Pause / resume the simulation (Space)", onclick: () => this.togglePause() }, "❚❚ Pause");
     this.speed = h("select#speed", { "aria-label": "Speed", title: "Simulation speed" }, ...SPEEDS.map((s) => h("option", { value: s }, formatSpeed(s))));
     this.speed.value = "1";
@@ -54,7 +67,8 @@ export class TopBar {
       "header.topbar",
       {},
       h("span.brand", {}, "xabsl", h("b", {}, "studio")),
-      h("label.inline", {}, "Robot ", this.robotPicker),
+      h("label.inline", {}, h("span.label-text", {}, "Robot "), this.robotPicker),
+      h("label.inline", {}, h("span.label-text", {}, "Agent "), this.agentPicker),
       h(
         "div.group",
         { role: "group", "aria-label": "Simulation" },
@@ -118,10 +132,11 @@ export class TopBar {
         this.setSpeed(info.speed);
       }
       this.robotPicker.replaceChildren(
-        ...session.robots.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${a.program ? "" : " (no engine)"}`)),
+        ...session.robots.map((a, i) => h("option", { value: a.id }, `${i < 10 ? `${(i + 1) % 10} · ` : ""}${a.name}${!a.program ? " (no engine)" : a.engine === false ? " (stands: errors)" : ""}`)),
       );
     }
     if (this.robotPicker.value !== String(session.selectedRobot)) this.robotPicker.value = String(session.selectedRobot);
+    this.renderAgent(changes);
     const tick = session.live;
     const status = tick?.status;
     const parts: string[] = [];
@@ -130,6 +145,44 @@ export class TopBar {
     if (tick) parts.push(formatClock(tick.t));
     setText(this.clock, parts.join(" · "));
     this.renderLink();
+  }
+
+  /// The agent picker: the agents of the selected robot's behavior set, the one whose root option
+  /// the robot runs selected; while a root is forced, a "forced: name" entry says so.
+  private renderAgent(changes: Set<SessionEvent>): void {
+    const session = this.session;
+    const index = session.indexOf(session.selectedRobot);
+    const key = `${session.hello?.generation ?? -1}|${session.selectedRobot}`;
+    if (key !== this.agentKey || changes.has("hello")) {
+      this.agentKey = key;
+      const agents = index?.description.agents ?? [];
+      this.agentPicker.replaceChildren(
+        ...agents.map((a) => h("option", { value: a.name, title: `${a.title ?? a.name}: root option ${a.root}` }, a.name)),
+      );
+      this.agentPicker.disabled = agents.length === 0 || session.robotInfo(session.selectedRobot)?.engine === false;
+    }
+    if (!index || document.activeElement === this.agentPicker) return;
+    const robot = session.robotInView();
+    const root = robot?.path[0];
+    const forced = robot?.forced;
+    let shown = "";
+    if (forced) {
+      const name = forced[0] === 0 ? index.optionById.get(forced[1])?.name : index.behaviorById.get(forced[1])?.name;
+      shown = `forced: ${name ?? "?"}`;
+    } else if (root?.kind === "option") {
+      const rootName = index.optionById.get(root.option)?.name;
+      shown = index.description.agents.find((a) => a.root === rootName)?.name ?? "";
+    }
+    let entry = this.agentPicker.querySelector<HTMLOptionElement>("option.forced");
+    if (shown.startsWith("forced: ")) {
+      if (!entry) {
+        entry = h("option.forced", { disabled: true });
+        this.agentPicker.append(entry);
+      }
+      entry.value = shown;
+      setText(entry, shown);
+    } else entry?.remove();
+    if (shown && this.agentPicker.value !== shown) this.agentPicker.value = shown;
   }
 
   private setSpeed(speed: number): void {
