@@ -24,8 +24,9 @@ every bytecode of the prologue counts):
   up to :data:`INLINE_STATES` states, whose ``O{i}`` selects the active state's decision and the
   next state's actions with ``if s == 0: ... elif s == 1: ...`` (a comparison or two instead of
   two calls through the ``DEC``/``ACT`` tuples; ``benchmarks/engine_tick.py``: ~10 % per tick);
-* an input symbol registered as an attribute of a host object is read as ``IA{k}.<attribute>``
-  rather than called as ``I{k}()``;
+* an input symbol registered as an attribute of a host object is read as ``IA{k}.<attribute>``,
+  one registered as an item of a host mapping as ``IA{k}['<key>']``, rather than called as
+  ``I{k}()``;
 * a basic-behavior call does its activation bookkeeping inline (``BB{k}``/``BE{k}`` are the
   instance and its bound ``execute``) instead of calling back into the engine.
 
@@ -240,6 +241,8 @@ class _ExpressionWriter:
         slot = self.layout.inputs[ref.symbol]
         if slot.attribute is not None:
             return f"IA{slot.index}.{slot.attribute}"
+        if slot.key is not None:
+            return f"IA{slot.index}[{slot.key!r}]"
         if not slot.params:
             return f"I{slot.index}()"
         assigned = {a.param: a for a in ref.args}

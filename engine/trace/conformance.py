@@ -4,8 +4,9 @@ The conformance kit (``data/conformance/README.md``) runs a behavior under fixed
 conventions and records one JSON object per tick. This module is that host:
 
 * :func:`conformance_bindings` registers, for a program, every external enumeration (element
-  *i* in declaration order has value *i*), every input symbol (plain ones read a value table
-  that starts at 0 / false / the first element; parameterized ones are the kit's functions of
+  *i* in declaration order has value *i*), every input symbol (plain ones are items of a value
+  table that starts at 0 / false / the first element, read by generated code with a subscript
+  rather than a getter call; parameterized ones are the kit's functions of
   ``sum((i+1) * value_i)``), every output symbol as engine storage, and every basic behavior as
   a behavior that only records its calls.
 * :class:`TraceRunner` applies one ``in.jsonl`` line (agent switch, ``set``, clock), executes
@@ -101,7 +102,7 @@ def conformance_bindings(program: Program) -> tuple[Bindings, dict[str, Value]]:
             )
             continue
         values[symbol.name] = 0.0 if symbol.kind is Kind.DECIMAL else (False if symbol.kind is Kind.BOOLEAN else 0)
-        bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
+        bindings.input_item(symbol.name, symbol.kind, values, symbol.name, enum=symbol.enum)
     for out in program.outputs.values():
         if not out.internal:
             bindings.output(out.name, out.kind, enum=out.enum)
@@ -113,10 +114,6 @@ def conformance_bindings(program: Program) -> tuple[Bindings, dict[str, Value]]:
         )
         bindings.behavior(cls)
     return bindings, values
-
-
-def _reader(values: dict[str, Value], name: str) -> Callable[[], Value]:
-    return lambda: values[name]
 
 
 class TraceRunner:
