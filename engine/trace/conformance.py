@@ -77,6 +77,11 @@ def _function(kind: Kind, size: int, arity: int) -> Callable[..., Value]:
     if kind is Kind.DECIMAL:
         return weighted
     if kind is Kind.BOOLEAN:
+        # One call instead of two for the usual arities (as _weighted, the same operations).
+        if arity == 1:
+            return lambda a: 0.0 + 1 * float(a) > 0
+        if arity == 2:
+            return lambda a, b: 0.0 + 1 * float(a) + 2 * float(b) > 0
         return lambda *values: weighted(*values) > 0
     if size == 0:
         raise ValueError("an enum-valued input function needs a declared enumeration")
