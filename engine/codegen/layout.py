@@ -133,13 +133,15 @@ class OptionSlot:
 
 @dataclass(frozen=True, slots=True)
 class InputSlot:
-    """How one input symbol is read: host callable ``I{index}`` (or attribute of ``IA{index}``)."""
+    """How one input symbol is read: host callable ``I{index}`` (or attribute/item of ``IA{index}``)."""
 
     index: int
     #: the host function's parameters in registration order (also the positional call order)
     params: tuple[ParamSpec, ...] = ()
     #: the symbol is this attribute of a host object (global ``IA{index}``): read, not called
     attribute: str | None = None
+    #: the symbol is this item of a host mapping (global ``IA{index}``): subscripted, not called
+    key: str | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -24,8 +24,9 @@ every bytecode of the prologue counts):
   up to :data:`INLINE_STATES` states, whose ``O{i}`` selects the active state's decision and the
   next state's actions with ``if s == 0: ... elif s == 1: ...`` (a comparison or two instead of
   two calls through the ``DEC``/``ACT`` tuples; ``benchmarks/engine_tick.py``: ~10 % per tick);
-* an input symbol registered as an attribute of a host object is read as ``IA{k}.<attribute>``
-  rather than called as ``I{k}()``;
+* an input symbol registered as an attribute of a host object is read as ``IA{k}.<attribute>``,
+  one registered as an item of a host mapping as ``IA{k}['<key>']``, rather than called as
+  ``I{k}()``;
 * a basic-behavior call does its activation bookkeeping inline (``BB{k}``/``BE{k}`` are the
   instance and its bound ``execute``) instead of calling back into the engine.
 
@@ -240,6 +241,8 @@ class _ExpressionWriter:
         slot = self.layout.inputs[ref.symbol]
         if slot.attribute is not None:
             return f"IA{slot.index}.{slot.attribute}"
+        if slot.key is not None:
+            return f"IA{slot.index}[{slot.key!r}]"
         if not slot.params:
             return f"I{slot.index}()"
         assigned = {a.param: a for a in ref.args}
@@ -405,12 +408,14 @@ class _OptionWriter:
         self.tree(state, state.decision, writer, "    ", "return ")
         self.emit("")
 
-    def tree(self, state: State, node: DecisionTree, writer: _ExpressionWriter, indent: str, leaf: str) -> None:
-        """The decision tree of ``state``; a leaf is ``{leaf}(next, leaf id, state)``."""
+    def tree(
+        self, state: State, node: DecisionTree, writer: _ExpressionWriter, indent: str, leaf: str, nxt: str = ""
+    ) -> None:
+        """The decision tree of ``state``; a leaf is ``{leaf}(next, leaf id, state)`` (then ``{nxt} = next``)."""
         keyword = "if"
         while isinstance(node, If):
             self.emit(f"{indent}{keyword} {writer(node.condition)}:", state, node.span, "condition")
-            self.tree(state, node.then, writer, indent + "    ", leaf)
+            self.tree(state, node.then, writer, indent + "    ", leaf, nxt)
             node = node.otherwise
             # ``else if`` chains (the inlined common decision tree) become ``elif``: no
             # nesting, so long chains never reach Python's indentation limit.
@@ -420,6 +425,8 @@ class _OptionWriter:
             indent += "    "
         target = self.option.state(node.target or state.name).index
         self.emit(f"{indent}{leaf}({target}, {node.leaf}, {state.index})", state, node.span, "transition")
+        if nxt:
+            self.emit(f"{indent}{nxt} = {target}", state)
 
     # -- act --------------------------------------------------------------------------------
 
@@ -543,11 +550,7 @@ class _OptionWriter:
             # A single state can only stay: the decision only picks the leaf to record.
             state = self.option.states[0]
             writer = _ExpressionWriter(self.layout, self.option, state)
-            if isinstance(state.decision, If):
-                self.tree(state, state.decision, writer, "    ", "r = ")
-                e(f"    LF[{i}] = r")
-            else:
-                self.tree(state, state.decision, writer, "    ", f"LF[{i}] = ")
+            self.tree(state, state.decision, writer, "    ", f"LF[{i}] = ")
             if uses.decision_st:
                 e(f"    SD[{i}] = st")
             if uses.action_st and not uses.decision_st:
@@ -556,14 +559,17 @@ class _OptionWriter:
             return
         inline = self.inline
         if inline:
-            self.dispatch("s", lambda state: self.tree(state, state.decision, self.writer(state), "        ", "r = "))
+            # Each leaf records itself and sets the next state directly: no tuple to unpack.
+            leaf = f"LF[{i}] = "
+            pad = "        "
+            self.dispatch("s", lambda state: self.tree(state, state.decision, self.writer(state), pad, leaf, "n"))
         else:
             e(f"    r = DEC{i}[s]({uses.decision_params})")
-        e(f"    LF[{i}] = r")
+            e(f"    LF[{i}] = r")
+            e("    n = r[0]")
         if uses.decision_st:
             # What ``state_time`` the decision saw, for the debugger's explanation (§2.12).
             e(f"    SD[{i}] = st")
-        e("    n = r[0]")
         if any(self.slot.coop):
             e(f"    if n != s and CO{i}[n] and not CC({i}, n, s):")
             e("        n = s")

@@ -8,7 +8,8 @@ enumerations are engine storage and must not be registered (§2.1).
   reference; an input symbol with parameters is a host *function* called with its parameters
   positionally, in the order they are registered. A symbol that is one attribute of a host
   object (``world_model.ball_x``) can be registered as such (:meth:`Bindings.input_attribute`):
-  generated code then reads the attribute itself, about 4x cheaper than calling a getter.
+  generated code then reads the attribute itself, about 4x cheaper than calling a getter; one
+  that is one item of a host mapping (``values["ball.x"]``) likewise (:meth:`Bindings.input_item`).
 * **Output symbols** are plain storage kept by the engine (``initial`` value, read back with
   ``Engine.output``), or a ``setter``/``getter`` pair of the host. Writes go through at once
   (§2.2).
@@ -27,7 +28,7 @@ import keyword
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 from typing import Any, ClassVar
 
 from engine.ir.model import Parameter, short_name
@@ -55,7 +56,8 @@ def _parameters(owner: str, params: Iterable[Parameter | tuple[str, Kind]]) -> t
 class InputBinding:
     """An input symbol as the host provides it: a getter, or a function of ``params``.
 
-    ``source``/``attribute``: the symbol is ``source.<attribute>`` (``read`` reads exactly that).
+    ``source``/``attribute``: the symbol is ``source.<attribute>`` (``read`` reads exactly that);
+    ``source``/``key``: the symbol is ``source[key]`` (likewise).
     """
 
     name: str
@@ -65,6 +67,7 @@ class InputBinding:
     enum: str | None = None
     source: object | None = None
     attribute: str | None = None
+    key: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -201,6 +204,19 @@ class Bindings:
             raise ValueError(f"input symbol {name}: {attribute!r} is not an attribute name")
         read = partial(attrgetter(attribute), source)
         self.inputs[name] = InputBinding(name, kind, read, (), enum, source, attribute)
+
+    def input_item(
+        self, name: str, kind: Kind, source: Mapping[str, Any], key: str, *, enum: str | None = None
+    ) -> None:
+        """Register an input symbol that is ``source[key]`` at every reference.
+
+        The same as ``input(name, kind, lambda: source[key])``, but the generated code subscripts
+        the mapping directly instead of calling a getter (as cheap as :meth:`input_attribute`, and
+        for any key: XABSL names have dots). ``source`` is held, not copied: assign its items to
+        change the symbol.
+        """
+        read = partial(itemgetter(key), source)
+        self.inputs[name] = InputBinding(name, kind, read, (), enum, source, None, key)
 
     def output(
         self,

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import traceback
 from collections.abc import Callable, Mapping, Sequence
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 from types import MappingProxyType
 from typing import Any
 
@@ -323,29 +323,35 @@ class Engine:
     def input_sampler(self, names: Sequence[str]) -> Callable[[], tuple[Value, ...]]:
         """A function that reads the plain input symbols ``names`` as one tuple, in that order.
 
-        For recording every tick: inputs bound with :meth:`Bindings.input_attribute` are read with
-        one ``operator.attrgetter`` call per host object (all in C), the others through their
+        For recording every tick: inputs bound with :meth:`Bindings.input_attribute` (or
+        :meth:`Bindings.input_item`) are read with one ``operator.attrgetter`` (``itemgetter``)
+        call per host object (all in C), the others through their
         getters. While the debugger overrides any input, the sampler reads through
         :attr:`input_reads` instead, so overridden values are what it returns. Valid until the
         next load or reload.
         """
         loaded = self._require()
-        groups: dict[int, tuple[object, list[str], list[int], list[Callable[..., Value]]]] = {}
+        groups: dict[tuple[int, bool], tuple[object, list[str], list[int], list[Callable[..., Value]]]] = {}
         getters: list[tuple[Callable[..., Value], int]] = []
         for position, name in enumerate(names):
             binding = loaded.linked.inputs[loaded.layout.inputs[name].index]
-            if binding.attribute is not None and binding.source is not None:
-                group = groups.setdefault(id(binding.source), (binding.source, [], [], []))
-                group[1].append(binding.attribute)
+            field = binding.attribute if binding.attribute is not None else binding.key
+            if field is not None and binding.source is not None:
+                by_key = binding.attribute is None
+                group = groups.setdefault((id(binding.source), by_key), (binding.source, [], [], []))
+                group[1].append(field)
                 group[2].append(position)
                 group[3].append(binding.read)
             else:
                 getters.append((binding.read, position))
         readers: list[tuple[Callable[[object], tuple[Value, ...]], object]] = []
         order: list[int] = []
-        for source, attributes, positions, single_reads in groups.values():
+        for (_, by_key), (source, attributes, positions, single_reads) in groups.items():
             if len(attributes) > 1:  # one C call reads them all (attrgetter of several names -> tuple)
-                readers.append((attrgetter(*attributes), source))
+                getter: Callable[[Any], tuple[Value, ...]] = (
+                    itemgetter(*attributes) if by_key else attrgetter(*attributes)
+                )
+                readers.append((getter, source))
                 order.extend(positions)
             else:
                 getters.append((single_reads[0], positions[0]))

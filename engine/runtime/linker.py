@@ -159,7 +159,7 @@ def link(
             )
         _check_parameters(f"input symbol {symbol.name}", symbol.params, binding.params, problems)
         input_slots[symbol.name] = InputSlot(
-            len(inputs), tuple((p.name, p.kind) for p in binding.params), binding.attribute
+            len(inputs), tuple((p.name, p.kind) for p in binding.params), binding.attribute, binding.key
         )
         inputs.append(binding)
 

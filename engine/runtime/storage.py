@@ -94,7 +94,7 @@ class LoadedProgram:
             g[f"BE{k}"] = behavior.execute
         for k, binding in enumerate(linked.inputs):
             g[f"I{k}"] = binding.read
-            if binding.attribute is not None:
+            if binding.attribute is not None or binding.key is not None:
                 g[f"IA{k}"] = binding.source
             if binding.params:
                 storage = [default_value(p.kind) for p in binding.params]
@@ -272,7 +272,7 @@ class LoadedProgram:
         if value is None:
             self.overrides.pop(symbol, None)
             self.globals[key] = binding.read
-            if slot.attribute is not None:
+            if slot.attribute is not None or slot.key is not None:
                 self.globals[f"IA{slot.index}"] = binding.source
         else:
             self.overrides[symbol] = value
@@ -280,6 +280,8 @@ class LoadedProgram:
             if slot.attribute is not None:
                 # Generated code reads ``IA{k}.<attribute>``: give it an object that has the value.
                 self.globals[f"IA{slot.index}"] = SimpleNamespace(**{slot.attribute: value})
+            elif slot.key is not None:
+                self.globals[f"IA{slot.index}"] = {slot.key: value}
         self.input_reads[symbol] = self.globals[key]
 
     # -- root actions ---------------------------------------------------------------------------------

@@ -4,8 +4,9 @@ The conformance kit (``data/conformance/README.md``) runs a behavior under fixed
 conventions and records one JSON object per tick. This module is that host:
 
 * :func:`conformance_bindings` registers, for a program, every external enumeration (element
-  *i* in declaration order has value *i*), every input symbol (plain ones read a value table
-  that starts at 0 / false / the first element; parameterized ones are the kit's functions of
+  *i* in declaration order has value *i*), every input symbol (plain ones are items of a value
+  table that starts at 0 / false / the first element, read by generated code with a subscript
+  rather than a getter call; parameterized ones are the kit's functions of
   ``sum((i+1) * value_i)``), every output symbol as engine storage, and every basic behavior as
   a behavior that only records its calls.
 * :class:`TraceRunner` applies one ``in.jsonl`` line (agent switch, ``set``, clock), executes
@@ -50,8 +51,16 @@ def _enum_size(program: Program, enum: str | None) -> int:
     return len(program.enums[enum].elements)
 
 
-def _function(kind: Kind, size: int) -> Callable[..., Value]:
-    """The kit's binding for a parameterized input symbol of ``kind``."""
+def _weighted(arity: int) -> Callable[..., float]:
+    """``sum((i+1) * value_i)`` of ``arity`` values, summed left to right from ``0.0``."""
+    # Unrolled for the usual arities: the same float operations in the same order as the loop
+    # (so bit-identical results), without its per-call loop; these run several times a tick.
+    if arity == 1:
+        return lambda a: 0.0 + 1 * float(a)
+    if arity == 2:
+        return lambda a, b: 0.0 + 1 * float(a) + 2 * float(b)
+    if arity == 3:
+        return lambda a, b, c: 0.0 + 1 * float(a) + 2 * float(b) + 3 * float(c)
 
     def weighted(*values: Value) -> float:
         total = 0.0
@@ -59,9 +68,20 @@ def _function(kind: Kind, size: int) -> Callable[..., Value]:
             total += (i + 1) * float(value)
         return total
 
+    return weighted
+
+
+def _function(kind: Kind, size: int, arity: int) -> Callable[..., Value]:
+    """The kit's binding for a parameterized input symbol of ``kind`` with ``arity`` parameters."""
+    weighted = _weighted(arity)
     if kind is Kind.DECIMAL:
         return weighted
     if kind is Kind.BOOLEAN:
+        # One call instead of two for the usual arities (as _weighted, the same operations).
+        if arity == 1:
+            return lambda a: 0.0 + 1 * float(a) > 0
+        if arity == 2:
+            return lambda a, b: 0.0 + 1 * float(a) + 2 * float(b) > 0
         return lambda *values: weighted(*values) > 0
     if size == 0:
         raise ValueError("an enum-valued input function needs a declared enumeration")
@@ -95,13 +115,13 @@ def conformance_bindings(program: Program) -> tuple[Bindings, dict[str, Value]]:
             bindings.input(
                 symbol.name,
                 symbol.kind,
-                _function(symbol.kind, _enum_size(program, symbol.enum)),
+                _function(symbol.kind, _enum_size(program, symbol.enum), len(symbol.params)),
                 params=symbol.params,
                 enum=symbol.enum,
             )
             continue
         values[symbol.name] = 0.0 if symbol.kind is Kind.DECIMAL else (False if symbol.kind is Kind.BOOLEAN else 0)
-        bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
+        bindings.input_item(symbol.name, symbol.kind, values, symbol.name, enum=symbol.enum)
     for out in program.outputs.values():
         if not out.internal:
             bindings.output(out.name, out.kind, enum=out.enum)
@@ -113,10 +133,6 @@ def conformance_bindings(program: Program) -> tuple[Bindings, dict[str, Value]]:
         )
         bindings.behavior(cls)
     return bindings, values
-
-
-def _reader(values: dict[str, Value], name: str) -> Callable[[], Value]:
-    return lambda: values[name]
 
 
 class TraceRunner:

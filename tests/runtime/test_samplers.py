@@ -58,3 +58,22 @@ def test_output_sampler_reads_engine_storage() -> None:
     world.a = 5.0
     engine.execute(25)
     assert sample() == (3.0, 5.0)
+
+
+def test_input_sampler_reads_mapping_items_with_one_call() -> None:
+    values = {"a": 1.0, "b.x": 2.0}
+    bindings = Bindings()
+    bindings.input_item("a", Kind.DECIMAL, values, "a")
+    bindings.input_item("b", Kind.DECIMAL, values, "b.x")
+    bindings.input("c", Kind.DECIMAL, lambda: 3.0)
+    for name in ("out.a", "out.b", "out.c"):
+        bindings.output(name, Kind.DECIMAL)
+    engine = Engine(bindings, PROGRAM)
+    sample = engine.input_sampler(["c", "b", "a"])
+    assert sample() == (3.0, 2.0, 1.0)
+    values["a"], values["b.x"] = 10.0, 20.0
+    assert sample() == (3.0, 20.0, 10.0)
+    engine.root_actions.override_input("b", 42.0)
+    assert sample() == (3.0, 42.0, 10.0)
+    engine.execute(0)
+    assert engine.output("out.b") == 42.0 and engine.output("out.a") == 10.0

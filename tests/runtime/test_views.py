@@ -84,3 +84,24 @@ def test_attribute_inputs_are_read_directly_and_can_be_overridden() -> None:
     engine.execute(20)
     assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 1.0)
     assert Debugger(engine).input_values() == {"x": 1.0}
+
+
+def test_item_inputs_are_subscripted_directly_and_can_be_overridden() -> None:
+    values = {"x": 0.0}
+    bindings = Bindings()
+    bindings.input_item("x", D, values, "x")
+    bindings.behavior(Act)
+    engine = Engine(bindings, program())
+    assert "IA0['x']" in engine.source("main") and "I0()" not in engine.source("main")
+    values["x"] = 1.0
+    engine.execute(0)
+    assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 1.0)
+    engine.root_actions.override_input("x", 0.25)
+    assert Debugger(engine).input_values() == {"x": 0.25}
+    engine.execute(10)
+    assert engine.active_states()[0] == 0, "the override is what the decision read"
+    engine.root_actions.release_input("x")
+    values["x"] = 0.75
+    engine.execute(20)
+    assert engine.active_states()[0] == 1 and Act.seen[-1] == (0.0, 0.75)
+    assert Debugger(engine).input_values() == {"x": 0.75}
