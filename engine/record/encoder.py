@@ -107,7 +107,7 @@ class _Nesting:
     are written as element names, decimals rounded to ``decimals`` fractional digits (None: exact).
     """
 
-    __slots__ = ("_decimal", "_enum", "_keys", "_paths", "_positions", "_scale")
+    __slots__ = ("_keys", "_positions", "_scale", "_slots")
 
     def __init__(
         self,
@@ -118,21 +118,31 @@ class _Nesting:
         decimals: int | None,
     ) -> None:
         namespaces = {name.rsplit(".", k)[0] for name in names for k in range(1, name.count(".") + 1)}
-        paths: list[tuple[str, ...]] = []
-        for name in names:
+        decimal = is_decimal if decimals is not None else (False,) * len(names)
+        slots: list[tuple[dict[int, str] | None, bool, str, str | None, tuple[str, ...]]] = []
+        for name, enum, is_dec in zip(names, enums, decimal, strict=True):
             parts = tuple(name.split("."))
-            paths.append((*parts, "=") if name in namespaces else parts)
-        self._paths = tuple(paths)
+            path = (*parts, "=") if name in namespaces else parts
+            # (enum table, decimal?, first key, second key if the path has exactly two, the path)
+            slots.append(
+                (
+                    tables.get(enum) if enum is not None else None,
+                    is_dec,
+                    path[0],
+                    path[1] if len(path) == 2 else None,
+                    path,
+                )
+            )
+        #: per symbol position, everything encode needs, so that its loop indexes one tuple
+        self._slots = tuple(slots)
         self._positions = range(len(names))
         self._keys = names
-        self._enum = tuple(tables.get(e) if e is not None else None for e in enums)
-        self._decimal = is_decimal if decimals is not None else (False,) * len(names)
         self._scale = 10.0 ** (decimals or 0)
 
     def encode(self, values: tuple[Value | None, ...], previous: tuple[Value | None, ...]) -> dict[str, Any]:
         """The nested object of ``values``: every value if ``previous`` is empty, else the changed ones."""
         out: dict[str, Any] = {}
-        paths, enum, decimal, scale = self._paths, self._enum, self._decimal, self._scale
+        slots, scale = self._slots, self._scale
         if len(previous) != len(values):
             changed: Any = range(len(values))
         elif values == previous:
@@ -140,28 +150,29 @@ class _Nesting:
         else:
             # In C: positions where the value differs (``==`` equal values, 0 and 0.0, count as unchanged).
             changed = compress(self._positions, map(ne, values, previous))
+        get = out.get
         for i in changed:
             value = values[i]
-            table = enum[i]
-            if table is not None and value is not None:
-                value = table.get(int(value), int(value))
-            elif decimal[i] and value is not None:
+            table, is_decimal, head, leaf, path = slots[i]
+            if value is None:
+                pass
+            elif is_decimal:
                 # ``round(v * s) / s``: exact decimal rounding with round(v, n) costs 3-4x more;
                 # a try beats contextlib.suppress in this loop. NaN and infinities stay (JSON null).
                 try:  # noqa: SIM105
                     value = round(value * scale) / scale
                 except (ValueError, OverflowError):
                     pass
-            path = paths[i]
-            depth = len(path)
-            if depth == 2:  # the common case (``ball.x``), without the loop below
-                node = out.get(path[0])
+            elif table is not None:
+                value = table.get(int(value), int(value))
+            if leaf is not None:  # the common case (``ball.x``), without the loop below
+                node = get(head)
                 if node is None:
-                    node = out[path[0]] = {}
-                node[path[1]] = value
+                    node = out[head] = {}
+                node[leaf] = value
                 continue
-            if depth == 1:
-                out[path[0]] = value
+            if len(path) == 1:
+                out[head] = value
                 continue
             node = out
             for part in path[:-1]:
