@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 from typing import TypeAlias
 
 from engine import ir
-from engine.lang import ast, deep_recursion, lint
-from engine.lang.check import OptionChecker, title_fields
+from engine.lang import assemble_program, ast, deep_recursion
+from engine.lang.check import OptionChecker
 from engine.lang.diagnostics import Diagnostic, Diagnostics
 from engine.lang.loader import display_path
 from engine.lang.parser import parse_file
@@ -525,24 +525,14 @@ class Project:
         for stale in set(self._checked) - live:
             del self._checked[stale]
 
-        agents = self._agents(table, diagnostics)
-        fields = title_fields(root.title_comment if root else None)
-        program = ir.Program(
-            title=fields["title"],
-            options=options,
-            agents=tuple(agents),
-            enums=table.enums,
-            inputs=table.inputs,
-            outputs=table.outputs,
-            constants=table.constants,
-            behaviors=table.behaviors,
-            platform=fields["platform"],
-            software_environment=fields["software_environment"],
-            files=tuple(f.shown for f in files),
+        program = assemble_program(
+            table,
+            options,
+            usage,
+            root.title_comment if root else None,
+            tuple(f.shown for f in files),
+            diagnostics,
         )
-        lint.check_cycles(options, diagnostics)
-        lint.check_reachability(program, diagnostics)
-        lint.check_unused(program, usage, diagnostics)
         checked = time.perf_counter()
 
         by_shown = {f.shown: f for f in files}
@@ -592,23 +582,6 @@ class Project:
                 header.decl.name.span,
             )
         return _OptionResult(option, list(own.items), usage, recorder.references)
-
-    @staticmethod
-    def _agents(table: SymbolTable, diagnostics: Diagnostics) -> list[ir.Agent]:
-        agents: list[ir.Agent] = []
-        names: set[str] = set()
-        for decl in table.agents:
-            if decl.name.text in names:
-                diagnostics.add(
-                    "duplicate-definition", f"agent '{decl.name.text}' is defined more than once", decl.name.span
-                )
-            names.add(decl.name.text)
-            if decl.root.text not in table.options:
-                diagnostics.add(
-                    "unknown-option", f"agent '{decl.name.text}': no option named '{decl.root.text}'", decl.root.span
-                )
-            agents.append(ir.Agent(decl.name.text, decl.title, decl.root.text, decl.doc, decl.name.span))
-        return agents
 
     def _index(
         self, files: list[SourceState], results: dict[str, list[_OptionResult]]

@@ -27,10 +27,10 @@ from engine.lang import lint
 from engine.lang.check import OptionChecker, title_fields
 from engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
 from engine.lang.loader import load
-from engine.lang.symbols import Declarations
+from engine.lang.symbols import Declarations, SymbolTable
 from engine.types import Span
 
-__all__ = ["Compilation", "Diagnostic", "Severity", "compile_file"]
+__all__ = ["Compilation", "Diagnostic", "Severity", "assemble_program", "compile_file"]
 
 
 #: Recursion limit while compiling: deeply nested expressions and long ``else if`` chains recurse
@@ -125,6 +125,55 @@ def _no_cycle_collection() -> Iterator[None]:
             gc.enable()
 
 
+def assemble_program(
+    table: SymbolTable,
+    options: dict[str, ir.Option],
+    usage: set[tuple[str, str]],
+    title_comment: str | None,
+    files: tuple[str, ...],
+    diagnostics: Diagnostics,
+) -> ir.Program:
+    """The last stage of a compile: the program of the checked ``options``, its agents and lints.
+
+    Checks the agents (unique names, existing root options), builds the :class:`~engine.ir.Program`
+    and runs the option-graph and usage lints (cycles, reachability, unused declarations) into
+    ``diagnostics``. Shared by :func:`compile_file` and the language server, which checks options
+    one by one and keeps them between keystrokes.
+    """
+    agents: list[ir.Agent] = []
+    agent_names: set[str] = set()
+    for decl in table.agents:
+        if decl.name.text in agent_names:
+            diagnostics.add(
+                "duplicate-definition", f"agent '{decl.name.text}' is defined more than once", decl.name.span
+            )
+        agent_names.add(decl.name.text)
+        if decl.root.text not in table.options:
+            diagnostics.add(
+                "unknown-option", f"agent '{decl.name.text}': no option named '{decl.root.text}'", decl.root.span
+            )
+        agents.append(ir.Agent(decl.name.text, decl.title, decl.root.text, decl.doc, decl.name.span))
+
+    fields = title_fields(title_comment)
+    program = ir.Program(
+        title=fields["title"],
+        options=options,
+        agents=tuple(agents),
+        enums=table.enums,
+        inputs=table.inputs,
+        outputs=table.outputs,
+        constants=table.constants,
+        behaviors=table.behaviors,
+        platform=fields["platform"],
+        software_environment=fields["software_environment"],
+        files=files,
+    )
+    lint.check_cycles(options, diagnostics)
+    lint.check_reachability(program, diagnostics)
+    lint.check_unused(program, usage, diagnostics)
+    return program
+
+
 def _compile(path: str, base: str | None, overrides: Mapping[str, str] | None) -> Compilation:
     diagnostics = Diagnostics()
     started = time.perf_counter()
@@ -152,37 +201,14 @@ def _compile(path: str, base: str | None, overrides: Mapping[str, str] | None) -
                 header.decl.name.span,
             )
 
-    agents: list[ir.Agent] = []
-    agent_names: set[str] = set()
-    for decl in table.agents:
-        if decl.name.text in agent_names:
-            diagnostics.add(
-                "duplicate-definition", f"agent '{decl.name.text}' is defined more than once", decl.name.span
-            )
-        agent_names.add(decl.name.text)
-        if decl.root.text not in table.options:
-            diagnostics.add(
-                "unknown-option", f"agent '{decl.name.text}': no option named '{decl.root.text}'", decl.root.span
-            )
-        agents.append(ir.Agent(decl.name.text, decl.title, decl.root.text, decl.doc, decl.name.span))
-
-    fields = title_fields(loaded.root.title_comment if loaded.root else None)
-    program = ir.Program(
-        title=fields["title"],
-        options=options,
-        agents=tuple(agents),
-        enums=table.enums,
-        inputs=table.inputs,
-        outputs=table.outputs,
-        constants=table.constants,
-        behaviors=table.behaviors,
-        platform=fields["platform"],
-        software_environment=fields["software_environment"],
-        files=tuple(f.path for f in loaded.files),
+    program = assemble_program(
+        table,
+        options,
+        usage,
+        loaded.root.title_comment if loaded.root else None,
+        tuple(f.path for f in loaded.files),
+        diagnostics,
     )
-    lint.check_cycles(options, diagnostics)
-    lint.check_reachability(program, diagnostics)
-    lint.check_unused(program, usage, diagnostics)
     checked = time.perf_counter()
 
     return Compilation(
