@@ -59,6 +59,7 @@ from server.messages import (
     openapi_schemas,
     parse_command,
 )
+from server.openapi import ErrorBody, error_responses
 from server.profile import router as profile_router
 from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
 from server.replay import ReplaySession
@@ -112,12 +113,6 @@ class CompileBody(BaseModel):
     text: str = Field(description="its unsaved content")
 
 
-class ErrorBody(BaseModel):
-    """A refused request: what was wrong."""
-
-    detail: str = Field(description="the reason, for a human")
-
-
 class NdjsonResponse(StreamingResponse):
     """JSON lines (``/api/log``)."""
 
@@ -128,39 +123,6 @@ class SvgResponse(Response):
     """An SVG document (``/api/graph``)."""
 
     media_type = "image/svg+xml"
-
-
-_WHY = {
-    400: "a malformed request (its text says what is wrong)",
-    401: "the server requires a token and none or a wrong one was given",
-    403: "a foreign Origin, or a path outside the behavior folders",
-    404: "no such file, folder, behavior set or option",
-    409: "the file changed since the version given, or the target exists; a command that does not fit the session now",
-    413: "a request body over 1 MiB",
-    415: "a file that is not UTF-8 text",
-    422: "saved or compiled, but a behavior set has errors (the body lists them); or a malformed parameter",
-    428: "overwriting without the version edited",
-    503: "Graphviz (dot) is not installed",
-}
-
-
-_ERROR_JSON = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
-# 422 is also FastAPI's answer to a malformed parameter or body.
-_UNPROCESSABLE_JSON = {
-    "application/json": {
-        "schema": {
-            "anyOf": [{"$ref": "#/components/schemas/ErrorBody"}, {"$ref": "#/components/schemas/HTTPValidationError"}]
-        }
-    }
-}
-
-
-def _errors(*codes: int) -> dict[int | str, dict[str, Any]]:
-    """OpenAPI ``responses`` for error statuses a route answers (besides 401/403 on every /api route)."""
-    return {
-        code: {"description": _WHY[code], "content": _UNPROCESSABLE_JSON if code == 422 else _ERROR_JSON}
-        for code in sorted({401, 403, *codes})
-    }
 
 
 def _etag(value: str | None) -> str | None:
@@ -335,7 +297,7 @@ async def language_server(ws: WebSocket) -> None:
 # -- session --------------------------------------------------------------------------------------
 
 
-@router.get("/api/status", tags=["session"], responses=_errors())
+@router.get("/api/status", tags=["session"], responses=error_responses())
 async def status(studio: StudioDep) -> dict[str, Any]:
     """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
     result = await studio.session.status()
@@ -345,7 +307,7 @@ async def status(studio: StudioDep) -> dict[str, Any]:
     return result
 
 
-@router.get("/api/structure", tags=["session"], responses=_errors())
+@router.get("/api/structure", tags=["session"], responses=error_responses())
 async def structure(studio: StudioDep) -> Response:
     """The ``structure`` of the current hello (programs JSON and agents)."""
     gen = studio.session.generation
@@ -377,7 +339,7 @@ _COMMAND_DOC: dict[str, Any] = {
 }
 
 
-@router.post("/api/command", tags=["session"], responses=_errors(401, 403, 413), openapi_extra=_COMMAND_DOC)
+@router.post("/api/command", tags=["session"], responses=error_responses(401, 403, 413), openapi_extra=_COMMAND_DOC)
 async def command(studio: StudioDep, request: Request) -> Response:
     """A websocket command over REST (``{"op": "pause"}``); answers the reply.
 
@@ -408,7 +370,7 @@ def _reply_response(answer: Reply, status: int) -> Response:
     tags=["session"],
     response_class=NdjsonResponse,
     responses={
-        **_errors(422),
+        **error_responses(422),
         200: {
             "description": "one JSON object per line and tick",
             "content": {"application/x-ndjson": {"schema": {"type": "string"}}},
@@ -428,7 +390,7 @@ async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(
 # -- files ------------------------------------------------------------------------------------------
 
 
-@router.get("/api/files", tags=["files"], responses=_errors())
+@router.get("/api/files", tags=["files"], responses=error_responses())
 async def list_files(studio: StudioDep) -> dict[str, Any]:
     """Every behavior file: path, version, size, the behaviors it belongs to."""
     listed = await asyncio.to_thread(studio.files.list)
@@ -437,14 +399,14 @@ async def list_files(studio: StudioDep) -> dict[str, Any]:
     return {"files": listed}
 
 
-@router.get("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 415))
+@router.get("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 415))
 async def read_file(studio: StudioDep, path: FilePath) -> JSONResponse:
     """A file's text and version (also as ETag)."""
     text, version = await asyncio.to_thread(studio.files.read, path)
     return JSONResponse({"path": path, "version": version, "text": text}, headers={"ETag": f'"{version}"'})
 
 
-@router.put("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 413, 422, 428))
+@router.put("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 409, 413, 422, 428))
 async def write_file(
     studio: StudioDep, path: FilePath, body: FileBody, if_match: str | None = Header(default=None)
 ) -> Response:
@@ -455,7 +417,9 @@ async def write_file(
         return await studio.after_write([path], version, 200)
 
 
-@router.post("/api/files/{path:path}", tags=["files"], status_code=201, responses=_errors(400, 404, 409, 413, 422))
+@router.post(
+    "/api/files/{path:path}", tags=["files"], status_code=201, responses=error_responses(400, 404, 409, 413, 422)
+)
 async def create_file(studio: StudioDep, path: FilePath, body: FileBody) -> Response:
     """Create a file (409 if it exists); compile the behaviors it belongs to."""
     async with studio.write_lock:
@@ -463,7 +427,7 @@ async def create_file(studio: StudioDep, path: FilePath, body: FileBody) -> Resp
         return await studio.after_write([path], version, 201)
 
 
-@router.patch("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 413, 422))
+@router.patch("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 409, 413, 422))
 async def rename_file(
     studio: StudioDep, path: FilePath, body: RenameBody, if_match: str | None = Header(default=None)
 ) -> Response:
@@ -473,7 +437,7 @@ async def rename_file(
         return await studio.after_write([path, body.path], version, 200, deleted=path)
 
 
-@router.delete("/api/files/{path:path}", tags=["files"], responses=_errors(400, 404, 409, 422))
+@router.delete("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 409, 422))
 async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = Header(default=None)) -> Response:
     """Delete a file; compile the behaviors it belonged to."""
     async with studio.write_lock:
@@ -511,7 +475,7 @@ class TestDraftBody(BaseModel):
     save: bool = False
 
 
-@router.post("/api/tests/draft", tags=["files"], responses=_errors(400, 409, 422))
+@router.post("/api/tests/draft", tags=["files"], responses=error_responses(400, 409, 422))
 async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
     """A behavior test file reproducing the tester's situation (text; with ``save``, also written).
 
@@ -582,7 +546,7 @@ async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
     return {"text": text, "path": f"tests/{file}", "saved": saved}
 
 
-@router.post("/api/compile", tags=["files"], responses=_errors(400, 404, 413, 422))
+@router.post("/api/compile", tags=["files"], responses=error_responses(400, 404, 413, 422))
 async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
     """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
     real = studio.files.resolve(body.path, must_exist=False)
@@ -618,7 +582,7 @@ async def _svg(studio: Studio, request: Request, dot: str) -> Response:
 
 
 _SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
-    **_errors(404, 422, 503),
+    **error_responses(404, 422, 503),
     200: {"description": "the graph", "content": {"image/svg+xml": {"schema": {"type": "string"}}}},
     304: {"description": "the SVG of the If-None-Match ETag is still current"},
 }

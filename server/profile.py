@@ -12,18 +12,18 @@ timeline seeks) and coverage against the programs of the newest generation in th
 from __future__ import annotations
 
 import asyncio
-import math
 import threading
 from collections.abc import Iterator
 from typing import Any
 
 import orjson
-from fastapi import APIRouter, HTTPException, Request
+from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response
 
 from engine.profile import build_report
 from engine.profile.analysis import count_paths
 from server.frames import Entry
+from server.openapi import error_responses
 from server.session import Session
 
 router = APIRouter()
@@ -84,11 +84,13 @@ def session_profile(session: Session, robot: str | None = None, oscillation_ms: 
     return report
 
 
-@router.get("/api/profile", tags=["session"])
-async def profile(request: Request, robot: str | None = None, oscillation_ms: float = 1000.0) -> Response:
+@router.get("/api/profile", tags=["session"], responses=error_responses(404, 422))
+async def profile(
+    request: Request,
+    robot: str | None = None,
+    oscillation_ms: float = Query(1000.0, gt=0, le=3_600_000, description="left and re-entered within this many ms"),
+) -> Response:
     """The profile of the session's ring buffer (docs/profile.md; ``robot``: one robot by name)."""
-    if not math.isfinite(oscillation_ms) or oscillation_ms <= 0:
-        raise HTTPException(400, f"oscillation_ms must be a positive number of ms, got {oscillation_ms}")
     session: Session = request.app.state.studio.session
     latest = session.ring.latest
     key = (latest.seq if latest is not None else None, robot, oscillation_ms)
