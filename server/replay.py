@@ -597,10 +597,12 @@ class _Values:
         self.times = times
         self.constants = {c["name"]: c["value"] for c in description["constants"]}
         self.elements = {el for e in description["enums"] for el in e["elements"]}
-        # Conditions may name an element short (``game.state == init``): by its last part.
+        # Conditions may name an element short (``game.state == init``): without its enumeration's
+        # prefix (an element's own dots stay: ``kick.left`` of ``play.kind``).
         short: dict[str, list[str]] = {}
-        for element in self.elements:
-            short.setdefault(element.rsplit(".", 1)[-1], []).append(element)
+        for e in description["enums"]:
+            for element in e["elements"]:
+                short.setdefault(element.removeprefix(e["name"] + "."), []).append(element)
         self.short = short
 
     def ident(self, name: str) -> Any:
@@ -814,12 +816,12 @@ def explain(
             before = next((n for n in previous.path if n[0] == 0 and n[2] == option_id), None)
             if before is not None and before[3] == decided_in:
                 decision_state_time = float(before[5] + (t - previous_view.t))
-    params = {p["name"].rsplit(".", 1)[-1]: v for p, v in zip(option_json["params"], node[8], strict=False)}
+    params = {p["short_name"]: v for p, v in zip(option_json["params"], node[8], strict=False)}
     params.update({p["name"]: v for p, v in zip(option_json["params"], node[8], strict=False)})
     for p in option_json["params"]:
         if p.get("enum") and p["name"] in params:
             host = agent.program.tables["enums"].get(p["enum"], {})
-            for key in (p["name"], p["name"].rsplit(".", 1)[-1]):
+            for key in (p["name"], p["short_name"]):
                 params[key] = host.get(str(int(params[key])), params[key])
     values = _Values(
         agent,

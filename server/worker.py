@@ -28,6 +28,7 @@ second behind (a slow machine at 20x), the backlog is dropped instead of burst t
 
 from __future__ import annotations
 
+import functools
 import os
 import select
 import signal
@@ -474,7 +475,7 @@ class Simulation:
         result = self._explanation(codec, option, explanation)
         state = codec.program.options[option].state(explanation.decided_in)
         result["tree"] = decision_tree(
-            state.decision, explanation.leaf, None, lambda node: node.text or render(node.condition)
+            state.decision, explanation.leaf, None, lambda node: node.text or render(node.condition, option)
         )
         _mark_values(result["tree"], explanation)
         result.update(seq=None, t=None, recorded=False)
@@ -546,7 +547,7 @@ class Simulation:
             state = ir_option.states[decided]
             values = RecordedValues(engine, codec, ir_option, inputs, outputs, params, state_time, option_time)
             try:
-                explanation = explain_decision(ir_option, state, leaf, values, render)
+                explanation = explain_decision(ir_option, state, leaf, values, functools.partial(render, option=option))
             except KeyError:
                 raise CommandError(f"state {option}.{state.name} has no leaf {leaf}") from None
             result = self._explanation(codec, option, explanation)
@@ -554,7 +555,7 @@ class Simulation:
                 seq=seq,
                 t=t,
                 recorded=True,
-                tree=decision_tree(state.decision, leaf, values, _if_text),
+                tree=decision_tree(state.decision, leaf, values, functools.partial(_if_text, option=option)),
             )
             results.append(result)
         return results
@@ -715,8 +716,8 @@ def _collect(message: FromWorker, droppable: bool) -> bool:
     return True
 
 
-def _if_text(node: Any) -> str:
-    return str(node.text or render(node.condition))
+def _if_text(node: Any, option: str) -> str:
+    return str(node.text or render(node.condition, option))
 
 
 def _mark_values(tree: dict[str, Any], explanation: Explanation) -> None:
@@ -810,7 +811,7 @@ class RecordedValues:
         if kind is Kind.ENUM:
             elements = self.codec.program.enums[enum].elements if enum in self.codec.program.enums else ()
             if isinstance(value, int) and 0 <= value < len(elements):
-                return elements[value].rsplit(".", 1)[-1]
+                return elements[value].removeprefix(f"{enum}.")  # dots inside an element stay
             return f"{value}?"
         return show_value(value)
 

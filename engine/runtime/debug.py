@@ -29,6 +29,7 @@ from typing import Any, Protocol
 from engine.codegen.layout import default_value
 from engine.codegen.python import expression_source
 from engine.codegen.support import MS_MASK, modulo
+from engine.emit.json import render_expression
 from engine.errors import DebugError
 from engine.ir.model import (
     COMPARISON_OPERATORS,
@@ -308,7 +309,7 @@ class LiveValues:
         if kind is Kind.ENUM:
             for name, host in self.loaded.enum_values(enum).elements.items():
                 if host == value:
-                    return name.rsplit(".", 1)[-1] if enum and name.startswith(enum + ".") else name
+                    return name[len(enum) + 1 :] if enum and name.startswith(enum + ".") else name
             return f"{value}?"
         return show_value(value)
 
@@ -421,7 +422,7 @@ class Debugger:
             assert isinstance(node, If)
             source = expression_source(loaded.layout, ir_option, state, node.condition)
             value = eval(compile(source, f"<xabsl-explain:{option}>", "eval"), loaded.globals, namespace)
-            found = comparisons(node.condition, live, functools.partial(_span_text, node))
+            found = comparisons(node.condition, live, functools.partial(_span_text, node, option))
             conditions.append(Condition(node.text, source, value, branch, node.condition.span, found))
         transition = _leaf(state.decision, leaf)
         target = transition.target or state.name
@@ -440,7 +441,7 @@ def _leaf(tree: If | Transition, leaf: int) -> Transition:
     return node
 
 
-def _span_text(node: If, expression: Expression) -> str:
+def _span_text(node: If, option: str, expression: Expression) -> str:
     """The source text of a sub-expression of ``node``'s condition, cut from the condition's text.
 
     ``node.text`` is the condition's source with runs of blanks collapsed; a sub-expression's span
@@ -449,45 +450,14 @@ def _span_text(node: If, expression: Expression) -> str:
     """
     outer, inner = node.condition.span, expression.span
     if outer is None or inner is None or node.text is None or len(node.text) != outer.end - outer.start:
-        return render(expression)
+        return render(expression, option)
     return node.text[inner.start - outer.start : inner.end - outer.start]
 
 
-def render(expression: Expression) -> str:
-    """XABSL source for an IR expression (what a condition's operand is shown as without its text)."""
-    e = expression
-    match e:
-        case Number(value=value):
-            return show_value(float(value))
-        case Constant(name=name):
-            return name
-        case BooleanLiteral(value=value):
-            return "true" if value else "false"
-        case EnumLiteral(element=element):
-            return element
-        case ParameterRef(param=param):
-            return "@" + param.rsplit(".", 1)[-1]
-        case OutputRef(symbol=symbol):
-            return symbol
-        case InputRef(symbol=symbol, args=args):
-            if not args:
-                return symbol
-            inner = ", ".join(f"{a.param.rsplit('.', 1)[-1]} = {render(a.value)}" for a in args)
-            return f"{symbol}({inner})"
-        case StateTime():
-            return "state_time"
-        case OptionTime():
-            return "option_time"
-        case ActionDone():
-            return "action_done"
-        case Conflict():
-            return "conflict"
-        case Unary(op=op, operand=operand):
-            return f"{op}{render(operand)}"
-        case Binary(op=op, left=left, right=right):
-            return f"{render(left)} {op.removeprefix('enum')} {render(right)}"
-        case Logical(op=op, operands=operands):
-            return f" {op} ".join(f"({render(o)})" if isinstance(o, Logical) else render(o) for o in operands)
-        case Conditional(condition=c, then=t, otherwise=o):
-            return f"({render(c)} ? {render(t)} : {render(o)})"
-    return type(e).__name__  # type: ignore[unreachable]
+def render(expression: Expression, option: str = "") -> str:
+    """XABSL source for an IR expression (what a condition's operand is shown as without its text).
+
+    ``option`` is the option the expression belongs to: its parameters are written ``@name`` with
+    the whole declared name (dots kept). One renderer for the description and the debugger.
+    """
+    return render_expression(expression, option)

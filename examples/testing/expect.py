@@ -96,8 +96,9 @@ def matches(actual: Any, wanted: Any) -> bool:
     if isinstance(wanted, bool) or isinstance(actual, bool):
         return isinstance(wanted, bool) and isinstance(actual, bool) and actual is wanted
     if isinstance(wanted, str):
-        # An enum element, qualified (role.striker) or by its last name (striker).
-        return isinstance(actual, str) and (actual == wanted or actual.rsplit(".", 1)[-1] == wanted)
+        # An enum element, qualified (role.striker) or without its enumeration's prefix (striker;
+        # an element's own dots stay: kick.left of play.kind).
+        return isinstance(actual, str) and (actual == wanted or actual.endswith("." + wanted))
     if isinstance(actual, str):
         return False
     return math.isclose(float(actual), float(wanted), rel_tol=TOLERANCE, abs_tol=TOLERANCE)

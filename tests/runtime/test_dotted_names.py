@@ -100,3 +100,19 @@ def test_forced_basic_behavior_and_option_take_dotted_parameter_names(program: P
     assert isinstance(guard, OptionNode) and guard.option == "guard"
     assert guard.params["guard.robot.x"] == 900.0 and guard.params["guard.x"] == 0.0
     assert guard.state == "save"  # @use.hands && @robot.x > @x
+
+
+def test_the_debugger_writes_dotted_parameters_and_elements_whole() -> None:
+    # "why" renders an operand from the IR when the condition's text cannot be cut: the option's
+    # prefix goes, the parameter's own dots stay (it used to say "@y" for "@offset.y").
+    from engine.ir.model import Argument, EnumLiteral, InputRef, ParameterRef
+    from engine.runtime.debug import render
+
+    assert render(ParameterRef("offset_walk.offset.y", Kind.DECIMAL), "offset_walk") == "@offset.y"
+    call = InputRef(
+        "ball.is.near",
+        Kind.BOOLEAN,
+        args=(Argument("ball.is.near.dist.max", Kind.DECIMAL, None, ParameterRef("twin_x.robot.x", Kind.DECIMAL)),),
+    )
+    assert render(call, "twin_x") == "ball.is.near(dist.max = @robot.x)"
+    assert render(EnumLiteral("play.kind.kick.left", "play.kind"), "") == "kick.left"
