@@ -10,6 +10,7 @@ Without chromium or a built UI these tests skip with the reason; ``make test`` p
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import socket
@@ -51,10 +52,12 @@ def free_port() -> int:
 class StudioServer:
     """``xabsl serve`` on a soccer copy, started, stopped and restarted on one port."""
 
-    def __init__(self, example: Path, port: int, log: Path) -> None:
+    def __init__(self, example: Path, port: int, log: Path, replay: bool = False) -> None:
         self.example = example
         self.port = port
         self.log = log
+        #: serve ``example`` as a recording (``xabsl serve --replay FILE``) instead of a folder
+        self.replay = replay
         self.process: subprocess.Popen[bytes] | None = None
 
     @property
@@ -63,7 +66,8 @@ class StudioServer:
 
     def start(self) -> None:
         xabsl = Path(sys.executable).with_name("xabsl")
-        command = [str(xabsl), "serve", str(self.example), "--port", str(self.port), "--web-dist", str(WEB_DIST)]
+        what = ["--replay", str(self.example)] if self.replay else [str(self.example)]
+        command = [str(xabsl), "serve", *what, "--port", str(self.port), "--web-dist", str(WEB_DIST)]
         command += ["--record-dir", str(self.log.parent / "recordings")]  # not into the user's cache
         with self.log.open("ab") as log:
             self.process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
@@ -138,17 +142,28 @@ def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
         context.close()
 
 
-@pytest.fixture
-def page(browser: Any, studio: StudioServer) -> Iterator[Any]:
-    """A fresh tab on the studio, live (the first frames have arrived)."""
+@contextlib.contextmanager
+def studio_tab(browser: Any, server: StudioServer, live: bool = True) -> Iterator[Any]:
+    """A fresh tab on ``server`` (with ``live``: once the first frames have arrived).
+
+    Closing it fails the test when the page raised an uncaught error meanwhile.
+    """
     tab = browser.new_page()
     errors: list[str] = []
     tab.on("pageerror", lambda error: errors.append(str(error)))
-    tab.goto(studio.url)
-    tab.wait_for_function("() => window.xabslStudio && window.xabslStudio.session.buffer.length > 5", timeout=30000)
+    tab.goto(server.url)
+    if live:
+        tab.wait_for_function("() => window.xabslStudio && window.xabslStudio.session.buffer.length > 5", timeout=30000)
     yield tab
     tab.close()
     assert not errors, f"uncaught errors in the page: {errors}"
+
+
+@pytest.fixture
+def page(browser: Any, studio: StudioServer) -> Iterator[Any]:
+    """A fresh tab on the studio, live (the first frames have arrived)."""
+    with studio_tab(browser, studio) as tab:
+        yield tab
 
 
 def screenshot(page: Any, name: str) -> None:

@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.conftest import CHROMIUM, REPO, WEB_DIST, StudioServer, free_port, screenshot
+from tests.e2e.conftest import CHROMIUM, REPO, WEB_DIST, StudioServer, free_port, screenshot, studio_tab
 
 STUDIO = "window.xabslStudio"
 
@@ -42,14 +42,8 @@ def errands(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
 
 @pytest.fixture
 def page(browser: Any, errands: StudioServer) -> Iterator[Any]:
-    tab = browser.new_page()
-    errors: list[str] = []
-    tab.on("pageerror", lambda error: errors.append(str(error)))
-    tab.goto(errands.url)
-    tab.wait_for_function(f"() => {STUDIO} && {STUDIO}.session.buffer.length > 5", timeout=30000)
-    yield tab
-    tab.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+    with studio_tab(browser, errands) as tab:
+        yield tab
 
 
 def command(server: StudioServer, op: str, **args: Any) -> Any:

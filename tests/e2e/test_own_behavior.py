@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.conftest import CHROMIUM, REPO, WEB_DIST, StudioServer, free_port, screenshot
+from tests.e2e.conftest import CHROMIUM, REPO, WEB_DIST, StudioServer, free_port, screenshot, studio_tab
 
 STUDIO = "window.xabslStudio"
 BROKEN = "options/approach_ball.xabsl"
@@ -51,14 +51,8 @@ def own(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
 
 @pytest.fixture
 def page(browser: Any, own: StudioServer) -> Iterator[Any]:
-    tab = browser.new_page()
-    errors: list[str] = []
-    tab.on("pageerror", lambda error: errors.append(str(error)))
-    tab.goto(own.url)
-    tab.wait_for_function(f"() => {STUDIO} && {STUDIO}.session.buffer.length > 5", timeout=30000)
-    yield tab
-    tab.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+    with studio_tab(browser, own) as tab:
+        yield tab
 
 
 def wait_until(page: Any, expression: str, timeout: float = 20000) -> Any:
@@ -150,12 +144,18 @@ def test_a_hand_set_input_and_an_input_function_value_drive_a_forced_option(page
     )
     set_by_hand(page, "clamp", "120")
     wait_until(page, f"() => ({PATH})().some((n) => n.startsWith('walk(120,'))")
-    assert "by hand" in clamp.inner_text()
+    wait_until(
+        page, "() => document.querySelector(\".symbols-panel [data-symbol='clamp']\").innerText.includes('by hand')"
+    )
     # ball.distance and ball.angle by hand: close and in front, so approach_ball goes to kick
     set_by_hand(page, "ball.angle", "0")
     set_by_hand(page, "ball.distance", "10")
     wait_until(page, f"() => ({PATH})()[0] === 'approach_ball:kick'")
-    assert "by hand" in page.locator(".symbols-panel [data-symbol='ball.distance']").inner_text()
+    # the panel redraws on its next frame: wait for it rather than read the DOM at once
+    wait_until(
+        page,
+        "() => document.querySelector(\".symbols-panel [data-symbol='ball.distance']\").innerText.includes('by hand')",
+    )
     screenshot(page, "own-behavior-forced")
     # the values stay: a second later they still hold and the robot kicked again (state cycle)
     page.wait_for_timeout(1000)

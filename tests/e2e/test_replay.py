@@ -6,8 +6,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
-import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -15,30 +13,9 @@ from typing import Any
 import pytest
 
 from engine.record import Recording
-from tests.e2e.conftest import REPO, WEB_DIST, StudioServer, free_port, screenshot
+from tests.e2e.conftest import REPO, StudioServer, free_port, screenshot, studio_tab
 
 STUDIO = "window.xabslStudio"
-
-
-class ReplayServer(StudioServer):
-    """``xabsl serve --replay FILE``."""
-
-    def start(self) -> None:
-        xabsl = Path(sys.executable).with_name("xabsl")
-        command = [str(xabsl), "serve", "--replay", str(self.example), "--port", str(self.port)]
-        with self.log.open("ab") as log:
-            self.process = subprocess.Popen([*command, "--web-dist", str(WEB_DIST)], stdout=log, stderr=log, cwd=REPO)
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            if self.process.poll() is not None:
-                raise RuntimeError(f"xabsl serve exited: {self.log.read_text(errors='replace')}")
-            try:
-                with urllib.request.urlopen(self.url + "api/status", timeout=2) as response:
-                    if response.status == 200:
-                        return
-            except OSError:
-                time.sleep(0.2)
-        raise RuntimeError("xabsl serve --replay did not answer within 60 s")
 
 
 @pytest.fixture(scope="module")
@@ -51,22 +28,17 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def replay_server(recording: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[ReplayServer]:
-    server = ReplayServer(recording, free_port(), tmp_path_factory.mktemp("replay-log") / "serve.log")
+def replay_server(recording: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
+    server = StudioServer(recording, free_port(), tmp_path_factory.mktemp("replay-log") / "serve.log", replay=True)
     server.start()
     yield server
     server.stop()
 
 
 @pytest.fixture
-def tab(browser: Any, replay_server: ReplayServer) -> Iterator[Any]:
-    page = browser.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda error: errors.append(str(error)))
-    page.goto(replay_server.url)
-    yield page
-    page.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+def tab(browser: Any, replay_server: StudioServer) -> Iterator[Any]:
+    with studio_tab(browser, replay_server, live=False) as page:
+        yield page
 
 
 def loaded(tab: Any, ticks: int) -> None:
