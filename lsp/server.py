@@ -389,15 +389,23 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
             return None
         return analysis, state, ls.offset_of(state, position)
 
-    @server.feature(lsp.TEXT_DOCUMENT_HOVER)
-    def hover(ls: XabslLanguageServer, params: lsp.HoverParams) -> lsp.Hover | None:
-        found = at(ls, params.text_document, params.position)
+    def name_at(
+        ls: XabslLanguageServer, doc: lsp.TextDocumentIdentifier, position: lsp.Position
+    ) -> tuple[Analysis, SourceState, Occurrence] | None:
+        """The name occurrence under the cursor, with its analysis and source (None: no name there)."""
+        found = at(ls, doc, position)
         if found is None:
             return None
         analysis, state, offset = found
         occurrence = analysis.occurrence_at(state.real, offset)
-        if occurrence is None:
+        return None if occurrence is None else (analysis, state, occurrence)
+
+    @server.feature(lsp.TEXT_DOCUMENT_HOVER)
+    def hover(ls: XabslLanguageServer, params: lsp.HoverParams) -> lsp.Hover | None:
+        named = name_at(ls, params.text_document, params.position)
+        if named is None:
             return None
+        analysis, state, occurrence = named
         return lsp.Hover(
             contents=lsp.MarkupContent(lsp.MarkupKind.Markdown, ls.describe(analysis, occurrence.key)),
             range=ls.range_of(state, occurrence.start, occurrence.end),
@@ -405,25 +413,21 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
 
     @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
     def definition(ls: XabslLanguageServer, params: lsp.DefinitionParams) -> list[lsp.Location] | None:
-        found = at(ls, params.text_document, params.position)
-        if found is None:
+        named = name_at(ls, params.text_document, params.position)
+        if named is None:
             return None
-        analysis, state, offset = found
-        occurrence = analysis.occurrence_at(state.real, offset)
-        if occurrence is None or occurrence.key not in analysis.declarations:
+        analysis, _state, occurrence = named
+        if occurrence.key not in analysis.declarations:
             return None
         real, declared = analysis.declarations[occurrence.key]
         return [ls.location(analysis, real, declared.start, declared.end)]
 
     @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
     def references(ls: XabslLanguageServer, params: lsp.ReferenceParams) -> list[lsp.Location] | None:
-        found = at(ls, params.text_document, params.position)
-        if found is None:
+        named = name_at(ls, params.text_document, params.position)
+        if named is None:
             return None
-        analysis, state, offset = found
-        occurrence = analysis.occurrence_at(state.real, offset)
-        if occurrence is None:
-            return None
+        analysis, _state, occurrence = named
         return [
             ls.location(analysis, real, o.start, o.end)
             for real, o in analysis.references(occurrence.key)
@@ -432,23 +436,21 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
 
     @server.feature(lsp.TEXT_DOCUMENT_PREPARE_RENAME)
     def prepare_rename(ls: XabslLanguageServer, params: lsp.PrepareRenameParams) -> lsp.PrepareRenamePlaceholder | None:
-        found = at(ls, params.text_document, params.position)
-        if found is None:
+        named = name_at(ls, params.text_document, params.position)
+        if named is None:
             return None
-        analysis, state, offset = found
-        occurrence = analysis.occurrence_at(state.real, offset)
-        if occurrence is None or occurrence.key[0] in ("namespace",) or occurrence.key not in analysis.declarations:
+        analysis, state, occurrence = named
+        if occurrence.key[0] in ("namespace",) or occurrence.key not in analysis.declarations:
             return None
         return lsp.PrepareRenamePlaceholder(ls.range_of(state, occurrence.start, occurrence.end), occurrence.text)
 
     @server.feature(lsp.TEXT_DOCUMENT_RENAME)
     def rename(ls: XabslLanguageServer, params: lsp.RenameParams) -> lsp.WorkspaceEdit | None:
-        found = at(ls, params.text_document, params.position)
-        if found is None:
+        named = name_at(ls, params.text_document, params.position)
+        if named is None:
             return None
-        analysis, state, offset = found
-        occurrence = analysis.occurrence_at(state.real, offset)
-        if occurrence is None or occurrence.key not in analysis.declarations:
+        analysis, _state, occurrence = named
+        if occurrence.key not in analysis.declarations:
             return None
         new = params.new_name.strip()
         bare = new[1:] if new.startswith("@") else new
