@@ -98,13 +98,27 @@ class StudioServer:
         self.start()
 
 
-@pytest.fixture(scope="module")
-def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
+@contextlib.contextmanager
+def serving(example: Path, root: Path, replay: bool = False) -> Iterator[StudioServer]:
+    """``xabsl serve`` on ``example`` (a folder, or a recording with ``replay``) while in the block.
+
+    Fails (never skips) when chromium or the built UI is missing: a missing browser must not look
+    like a passing UI.
+    """
     if not CHROMIUM.exists():
-        # fail, never skip: a missing browser must not look like a passing UI
         pytest.fail("Debian chromium is not installed: `make test` (or `make test-deps`) installs it")
     if not (WEB_DIST / "index.html").is_file():
         pytest.fail("the web UI is not built: `make test` (or `make web`) builds it")
+    server = StudioServer(example, free_port(), root / "serve.log", replay=replay)
+    server.start()
+    try:
+        yield server
+    finally:
+        server.stop()
+
+
+@pytest.fixture(scope="module")
+def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     root = tmp_path_factory.mktemp("studio")
     example = root / "soccer"
     example.mkdir()
@@ -115,10 +129,8 @@ def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     (example / "studio.py").write_text(
         '"""The soccer world plug-in."""\n\nfrom examples.soccer.studio import example\n'
     )
-    server = StudioServer(example, free_port(), root / "serve.log")
-    server.start()
-    yield server
-    server.stop()
+    with serving(example, root) as server:
+        yield server
 
 
 @pytest.fixture(scope="module")

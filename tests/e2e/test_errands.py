@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.conftest import CHROMIUM, REPO, WEB_DIST, StudioServer, free_port, screenshot, studio_tab
+from tests.e2e.conftest import REPO, StudioServer, screenshot, serving, studio_tab
 
 STUDIO = "window.xabslStudio"
 
@@ -24,20 +24,14 @@ STUDIO = "window.xabslStudio"
 @pytest.fixture(scope="module")
 def errands(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     """``xabsl serve`` on a copy of the errands example (its behavior and its studio.py plug-in)."""
-    if not CHROMIUM.exists():
-        pytest.fail("Debian chromium is not installed: `make test` (or `make test-deps`) installs it")
-    if not (WEB_DIST / "index.html").is_file():
-        pytest.fail("the web UI is not built: `make test` (or `make web`) builds it")
     root = tmp_path_factory.mktemp("errands-studio")
     example = root / "errands"
     example.mkdir()
     shutil.copytree(REPO / "examples" / "errands" / "behavior", example / "behavior")
     shutil.copytree(REPO / "examples" / "errands" / "model", example / "model")
     (example / "studio.py").write_text('"""The errands plug-in."""\n\nfrom examples.errands.studio import example\n')
-    server = StudioServer(example, free_port(), root / "serve.log")
-    server.start()
-    yield server
-    server.stop()
+    with serving(example, root) as server:
+        yield server
 
 
 @pytest.fixture

@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.conftest import CHROMIUM, REPO, WEB_DIST, StudioServer, free_port, screenshot, studio_tab
+from tests.e2e.conftest import REPO, StudioServer, screenshot, serving, studio_tab
 
 STUDIO = "window.xabslStudio"
 BROKEN = "options/approach_ball.xabsl"
@@ -34,19 +34,13 @@ PATH = f"""() => {{
 @pytest.fixture(scope="module")
 def own(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     """``xabsl serve`` on a behavior folder of our own (a copy of the demo) with a syntax error."""
-    if not CHROMIUM.exists():
-        pytest.fail("Debian chromium is not installed: `make test` (or `make test-deps`) installs it")
-    if not (WEB_DIST / "index.html").is_file():
-        pytest.fail("the web UI is not built: `make test` (or `make web`) builds it")
     root = tmp_path_factory.mktemp("own-behavior")
     folder = root / "team"
     shutil.copytree(REPO / "examples" / "demo", folder)
     file = folder / BROKEN
     file.write_text(file.read_text().replace("goto kicked;", "goto kicked", 1))
-    server = StudioServer(folder, free_port(), root / "serve.log")
-    server.start()
-    yield server
-    server.stop()
+    with serving(folder, root) as server:
+        yield server
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from engine.record import Recording
-from tests.e2e.conftest import REPO, StudioServer, free_port, screenshot, studio_tab
+from tests.e2e.conftest import REPO, StudioServer, screenshot, serving, studio_tab
 
 STUDIO = "window.xabslStudio"
 
@@ -29,10 +29,8 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def replay_server(recording: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
-    server = StudioServer(recording, free_port(), tmp_path_factory.mktemp("replay-log") / "serve.log", replay=True)
-    server.start()
-    yield server
-    server.stop()
+    with serving(recording, tmp_path_factory.mktemp("replay-log"), replay=True) as server:
+        yield server
 
 
 @pytest.fixture
