@@ -1,8 +1,8 @@
 """IR -> JSON for the studio UI (``xabsl compile --json``), and back to the IR's shape on read.
 
 The document describes the behavior, not its execution: agents; options with parameters,
-states, decision trees (conditions as source text, leaf ids), transitions (from, to, leaf id,
-the chain of conditions that leads to the leaf) and calls; basic behaviors; symbols with types,
+states, decision trees (conditions as source text, leaf ids), transitions (from, to, leaf id;
+the conditions leading to a leaf are its path in the decision tree) and calls; basic behaviors; symbols with types,
 units, ranges and doc comments; enumerations and constants. Integer ids are the IR's indices:
 an option's ``id`` is its IC index, a state's ``id`` its index in the option, a symbol's ``id``
 its index among the inputs or outputs.
@@ -123,22 +123,12 @@ class _Exporter:
         }
 
     def transitions(self, option: ir.Option, state: ir.State) -> list[dict[str, Any]]:
-        result = []
-        for leaf in ir.leaves(state.decision):
-            path = ir.leaf_path(state.decision, leaf.leaf)
-            result.append(
-                {
-                    "from": state.name,
-                    "to": leaf.target,
-                    "leaf": leaf.leaf,
-                    "stay": leaf.stay,
-                    "conditions": [
-                        {"text": node.text or self.text(node.condition), "value": taken} for node, taken in path
-                    ],
-                    "span": self.span(leaf.span),
-                }
-            )
-        return result
+        # No condition texts here: the chain to each leaf is in the state's ``decision`` tree
+        # already, and repeating it per leaf grows with the square of an ``else if`` chain.
+        return [
+            {"from": state.name, "to": leaf.target, "leaf": leaf.leaf, "stay": leaf.stay, "span": self.span(leaf.span)}
+            for leaf in ir.leaves(state.decision)
+        ]
 
     def option(self, option: ir.Option) -> dict[str, Any]:
         self.owner = option.name

@@ -142,7 +142,7 @@ def test_the_json_of_a_program_read_from_ic_renders_whole_names(compiled: Compil
     shot = "shot.on.target(speed.min = @shift.y, rolling.only = false, hand.used = both.hands)"
     assert save["decision"]["if"] == shot
     first = next(t for t in guard["transitions"] if t["from"] == "watch")
-    assert first["conditions"][0]["text"] == watch["decision"]["if"]
+    assert (first["leaf"], first["to"]) == (0, watch["decision"]["then"]["to"])
     assigned = [a["value"] for a in watch["actions"] if a["type"] == "assign"]
     assert "goal.dist(x = @x, goal.x = @robot.x)" in assigned
 

@@ -56,17 +56,11 @@ export interface IfNode {
 
 export type DecisionTree = Leaf | IfNode;
 
-export interface TransitionCondition {
-  text: string;
-  value: boolean;
-}
-
 export interface Transition {
   from: string;
   to: string | null;
   leaf: number;
   stay: boolean;
-  conditions: TransitionCondition[];
   span: Span | null;
 }
 
