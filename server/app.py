@@ -564,8 +564,7 @@ async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
 
 
 def _running(studio: Studio, key: str) -> Program:
-    state = studio.session.programs.get(key)
-    shown = state.shown if state is not None else None
+    shown = studio.session.shown_program(key)
     if shown is None:
         raise HTTPException(404, f"no running behavior {key!r}")
     return shown

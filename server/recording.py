@@ -32,6 +32,7 @@ from typing import Any
 
 import orjson
 
+from engine.emit.ic import emit_ic
 from engine.ir.model import Program
 from engine.record import RecordingEncoder
 from engine.record import schema as S
@@ -155,7 +156,7 @@ class LiveRecorder:
                 self._descriptions[key] = data
                 self._program_gen[key] = self._program_gen.get(key, -1) + 1
                 files = list(changed_files.get(key, ()))
-                self._write_program(key, description, "reload", files)
+                self._write_program(key, description, "reload", files, program)
                 self._event(
                     "reload",
                     None,
@@ -306,7 +307,7 @@ class LiveRecorder:
             },
         )
         for key, description in structure["programs"].items():
-            self._write_program(key, description, "start", [])
+            self._write_program(key, description, "start", [], self._programs.get(key))
         self._bind(gen)
         self._static(gen)
 
@@ -345,7 +346,10 @@ class LiveRecorder:
             S.EVENTS, "xabsl.Event", {"seq": self._seq, "t": self._t, "kind": kind, "agent": agent, "data": data}
         )
 
-    def _write_program(self, key: str, description: dict[str, Any], reason: str, files: list[str]) -> None:
+    def _write_program(
+        self, key: str, description: dict[str, Any], reason: str, files: list[str], program: Program | None
+    ) -> None:
+        ic = {"ic": emit_ic(program)} if program is not None else {}
         self._message(
             S.PROGRAM,
             "xabsl.Program",
@@ -356,6 +360,7 @@ class LiveRecorder:
                 "reason": reason,
                 "program": description,
                 "changed_files": files,
+                **ic,
             },
         )
 

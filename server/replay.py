@@ -339,6 +339,8 @@ class ReplaySession(Session):
         self._player: asyncio.Task[None] | None = None
         self.seek_seconds = 0.0
         self.seeks = 0
+        #: per (behavior key, generation): its program rebuilt from the recorded IC (graphs)
+        self._programs_shown: dict[tuple[str, int], tuple[Program | None]] = {}
         #: behavior times of the first and the last tick (the UI's timeline extent)
         self.t_first = recording.tick(0).t
         self.t_last = recording.tick(len(recording) - 1).t
@@ -367,6 +369,18 @@ class ReplaySession(Session):
 
     def release_owner(self, owner: str) -> None:
         """Nothing is forced in a replay."""
+
+    def shown_program(self, key: str) -> Program | None:
+        """The recorded generation of ``key`` in force at the playback position, rebuilt from its IC.
+
+        None for recordings without intermediate code (made before it was recorded).
+        """
+        gen = _latest_gen(self.recording, key, self.position)
+        cached = self._programs_shown.get((key, gen))
+        if cached is None:
+            view = self.recording.programs.get((key, gen))
+            cached = self._programs_shown[(key, gen)] = (view.program() if view is not None else None,)
+        return cached[0]
 
     # -- seeking and playing -----------------------------------------------------------------------
 

@@ -212,6 +212,11 @@ class Session:
         else:
             _store_partial(state, compilation)
 
+    def shown_program(self, key: str) -> Program | None:
+        """The program the studio draws for behavior ``key`` (graphs): the running or partial one."""
+        state = self.programs.get(key)
+        return state.shown if state is not None else None
+
     # -- the simulation process ----------------------------------------------------------------------
 
     @property

@@ -30,6 +30,8 @@ import orjson
 import zstandard
 from mcap.reader import SeekingReader, make_reader
 
+from engine.ir.ic_reader import read_ic
+from engine.ir.model import Program
 from engine.record import schema as S
 from engine.runtime import AssignmentNode, BehaviorNode, OptionNode, Root
 from engine.types import Kind, Value
@@ -51,6 +53,16 @@ class ProgramView:
     description: dict[str, Any]
     tables: dict[str, Any]
     changed_files: tuple[str, ...] = ()
+    #: the generation's intermediate code (None in recordings made before it was recorded)
+    ic: str | None = None
+
+    def program(self) -> Program | None:
+        """The generation's program rebuilt from its intermediate code (None without IC).
+
+        What the IC cannot carry stays out: source texts (conditions are rendered canonically),
+        doc comments, and declarations nothing uses.
+        """
+        return read_ic(self.ic) if self.ic is not None else None
 
     def option(self, option_id: int) -> dict[str, Any]:
         """The option JSON with IR id ``option_id``."""
@@ -199,6 +211,7 @@ class Recording:
                     data["program"],
                     tables[data["key"]],
                     tuple(data.get("changed_files", ())),
+                    data.get("ic"),
                 )
                 self.programs[(view.key, view.gen)] = view
             elif channel.topic == S.EVENTS:
@@ -209,7 +222,7 @@ class Recording:
                     if key in self.programs:
                         old = self.programs[key]
                         self.programs[key] = ProgramView(
-                            old.key, old.gen, old.seq, old.description, tables[old.key], old.changed_files
+                            old.key, old.gen, old.seq, old.description, tables[old.key], old.changed_files, old.ic
                         )
             else:
                 self.static_scenes.append(data)

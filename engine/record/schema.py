@@ -213,6 +213,10 @@ PROGRAM_SCHEMA: dict[str, Any] = {
         "reason": {"type": "string", "description": "start, reload, reset"},
         "program": {"type": "object", "description": "the program JSON of docs/protocol.md"},
         "changed_files": {"type": "array", "items": {"type": "string"}},
+        "ic": {
+            "type": "string",
+            "description": "the generation's XABSL intermediate code, from which a reader rebuilds the program",
+        },
     },
 }
 

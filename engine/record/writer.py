@@ -27,6 +27,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
+from engine.emit.ic import emit_ic
 from engine.emit.json import program_to_json
 from engine.host import Agent, World
 from engine.ir.model import Program
@@ -324,6 +325,7 @@ class Recorder:
                 "reason": reason,
                 "program": program_to_json(program),
                 "changed_files": list(changed_files),
+                "ic": emit_ic(program),
             },
         )
 

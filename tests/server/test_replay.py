@@ -188,6 +188,8 @@ def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Pa
         last = recording.tick(len(recording) - 1)
         assert set(last.agents) == {"blue1", "blue2", "red1", "red2"}
         assert last.agents["blue1"].gen == 1 and last.agents["red1"].gen == 0
+        reloaded = recording.programs[("behavior", 1)].program()  # the new generation, from its IC
+        assert reloaded is not None and "950" in " ".join(str(s) for s in reloaded.options["approach_ball"].states)
         assert last.agents["blue1"].option_names()[0] == "play_soccer"
         assert len(recording) > 30
         assert str(last.agents["blue1"].inputs["game.state"]).startswith("game.state.")  # enums by name
@@ -214,3 +216,26 @@ def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer
     assert kept == sorted(recorder.files[-len(kept) :])  # the newest survive; names sort in time order
     with Recording(kept[-1]) as recording:  # each file opens on its own
         assert len(recording) >= 1 and recording.tick(0).agents
+
+
+def test_a_replay_draws_the_recorded_generation_from_its_intermediate_code(replay: LiveServer) -> None:
+    """Graphs need the program; a recording carries each generation's IC, so a replay draws it."""
+    import urllib.request
+
+    def get(path: str) -> tuple[int, str]:
+        with urllib.request.urlopen(replay.url + path, timeout=30) as response:
+            return response.status, response.read().decode()
+
+    session = replay.session
+    assert isinstance(session, ReplaySession)
+    view = session.recording.programs[("behavior", 0)]
+    assert view.ic is not None and view.ic.startswith("// ")  # the IC of the recorded generation
+    program = view.program()
+    assert program is not None
+    assert [o["name"] for o in view.description["options"]] == list(program.options)
+    status, svg = get("/api/graph/behavior")
+    assert status == 200 and "<svg" in svg and "play_soccer" in svg
+    status, machine = get("/api/graph/behavior/play_soccer")
+    assert status == 200 and "<svg" in machine
+    for state in view.description["options"][program.options["play_soccer"].index]["states"]:
+        assert state["name"] in machine
