@@ -9,11 +9,12 @@ then hot-reloads edited programs into the engines (``Engine.reload`` keeps the a
 times of the options and states that still exist), and the caller runs on from tick ``k``. With
 the unchanged behavior the fork continues exactly like the recording (``tests/record``).
 
-Re-simulation costs up to the recording's length at the headless speed (a 10-minute 5 vs 5 match
-runs in a few seconds). Snapshots every few seconds would bound it; a pymunk space can be copied
-(``Space.copy()``) exactly only while no two shapes touch: the copy loses chipmunk's contact
-cache, and a copy taken during a contact drifts from the original within a few hundred steps
-(a world snapshot must be taken at contact-free steps, or hold the contact state). Events of a
+Re-simulation costs what the match cost: about 200x real time for 5 vs 5 soccer, so a fork at
+the end of a 10-minute match takes about 3 s (``benchmarks/fork_cost.py``). World snapshots
+would bound that only if a restored world continued bit for bit, and a copied pymunk space does
+not: ``Space.copy()`` loses chipmunk's contact cache and rebuilds its spatial index, and of
+copies of the soccer world taken at random ticks most drift within 600 physics steps, even some
+taken while no two shapes touched (measured by the same benchmark). Events of a
 live session before the fork tick (forcing, overrides) are not replayed yet: such recordings are
 refused.
 """
