@@ -52,12 +52,13 @@ from engine.host import (
     World,
     WorldCommandError,
 )
-from engine.ir.model import Program, leaf_path
+from engine.ir.model import Program
 from engine.runtime import DebugError, Debugger, Engine, EngineError
 from engine.runtime.breakpoints import Breakpoint, BreakpointHit, BreakpointSet
-from engine.runtime.debug import Explanation, Unknown, decision_tree, explain_decision, render, show_value
+from engine.runtime.debug import Unknown, explain_decision, render, show_value
 from engine.types import Kind, Value
 from server.channel import Channel, ChannelClosed
+from server.explain import explanation_result, mark_values, tree_result
 from server.frames import AgentSampler, ProgramCodec
 from server.messages import (
     Apply,
@@ -472,64 +473,12 @@ class Simulation:
         _, engine, codec = self._robot(command.robot)
         option = self._named(command.option, codec.option_ids, "option")
         explanation = Debugger(engine).explain(option)
-        result = self._explanation(codec, option, explanation)
-        state = codec.program.options[option].state(explanation.decided_in)
-        result["tree"] = decision_tree(
-            state.decision, explanation.leaf, None, lambda node: node.text or render(node.condition, option)
-        )
-        _mark_values(result["tree"], explanation)
+        ir_option = codec.program.options[option]
+        result = explanation_result(ir_option, explanation)
+        result["tree"] = tree_result(ir_option, explanation.decided_in, explanation.leaf, None)
+        mark_values(result["tree"], explanation)
         result.update(seq=None, t=None, recorded=False)
         return result
-
-    @staticmethod
-    def _explanation(codec: ProgramCodec, option: str, explanation: Explanation) -> dict[str, Any]:
-        states = codec.state_ids[option]
-        ir_option = codec.program.options[option]
-        decided = ir_option.state(explanation.decided_in)
-        # The leaf's own span, so the editor can point at the transition that fired.
-        leaf_span = None
-        try:
-            path = leaf_path(decided.decision, explanation.leaf)
-            node: Any = decided.decision
-            for _, branch in path:
-                node = node.then if branch else node.otherwise
-            leaf_span = node.span.as_dict() if node.span else None
-        except KeyError:
-            pass
-        return {
-            "option": codec.option_ids[option],
-            "option_name": option,
-            "decided_in": states[explanation.decided_in],
-            "decided_in_name": explanation.decided_in,
-            "leaf": explanation.leaf,
-            "target": states.get(explanation.target, -1),
-            "target_name": explanation.target,
-            "stay": explanation.stay,
-            "leaf_span": leaf_span,
-            "conditions": [
-                {
-                    "text": c.text,
-                    "source": c.source,
-                    "value": _plain(c.value),
-                    "branch": c.branch,
-                    "span": c.span.as_dict() if c.span else None,
-                    "comparisons": [
-                        {
-                            "text": k.text,
-                            "op": k.op,
-                            "left": k.left,
-                            "left_value": k.left_value,
-                            "right": k.right,
-                            "right_value": k.right_value,
-                            "value": k.value,
-                            "shown": str(k),
-                        }
-                        for k in c.comparisons
-                    ],
-                }
-                for c in explanation.conditions
-            ],
-        }
 
     def _op_explain_recorded(self, command: ExplainRecorded, owner: str | None) -> Any:
         """Internal: explain decisions from values the server recorded (``explain`` with ``seq``)."""
@@ -550,13 +499,8 @@ class Simulation:
                 explanation = explain_decision(ir_option, state, leaf, values, functools.partial(render, option=option))
             except KeyError:
                 raise CommandError(f"state {option}.{state.name} has no leaf {leaf}") from None
-            result = self._explanation(codec, option, explanation)
-            result.update(
-                seq=seq,
-                t=t,
-                recorded=True,
-                tree=decision_tree(state.decision, leaf, values, functools.partial(_if_text, option=option)),
-            )
+            result = explanation_result(ir_option, explanation)
+            result.update(seq=seq, t=t, recorded=True, tree=tree_result(ir_option, state.name, leaf, values))
             results.append(result)
         return results
 
@@ -716,20 +660,6 @@ def _collect(message: FromWorker, droppable: bool) -> bool:
     return True
 
 
-def _if_text(node: Any, option: str) -> str:
-    return str(node.text or render(node.condition, option))
-
-
-def _mark_values(tree: dict[str, Any], explanation: Explanation) -> None:
-    """Put the explanation's condition values on the taken path of ``tree`` (live: re-evaluated ones)."""
-    node = tree
-    for condition in explanation.conditions:
-        if "if" not in node:
-            return
-        node["value"] = condition.value if isinstance(condition.value, bool) else None
-        node = node["then"] if condition.branch else node["else"]
-
-
 class RecordedValues:
     """Values of a tick as the ring buffer recorded them (``debug.Values`` for ``explain_recorded``).
 
@@ -818,10 +748,6 @@ class RecordedValues:
     def special(self, expression: Any) -> Value:
         """``action_done`` and ``conflict`` are not recorded."""
         raise Unknown("not recorded")
-
-
-def _plain(value: Any) -> Any:
-    return value if isinstance(value, bool | int | float | str) or value is None else str(value)
 
 
 # -- the process ------------------------------------------------------------------------------------
