@@ -13,12 +13,14 @@ A recorded tick becomes the same :class:`~server.messages.Sample` the simulation
 usual :class:`~server.frames.FrameRecorder` turns it into frames, so every panel reads a replay
 exactly as it reads a live session.
 
-``explain`` works at any tick: :func:`explain` walks the recorded generation's decision tree
-(its program description) to the recorded leaf and evaluates the operands of every comparison of
-the conditions on the way from the recorded symbol values (inputs of the tick; outputs as the
-decision saw them: the previous tick's, updated by the assignments that ran before the option in
-this tick), the option's parameters and times. Values a recording does not hold (input functions
-with parameters, ``action_done``) are ``null``; the branch taken is always the recorded one.
+``explain`` works at any tick: :func:`explain` rebuilds the recorded generation from its
+intermediate code and lets the engine's debugger (``engine.runtime.debug.explain_decision``, the
+evaluator the live studio uses) walk its decision tree to the recorded leaf, evaluating every
+condition and both operands of every comparison from the recorded values (:class:`TickValues`:
+inputs of the tick; outputs as the decision saw them, the previous tick's updated by the
+assignments that ran before the option in this tick; the option's parameters and times). Values a
+recording does not hold (input functions with parameters, ``action_done``) are ``null``; the
+branch taken is always the recorded one.
 
 Commands that need a live world (forcing, overrides, resets, world commands) answer an error.
 """
@@ -28,24 +30,25 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import dataclasses
+import functools
 import time
 from bisect import bisect_right
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import orjson
 
-from engine.errors import CompileError
 from engine.host import Agent, AgentController, BehaviorSource, ExampleError, World
-from engine.ir.model import Program
-from engine.lang import ast
-from engine.lang.parser import parse_expression_text
+from engine.ir.model import Expression, Program
 from engine.record import Recording, RecordingError, TickView
 from engine.record.reader import AgentTick, ProgramView
 from engine.runtime import AssignmentNode, Engine, OptionNode
+from engine.runtime.debug import Unknown, explain_decision, render, show_value
+from engine.types import Kind, Value
 from server import frames
+from server.explain import explanation_result, tree_result
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.messages import (
     BreakpointCommand,
@@ -67,7 +70,6 @@ __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
 MAX_HISTORY_TICKS = 4800
 #: Ticks the replay's ring keeps (what the client encoder needs for deltas; history reads the file).
 RING_TICKS = 256
-_COMPARISONS = frozenset(("==", "!=", "<", "<=", ">", ">="))
 
 
 @dataclass(frozen=True, slots=True)
@@ -375,7 +377,10 @@ class ReplaySession(Session):
 
         None for recordings without intermediate code (made before it was recorded).
         """
-        gen = _latest_gen(self.recording, key, self.position)
+        return self.recorded_program(key, _latest_gen(self.recording, key, self.position))
+
+    def recorded_program(self, key: str, gen: int) -> Program | None:
+        """Generation ``gen`` of behavior ``key`` rebuilt from its recorded IC (None without IC)."""
         cached = self._programs_shown.get((key, gen))
         if cached is None:
             view = self.recording.programs.get((key, gen))
@@ -493,7 +498,10 @@ class ReplaySession(Session):
         agent = view.agents.get(name)
         if agent is None:
             raise CommandError(f"{name} has no tick {at} in the recording")
-        result = explain(agent, previous.agents.get(name) if previous else None, option, view.t, previous)
+        program = self.recorded_program(robots[robot]["program"], agent.gen)
+        if program is None:
+            raise CommandError(f"{self.recording.path} holds no intermediate code (an older recording): no why")
+        result = explain(program, agent, previous.agents.get(name) if previous else None, option, view.t, previous)
         # Asked without a tick (the page's "live" view: the playback position): shown as live.
         result.update(seq=at if seq is not None else None, t=view.t, recorded=seq is not None)
         return result
@@ -578,187 +586,86 @@ def latest_status(entry: Entry | None) -> dict[str, Any]:
 # -- explain --------------------------------------------------------------------------------------
 
 
-def _leaf_path(tree: dict[str, Any], leaf: int) -> list[tuple[dict[str, Any], bool]] | None:
-    if "leaf" in tree:
-        return [] if tree["leaf"] == leaf else None
-    for branch, key in ((True, "then"), (False, "else")):
-        below = _leaf_path(tree[key], leaf)
-        if below is not None:
-            return [(tree, branch), *below]
-    return None
+class TickValues:
+    """What one option's decision read in a recorded tick (``engine.runtime.debug.Values``).
 
-
-def _find_leaf(tree: dict[str, Any], leaf: int) -> dict[str, Any] | None:
-    if "leaf" in tree:
-        return tree if tree["leaf"] == leaf else None
-    return _find_leaf(tree["then"], leaf) or _find_leaf(tree["else"], leaf)
-
-
-class _Values:
-    """What a condition of one option could read at its decision, from the recording."""
+    Enum values are element indices in their enumeration (the reader gives element names;
+    unknown names are -1); plain inputs are the tick's,
+    outputs as the decision saw them (the previous tick's, updated by the assignments that ran
+    earlier in the same tick), parameters and times from the option's path node. Input functions
+    with parameters, ``action_done`` and ``conflict`` are not recorded: :class:`Unknown`.
+    """
 
     def __init__(
         self,
         agent: AgentTick,
         outputs: dict[str, Any],
         params: dict[str, Any],
-        times: dict[str, float | None],
+        state_time: float | None,
+        option_time: float,
     ) -> None:
-        description = agent.program.description
-        self.inputs = agent.inputs
+        self.agent = agent
         self.outputs = outputs
         self.params = params
-        self.times = times
-        self.constants = {c["name"]: c["value"] for c in description["constants"]}
-        self.elements = {el for e in description["enums"] for el in e["elements"]}
-        # Conditions may name an element short (``game.state == init``): without its enumeration's
-        # prefix (an element's own dots stay: ``kick.left`` of ``play.kind``).
-        short: dict[str, list[str]] = {}
-        for e in description["enums"]:
-            for element in e["elements"]:
-                short.setdefault(element.removeprefix(e["name"] + "."), []).append(element)
-        self.short = short
+        self._state_time = state_time
+        self.option_time = option_time
+        enums = agent.program.description["enums"]
+        self._elements: dict[str, list[str]] = {e["name"]: e["elements"] for e in enums}
+        self._index = {element: i for e in enums for i, element in enumerate(e["elements"])}
 
-    def ident(self, name: str) -> Any:
-        if name.startswith("@"):
-            return self.params.get(name[1:])
-        for table in (self.inputs, self.outputs, self.constants):
-            if name in table:
-                return table[name]
-        if name in self.elements:
-            return name
-        matches = self.short.get(name, [])
-        if len(matches) == 1:
-            return matches[0]
-        return _Element(name) if matches else None
+    @property
+    def state_time(self) -> float:
+        """The decided-in state's time as the decision saw it (unknown after an unrecorded transition)."""
+        if self._state_time is None:
+            raise Unknown("the state's time before this tick's transition is not recorded")
+        return self._state_time
 
+    @state_time.setter
+    def state_time(self, value: float) -> None:
+        self._state_time = value
 
-class _Element(str):
-    """A short element name that several enumerations have: equal to any element ending in it."""
+    def input(self, name: str, args: Mapping[str, Value]) -> Value:
+        """The recorded value of a plain input."""
+        if args or name not in self.agent.inputs:
+            raise Unknown(f"{name} is not recorded")
+        return self._value(self.agent.inputs[name])
 
-    __slots__ = ()
+    def output(self, name: str) -> Value:
+        """The output as the decision saw it."""
+        if name not in self.outputs:
+            raise Unknown(f"{name} is not recorded")
+        return self._value(self.outputs[name])
 
-    def matches(self, other: object) -> bool:
-        return isinstance(other, str) and (other == self or other.endswith("." + self))
+    def parameter(self, name: str) -> Value:
+        """The option's parameter in the path node."""
+        if name not in self.params:
+            raise Unknown(f"parameter {name} is not recorded")
+        return self._value(self.params[name])
 
+    def element(self, element: str) -> Value:
+        """The element's index in its enumeration."""
+        return self._index.get(element, -1)
 
-def _evaluate(expr: ast.Expr, values: _Values) -> Any:
-    """The value of ``expr`` from recorded values; None where the recording does not tell."""
-    if isinstance(expr, ast.NumberLit):
-        return float(expr.text)
-    if isinstance(expr, ast.BoolLit):
-        return expr.value
-    if isinstance(expr, ast.Ident):
-        return values.ident(expr.name)
-    if isinstance(expr, ast.Builtin):
-        return values.times.get(expr.name)
-    if isinstance(expr, ast.Paren):
-        return _evaluate(expr.inner, values)
-    if isinstance(expr, ast.UnaryOp):
-        operand = _evaluate(expr.operand, values)
-        if operand is None:
-            return None
-        return (not operand) if expr.op == "!" else -operand
-    if isinstance(expr, ast.CondOp):
-        condition = _evaluate(expr.condition, values)
-        if condition is None:
-            return None
-        return _evaluate(expr.then if condition else expr.otherwise, values)
-    if isinstance(expr, ast.BinaryOp):
-        left = _evaluate(expr.left, values)
-        if expr.op in ("&&", "||"):
-            if left is not None and bool(left) == (expr.op == "||"):
-                return bool(left)
-            right = _evaluate(expr.right, values)
-            if right is not None and bool(right) == (expr.op == "||"):
-                return bool(right)
-            return None if left is None or right is None else bool(right)
-        right = _evaluate(expr.right, values)
-        if left is None or right is None:
-            return None
-        return _binary(expr.op, left, right)
-    return None  # a Call: an input function with parameters is not recorded
+    def show(self, kind: Kind, enum: str | None, value: Value) -> str:
+        """Enum elements by name, without their enumeration's prefix (an element's own dots stay)."""
+        if kind is Kind.ENUM:
+            elements = self._elements.get(enum or "", [])
+            if isinstance(value, int) and 0 <= value < len(elements):
+                return elements[value].removeprefix(f"{enum}.")
+            return f"{value}?"
+        return show_value(value)
 
+    def _value(self, recorded: Any) -> Value:
+        if recorded is None:
+            raise Unknown("not recorded")
+        if isinstance(recorded, str):  # an enum element
+            return self._index.get(recorded, -1)
+        value: Value = recorded
+        return value
 
-def _binary(op: str, left: Any, right: Any) -> Any:
-    if op in ("==", "!=") and (isinstance(left, _Element) or isinstance(right, _Element)):
-        short, other = (left, right) if isinstance(left, _Element) else (right, left)
-        return short.matches(other) == (op == "==")
-    try:
-        match op:
-            case "==":
-                return bool(left == right)
-            case "!=":
-                return bool(left != right)
-            case "<":
-                return bool(left < right)
-            case "<=":
-                return bool(left <= right)
-            case ">":
-                return bool(left > right)
-            case ">=":
-                return bool(left >= right)
-            case "+":
-                return left + right
-            case "-":
-                return left - right
-            case "*":
-                return left * right
-            case "/":
-                return left / right if right else None
-            case "%":
-                return left % right if right else None
-    except TypeError:
-        return None
-    return None
-
-
-def _comparisons(expr: ast.Expr, text: str, values: _Values, into: list[dict[str, Any]]) -> None:
-    """Every comparison in ``expr`` with the value of each side (pre-order; the live ``explain``'s shape)."""
-    if isinstance(expr, ast.BinaryOp):
-        if expr.op in _COMPARISONS:
-            left = _evaluate(expr.left, values)
-            right = _evaluate(expr.right, values)
-            left_text, right_text = _text(expr.left, text), _text(expr.right, text)
-            left_value, right_value = _show(left), _show(right)
-            shown_left = left_text if left_value == left_text else f"{left_text} ({left_value})"
-            shown_right = right_text if right_value == right_text else f"{right_text} ({right_value})"
-            into.append(
-                {
-                    "text": text[expr.span.start : expr.span.end],
-                    "op": expr.op,
-                    "left": left_text,
-                    "left_value": left_value,
-                    "right": right_text,
-                    "right_value": right_value,
-                    "value": None if left is None or right is None else _binary(expr.op, left, right),
-                    "shown": f"{shown_left} {expr.op} {shown_right}",
-                }
-            )
-        _comparisons(expr.left, text, values, into)
-        _comparisons(expr.right, text, values, into)
-    elif isinstance(expr, ast.UnaryOp):
-        _comparisons(expr.operand, text, values, into)
-    elif isinstance(expr, ast.Paren):
-        _comparisons(expr.inner, text, values, into)
-    elif isinstance(expr, ast.CondOp):
-        for part in (expr.condition, expr.then, expr.otherwise):
-            _comparisons(part, text, values, into)
-
-
-def _show(value: Any) -> str:
-    """A value as the explanation shows it (``?``: the recording does not tell)."""
-    if value is None:
-        return "?"
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        return f"{value:.10g}"
-    return str(value)
-
-
-def _text(expr: ast.Expr, text: str) -> str:
-    return text[expr.span.start : expr.span.end]
+    def special(self, expression: Expression) -> Value:
+        """``action_done`` and ``conflict`` are not recorded."""
+        raise Unknown("not recorded")
 
 
 def _decision_outputs(agent: AgentTick, previous: AgentTick | None, option_id: int) -> dict[str, Any]:
@@ -787,6 +694,7 @@ def _decision_outputs(agent: AgentTick, previous: AgentTick | None, option_id: i
 
 
 def explain(
+    program: Program,
     agent: AgentTick,
     previous: AgentTick | None,
     option: str | int,
@@ -795,91 +703,75 @@ def explain(
 ) -> dict[str, Any]:
     """Why ``option`` took its leaf in the recorded tick of ``agent`` (the live ``explain``'s shape).
 
-    Each condition on the way to the recorded leaf has ``branch`` (taken, as recorded), ``value``
-    (computed from the recorded values; null when they do not tell) and ``comparisons``: per
-    comparison its text, the value of each side (``?``: not recorded) and its result.
+    ``program`` is the agent's recorded generation (rebuilt from its IC). Each condition on the
+    way to the recorded leaf has ``branch`` (taken, as recorded), ``value`` (computed from the
+    recorded values; null when they do not tell) and ``comparisons``: per comparison its text,
+    the value of each side (``?``: not recorded) and its result; ``tree`` is the decision tree
+    with the path taken.
 
     Raises:
         CommandError: no such option, or it did not decide anything in that tick.
     """
-    description = agent.program.description
-    options = description["options"]
     if isinstance(option, int):
-        if not 0 <= option < len(options):
+        found = [o for o in program.options.values() if o.index == option]
+        if not found:
             raise CommandError(f"no option {option}")
-        option_json = options[option]
     else:
-        found = [o for o in options if o["name"] == option]
+        found = [program.options[option]] if option in program.options else []
         if not found:
             raise CommandError(f"unknown option {option}")
-        option_json = found[0]
-    option_id = option_json["id"]
-    node = next((n for n in agent.path if n[0] == 0 and n[2] == option_id), None)
+    ir_option = found[0]
+    node = next((n for n in agent.path if n[0] == 0 and n[2] == ir_option.index), None)
     if node is None:
-        raise CommandError(f"option {option_json['name']} did not run in tick {agent.tick} of {agent.name}")
+        raise CommandError(f"option {ir_option.name} did not run in tick {agent.tick} of {agent.name}")
     state_id, option_time, state_time, decided_in, leaf = node[3], node[4], node[5], node[6], node[7]
     if leaf < 0:
-        raise CommandError(f"option {option_json['name']} decided nothing in that tick")
-    states = option_json["states"]
-    decided = states[decided_in]
+        raise CommandError(f"option {ir_option.name} decided nothing in that tick")
+    if not 0 <= decided_in < len(ir_option.states):
+        raise CommandError(f"option {ir_option.name} has no state {decided_in}")
+    decided = ir_option.states[decided_in]
     # The decision saw the decided-in state's time: after a transition this tick, last tick's + a period.
     decision_state_time: float | None = float(state_time)
     if decided_in != state_id:
         decision_state_time = None
         if previous is not None and previous_view is not None:
-            before = next((n for n in previous.path if n[0] == 0 and n[2] == option_id), None)
+            before = next((n for n in previous.path if n[0] == 0 and n[2] == ir_option.index), None)
             if before is not None and before[3] == decided_in:
                 decision_state_time = float(before[5] + (t - previous_view.t))
-    params = {p["short_name"]: v for p, v in zip(option_json["params"], node[8], strict=False)}
-    params.update({p["name"]: v for p, v in zip(option_json["params"], node[8], strict=False)})
-    for p in option_json["params"]:
-        if p.get("enum") and p["name"] in params:
-            host = agent.program.tables["enums"].get(p["enum"], {})
-            for key in (p["name"], p["short_name"]):
-                params[key] = host.get(str(int(params[key])), params[key])
-    values = _Values(
-        agent,
-        _decision_outputs(agent, previous, option_id),
-        params,
-        {"state_time": decision_state_time, "option_time": float(option_time), "action_done": None},
+    enums = agent.program.tables["enums"]
+    params: dict[str, Any] = {}
+    for p, value in zip(ir_option.params, node[8], strict=False):
+        params[p.name] = enums.get(p.enum, {}).get(str(int(value)), value) if p.enum else value
+    values = TickValues(
+        agent, _decision_outputs(agent, previous, ir_option.index), params, decision_state_time, float(option_time)
     )
-    conditions = []
-    for tree, branch in _leaf_path(decided["decision"], leaf) or []:
-        text = tree["if"]
-        operands: list[dict[str, Any]] = []
-        value: Any = None
-        try:
-            expr = parse_expression_text(text)
-        except CompileError:
-            expr = None
-        if expr is not None:
-            value = _evaluate(expr, values)
-            _comparisons(expr, text, values, operands)
-        conditions.append(
-            {
-                "text": text,
-                "source": text,
-                "value": None if value is None else bool(value),
-                "branch": branch,
-                "span": tree.get("span"),
-                "comparisons": operands,
-            }
+    try:
+        explanation = explain_decision(
+            ir_option, decided, leaf, values, functools.partial(render, option=ir_option.name)
         )
-    leaf_node = _find_leaf(decided["decision"], leaf) or {}
-    target_name = leaf_node.get("goto") or decided["name"]
-    target = next((s["id"] for s in states if s["name"] == target_name), -1)
-    return {
-        "option": option_id,
-        "option_name": option_json["name"],
-        "decided_in": decided_in,
-        "decided_in_name": decided["name"],
-        "leaf": leaf,
-        "target": target,
-        "target_name": target_name,
-        "stay": target_name == decided["name"],
-        "leaf_span": leaf_node.get("span"),
-        "conditions": conditions,
-        "recorded": True,
-        "tree": {},
-        "last_transition": None,
-    }
+    except KeyError:
+        raise CommandError(f"state {ir_option.name}.{decided.name} has no leaf {leaf}") from None
+    result = explanation_result(ir_option, explanation)
+    tree = tree_result(ir_option, decided.name, leaf, values)
+    # The IC has no source text: show the conditions as they were written (the description's).
+    _source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
+    result.update(recorded=True, tree=tree, last_transition=None)
+    return result
+
+
+def _source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[str, Any]) -> None:
+    """Copy the description's condition texts onto the tree and the conditions (same shapes)."""
+
+    def copy(node: dict[str, Any], source: dict[str, Any]) -> None:
+        if "if" in node and "if" in source:
+            node["if"] = source["if"]
+            copy(node["then"], source["then"])
+            copy(node["else"], source["else"])
+
+    copy(tree, described)
+    node = described
+    for condition in result["conditions"]:
+        if "if" not in node:
+            break
+        condition["text"] = node["if"]
+        node = node["then"] if condition["branch"] else node["else"]

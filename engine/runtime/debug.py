@@ -246,7 +246,8 @@ class Condition:
 
     text: str
     source: str
-    value: Value
+    #: None: the values do not tell (a recorded tick without the input function or ``action_done``)
+    value: Value | None
     branch: bool
     span: Span | None
     comparisons: tuple[Comparison, ...] = field(default=())
@@ -367,7 +368,7 @@ def explain_decision(
             Condition(
                 node.text,
                 text(node.condition),
-                value if value is not None else False,
+                value,
                 branch,
                 node.condition.span,
                 comparisons(node.condition, values, text),

@@ -125,6 +125,9 @@ def test_explain_at_a_past_tick_gives_operand_values(replay: LiveServer, client_
     assert comparison["shown"] == f"ball.distance ({comparison['left_value']}) < 900"
     assert result["recorded"] and result["t"] == recording_t
     assert comparison["value"] == condition["branch"] == condition["value"]
+    tree = result["tree"]  # the decision tree as the live why draws it, the recorded path taken
+    assert tree["if"] == condition["text"] and tree["taken"] and tree["branch"] == condition["branch"]
+    assert tree["value"] == condition["value"]
     # Over many ticks and options: what the recording lets compute agrees with the recorded leaves.
     computed = 0
     for at in range(300, len(recording), 97):
