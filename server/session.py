@@ -596,7 +596,10 @@ class Session:
             seq = latest.seq
         else:
             seq = command.seq
-        option_id = live["option"] if live is not None else self._option_id(command.robot, command.option)
+        # A tick of an earlier generation (before a reload) names options with that generation's ids.
+        recorded = self.ring.get(seq) if live is None else None
+        gen = recorded.gen if recorded is not None else self.generation
+        option_id = live["option"] if live is not None else self._option_id(command.robot, command.option, gen)
         if live is not None:
             # Live: continue the last scan of this robot and option (a full decode only the first time).
             cache_key = (command.robot, option_id)
@@ -618,7 +621,11 @@ class Session:
             ticks: tuple[tuple[Any, ...], ...] = (transition,)
         else:
             ticks = (at,) if transition is None else (at, transition)
-        name = _option_name(self, command.option, command.robot) if isinstance(command.option, int) else command.option
+        name = (
+            _option_name(self, command.option, command.robot, gen)
+            if isinstance(command.option, int)
+            else command.option
+        )
         ok, results, error = await self._send(ExplainRecorded(command.robot, name, generation, ticks), owner)
         if not ok:
             raise CommandError(error)
@@ -628,11 +635,12 @@ class Session:
         decision["last_transition"] = _transition(results[1]) if len(results) > 1 else None
         return decision
 
-    def _option_id(self, robot: int, option: int | str) -> int:
+    def _option_id(self, robot: int, option: int | str, gen: Generation | None = None) -> int:
         if isinstance(option, int):
             return option
+        gen = gen or self.generation
         key = self._breakpoint_key(None, robot)
-        program = self.generation.structure["programs"].get(key) if self.generation is not None else None
+        program = gen.structure["programs"].get(key) if gen is not None else None
         for item in program.get("options", []) if program else []:
             if item.get("name") == option:
                 return int(item["id"])
@@ -736,9 +744,10 @@ def _store_partial(state: ProgramState, compilation: Compilation) -> None:
     state.partial = partial if state.partial_json is not None else None
 
 
-def _option_name(session: Session, option: int, robot: int) -> str:
+def _option_name(session: Session, option: int, robot: int, gen: Generation | None = None) -> str:
+    gen = gen or session.generation
     key = session._breakpoint_key(None, robot)
-    program = session.generation.structure["programs"].get(key) if session.generation is not None else None
+    program = gen.structure["programs"].get(key) if gen is not None else None
     for item in program.get("options", []) if program else []:
         if item.get("id") == option:
             return str(item["name"])

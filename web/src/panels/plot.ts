@@ -181,4 +181,11 @@ export class PlotPanel {
     this.lastDraw = now;
     this.plot?.setData(this.data());
   }
+
+  /// What the plot shows now: x (timeline seconds) and one array of values per pin (tests, tools).
+  points(): { x: number[]; series: Array<Array<number | null>> } {
+    const data = this.plot?.data;
+    if (!data) return { x: [], series: [] };
+    return { x: Array.from(data[0] as ArrayLike<number>), series: data.slice(1).map((s) => Array.from(s as ArrayLike<number | null>)) };
+  }
 }

@@ -289,7 +289,8 @@ export class TimelinePanel {
       ctx.lineWidth = 1;
     }
     const tick = session.view;
-    const reloads = this.marks.length ? ` · ${this.marks.length} reload${this.marks.length === 1 ? "" : "s"}/reset${this.marks.length === 1 ? "" : "s"} (click a mark on the axis to see what changed)` : "";
+    const n = this.marks.length;
+    const reloads = n ? ` · ${n} reload${n === 1 ? "" : "s"} or reset${n === 1 ? "" : "s"}: click ${n === 1 ? "its" : "a"} mark on the axis to see what changed` : "";
     this.info.textContent = `${formatMs(this.t1 - this.t0)} buffered${reloads}${tick ? ` · showing t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
   }
 }
