@@ -155,3 +155,29 @@ def test_changed_files_and_diff_of_added_and_removed_files() -> None:
         "-two",
         "+three",
     ]
+
+
+def test_explain_of_a_tick_before_a_reload_uses_that_ticks_ids(
+    live_demo: LiveServer, client_for: Any, demo_dir: Path
+) -> None:
+    client = client_for(live_demo)
+    client.until(lambda m: m["type"] == "hello")
+    old_play = client.option_id("play")
+    before = client.wait_frame(lambda f: f["t"] > 800 and f["robots"][0]["path"][0][2] == old_play)
+    # A new option sorted first renumbers every option: play's id changes.
+    (demo_dir / "options" / "aaa_idle.xabsl").write_text(
+        "/** Stands. */\noption aaa_idle {\n  initial state idle {\n    action {\n      stand();\n    }\n  }\n}\n"
+    )
+    agents = demo_dir / "agents.xabsl"
+    agents.write_text(
+        agents.read_text().replace(
+            'include "options/play.xabsl";', 'include "options/aaa_idle.xabsl";\ninclude "options/play.xabsl";'
+        )
+    )
+    assert client.command("reload")["ok"]
+    client.wait_hello("reload")
+    assert client.option_id("play") != old_play
+    for option in ("play", old_play):
+        reply = client.command("explain", robot=0, option=option, seq=before["seq"])
+        assert reply["ok"], reply
+        assert reply["result"]["option_name"] == "play" and reply["result"]["seq"] == before["seq"]
