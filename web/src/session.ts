@@ -241,6 +241,14 @@ export class Session {
     this.emit("cursor");
   }
 
+  /// Show the tick at behavior time `t` of the current generation, or the tick `seq` when it is
+  /// buffered (a time from the server, e.g. a breakpoint hit, to the timeline time of its tick).
+  seekTick(t: number, seq?: number): void {
+    const tick = seq === undefined ? null : this.buffer.bySeq(seq);
+    const offset = this.hello ? (this.generations.get(this.hello.generation)?.offset ?? 0) : 0;
+    this.setCursor(tick ? tick.x : t + offset);
+  }
+
   /// Move the cursor by `n` buffered ticks (from live: back from the newest).
   stepCursor(n: number): void {
     const ticks = this.buffer.all;

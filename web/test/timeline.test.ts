@@ -165,6 +165,11 @@ describe("history across generations", () => {
     s.setCursor(60);
     expect(s.view?.seq).toBe(3);
     expect(s.buffer.range(40, 100).map((t) => t.seq)).toEqual([3, 4]);
+    // A server time (a breakpoint hit, a fact): of the current generation, or of its tick's seq.
+    s.seekTick(25);
+    expect(s.view?.seq).toBe(4);
+    s.seekTick(25, 2);
+    expect(s.view?.seq).toBe(2);
   });
 
   it("takes earlier generations' descriptions from a history answer and drops ticks it cannot read", () => {

@@ -241,7 +241,7 @@ export class FactsPanel {
               title: "Why, and go to this moment",
               onclick: () => {
                 this.selectedEvent = e;
-                this.session.setCursor(e.t);
+                this.session.seekTick(e.t);
                 this.listKey = "";
                 this.drawList();
               },

@@ -35,7 +35,7 @@ export class TimelinePanel {
   private width = 300;
   private dirty = true;
   /// Breakpoint hits, marked on the axis (red) at their time.
-  private hits: ReadonlyArray<{ t: number; robot: number; description: string }> = [];
+  private hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }> = [];
   /// Where a generation started in the buffered history (timeline time), as drawn.
   private marks: Array<Mark & { x: number }> = [];
   /// The dialog a click on a mark opens (in the page once the first mark is clicked).
@@ -59,7 +59,7 @@ export class TimelinePanel {
   }
 
   /// Mark breakpoint hits (a red triangle and line at each hit's time).
-  markHits(hits: ReadonlyArray<{ t: number; robot: number; description: string }>): void {
+  markHits(hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }>): void {
     this.hits = hits;
     this.dirty = true;
   }
@@ -243,8 +243,9 @@ export class TimelinePanel {
     ctx.fillStyle = "#e53935";
     ctx.strokeStyle = "rgba(229,57,53,0.6)";
     for (const hit of this.hits) {
-      if (hit.t < this.t0 || hit.t > this.t1) continue;
-      const x = xOf(hit.t);
+      const at = (hit.seq !== undefined ? session.buffer.bySeq(hit.seq)?.x : undefined) ?? hit.t;
+      if (at < this.t0 || at > this.t1) continue;
+      const x = xOf(at);
       ctx.beginPath();
       ctx.moveTo(x - 5, 0);
       ctx.lineTo(x + 5, 0);
