@@ -19,6 +19,8 @@ const GAP = 16;
 /// Colours of generation marks by reason (others: MARK_OTHER).
 const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726" };
 const MARK_OTHER = "#ab47bc";
+/// The letter on a mark's flag by reason (others: the reason's first letter).
+const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0" };
 
 export class TimelinePanel {
   readonly element: HTMLElement;
@@ -267,7 +269,7 @@ export class TimelinePanel {
       ctx.strokeStyle = color;
       ctx.fillRect(x - 5, 1, 10, AXIS_H - 4);
       ctx.fillStyle = "#fff";
-      ctx.fillText(mark.reason.charAt(0).toUpperCase(), x - 3, AXIS_H / 2 - 1);
+      ctx.fillText(MARK_LETTERS[mark.reason] ?? mark.reason.charAt(0).toUpperCase(), x - 3, AXIS_H / 2 - 1);
       ctx.setLineDash([3, 3]);
       ctx.beginPath();
       ctx.moveTo(x, AXIS_H - 3);
