@@ -112,6 +112,20 @@ export class Session {
     return program ? (view?.programs.get(program) ?? null) : null;
   }
 
+  /// Ids of the tick in view's generation as ids of the current one (by name; -1: it has none),
+  /// for what only the current generation has (the option graph the server draws).
+  currentIds(robotId: number): { option: (id: number) => number; behavior: (id: number) => number } {
+    const gen = this.view?.gen;
+    const current = this.hello?.generation;
+    if (gen === undefined || current === undefined || gen === current) return { option: (id) => id, behavior: (id) => id };
+    const then = this.indexIn(gen, robotId);
+    const now = this.indexIn(current, robotId);
+    return {
+      option: (id) => now?.optionByName.get(then?.optionById.get(id)?.name ?? "")?.id ?? -1,
+      behavior: (id) => now?.behaviorByName.get(then?.behaviorById.get(id)?.name ?? "")?.id ?? -1,
+    };
+  }
+
   applyHello(hello: Hello): void {
     const fresh = hello.reason === "connect";
     if (fresh) {

@@ -145,6 +145,8 @@ describe("history across generations", () => {
     expect(stateName()).toBe("wait");
     expect(live).not.toBe("wait"); // the same state id names another state in the edited behavior
     expect(s.takeChanges().has("hello")).toBe(true); // panels rebuild with the old ids
+    expect(s.currentIds(0).option(1)).toBe(-1); // "play" is gone from the current generation
+    expect(s.currentIds(0).option(0)).toBe(0); // approach_ball kept its name and id
     s.setCursor(null);
     expect(s.indexOf(0)?.optionById.get(1)?.name).toBe("play_edited");
     const rows = buildRobotTimeline(s.buffer.all, 0, (gen) => s.indexIn(gen, 0));
