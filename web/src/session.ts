@@ -142,6 +142,7 @@ export class Session {
       offset: hello.session.offset ?? 0,
       changedFiles: known?.changedFiles ?? null,
     });
+    this.forgetGenerations();
     this.decoder.reset();
     this.live = null;
     this.transitions.clear();
