@@ -153,8 +153,14 @@ export class TimelinePanel {
     if (structural || (changes.has("tick") && session.isLive && now - this.builtAt > 250)) {
       this.builtAt = now;
       const ticks = session.buffer.all;
-      this.team = buildTeamTimeline(ticks, session.robots.filter((a) => a.program !== null), (id, gen) => session.indexIn(gen, id));
-      this.rows = buildRobotTimeline(ticks, session.selectedRobot, (gen) => session.indexIn(gen, session.selectedRobot));
+      const indexes = new Map<number, ReturnType<Session["indexIn"]>>(); // per generation and robot, once per build
+      const indexIn = (gen: number, id: number): ReturnType<Session["indexIn"]> => {
+        const key = gen * 65536 + id;
+        if (!indexes.has(key)) indexes.set(key, session.indexIn(gen, id));
+        return indexes.get(key) ?? null;
+      };
+      this.team = buildTeamTimeline(ticks, session.robots.filter((a) => a.program !== null), (id, gen) => indexIn(gen, id));
+      this.rows = buildRobotTimeline(ticks, session.selectedRobot, (gen) => indexIn(gen, session.selectedRobot));
       this.t0 = session.buffer.oldest?.x ?? 0;
       this.t1 = Math.max(this.t0 + 1, session.buffer.newest?.x ?? 1);
       this.marks = session.buffer.starts().map((tick) => ({ gen: tick.gen, reason: session.generations.get(tick.gen)?.reason ?? "reload", t: tick.t, x: tick.x }));
