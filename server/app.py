@@ -38,6 +38,8 @@ from server import frames
 from server.clients import Client, Hub
 from server.docs import router as docs_router
 from server.files import BehaviorFiles, FileError
+from server.frames import Generation
+from server.generations import GenerationGone
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
 from server.messages import (
     BEHAVIOR_PARAMS_INDEX,
@@ -170,18 +172,23 @@ class Studio:
         except CommandError as error:
             return Reply(id=command.id, ok=False, error=str(error))
 
-    def start_history(self, command: History, client: Client | None) -> dict[str, int]:
-        """Queue the ``history`` chunks for ``client``; the reply's result (frames and chunks)."""
+    def start_history(self, command: History, client: Client | None) -> dict[str, Any]:
+        """Queue the ``history`` chunks for ``client``; the reply's result (frames, chunks, generations).
+
+        A live session serves every generation still in the ring (``t0``, ``t1``: timeline times,
+        ``t`` plus the generation's offset), each with what the client needs to read its ticks.
+        """
         t0, t1, every = command.t0, command.t1, command.every
         if t1 < t0:
             raise CommandError("history needs t0 <= t1")
         if client is None:
             raise CommandError("history streams over the websocket; use GET /api/log over REST")
+        generations: list[dict[str, Any]] = []
         if isinstance(self.session, ReplaySession):  # the whole recording, read from the file
             count, encoded = self.session.history_frames(t0, t1, every)
         else:
-            encoded = frames.history(self.session.ring, t0, t1, every)
-            count = _count_history(self.session, t0, t1, every)
+            gens, count, encoded = frames.span_history(self.session.ring, t0, t1, every)
+            generations = [_generation_info(self.session, gen) for gen in gens]
         chunks = max(1, -(-count // HISTORY_CHUNK)) if count else 0
 
         def messages() -> Iterator[bytes]:
@@ -198,7 +205,7 @@ class Studio:
         if count:
             client.history.append(messages())
             client.wake.set()
-        return {"frames": count, "chunks": chunks}
+        return {"frames": count, "chunks": chunks, "generations": generations}
 
     # -- compiling and hot reload -------------------------------------------------------------------------
 
@@ -255,13 +262,21 @@ class Studio:
         return JSONResponse(body, status_code=status)
 
 
-def _count_history(session: Session, t0: int, t1: int, every: int) -> int:
-    entries = session.ring.snapshot()
-    if not entries:
-        return 0
-    gen = entries[-1].gen
-    n = sum(1 for e in entries if e.gen is gen and t0 <= e.t <= t1)
-    return 0 if n == 0 else 1 + (n - 1) // every
+def _generation_info(session: Session, gen: Generation) -> dict[str, Any]:
+    """A :class:`~server.messages.GenerationInfo` (the description only for past generations)."""
+    first = next((e for e in session.ring.snapshot() if e.gen is gen), None)
+    info: dict[str, Any] = {
+        "number": gen.number,
+        "reason": gen.reason,
+        "offset": gen.offset,
+        "seq": first.seq if first is not None else 0,
+        "t": first.t if first is not None else 0,
+        "changed_files": sorted({path for paths in gen.changed.values() for path in paths}),
+    }
+    if session.generation is None or gen.number != session.generation.number:
+        info["structure"] = gen.structure
+        info["scene"] = orjson.loads(gen.scene_bytes)
+    return info
 
 
 def _studio(request: Request) -> Studio:
@@ -385,6 +400,21 @@ async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(
         return NdjsonResponse(iter(()))
     encoded = frames.history(session.ring, t0, t1)
     return NdjsonResponse(_log_lines(encoded, latest.gen))
+
+
+@router.get("/api/generations/{number}/diff", tags=["session"], responses=error_responses(404))
+async def generation_diff(studio: StudioDep, number: int = FastApiPath(ge=0, le=2**62)) -> dict[str, Any]:
+    """What a hot reload (or reset, fork) changed: per behavior file, its unified diff.
+
+    Against generation ``number - 1``, from the sources the session keeps of recent generations.
+    """
+    session = studio.session
+    if isinstance(session, ReplaySession):
+        raise HTTPException(404, "a replay keeps no behavior sources per generation")
+    try:
+        return session.generations.diff(number)
+    except GenerationGone as error:
+        raise HTTPException(404, str(error)) from None
 
 
 # -- files ------------------------------------------------------------------------------------------

@@ -318,6 +318,7 @@ class Hub:
             seq=latest.seq if latest else 0,
             t=latest.t if latest else 0,
             token_required=self.token_required,
+            offset=gen.offset,
         )
         return encode_hello(reason, gen.number, info, gen.structure_bytes, gen.scene_bytes)
 

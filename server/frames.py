@@ -256,6 +256,14 @@ class Generation:
     output_ids: tuple[tuple[int, ...], ...]
     #: per robot (robot id order): whether it runs an XABSL engine
     engines: tuple[bool, ...] = ()
+    #: ms the session's timeline adds to this generation's behavior times: a reset restarts the
+    #: world's clock, the timeline goes on (set by :class:`FrameRecorder` at its first tick)
+    offset: int = 0
+    #: per behavior key: the source texts (display name -> text) its running program came from,
+    #: texts unchanged since the previous generation shared with it (``server.session``)
+    sources: dict[str, dict[str, str]] = field(default_factory=dict)
+    #: per behavior key: the files whose text differs from the previous generation's
+    changed: dict[str, list[str]] = field(default_factory=dict)
 
     @classmethod
     def from_message(cls, message: NewGeneration) -> Generation:
@@ -367,6 +375,7 @@ class Ring:
     def __init__(self, seconds: float, behavior_hz: int) -> None:
         self.seconds = seconds
         self.capacity = max(1, round(seconds * behavior_hz))
+        self.period_ms = 1000 / behavior_hz
         self._entries: deque[Entry] = deque(maxlen=self.capacity)
         self._bytes = 0
 
@@ -476,6 +485,8 @@ class FrameRecorder:
             scene=scene,
             status=status,
         )
+        if new_gen:
+            _place(gen, self.ring.latest, t, self.ring.period_ms)
         self._prev_gen = gen
         if new_gen:
             entry.delta = encode(entry, None, None, None, True)
@@ -489,6 +500,20 @@ class FrameRecorder:
         self.recorded += 1
         self.record_seconds += time.perf_counter() - started
         return entry
+
+
+def _place(gen: Generation, previous: Entry | None, t: int, period_ms: float) -> None:
+    """Set ``gen``'s timeline offset from the tick before its first tick (at ``t``).
+
+    A clock that went back (a reset, a restart) continues one tick after that tick on the
+    timeline; one that goes on (a reload) keeps the previous offset.
+    """
+    if previous is None or previous.gen is gen:
+        return
+    if t < previous.t:
+        gen.offset = previous.t + previous.gen.offset + round(period_ms) - t
+    else:
+        gen.offset = previous.gen.offset
 
 
 _SCALE = 10.0**DECIMALS
@@ -586,7 +611,44 @@ def history(ring: Ring, t0: int, t1: int, every: int = 1) -> Iterator[bytes]:
     if not entries:
         return
     gen = entries[-1].gen
-    entries = [e for e in entries if e.gen is gen]
+    yield from _run_frames([e for e in entries if e.gen is gen], t0, t1, every)
+
+
+def runs(ring: Ring, x0: int, x1: int) -> list[list[Entry]]:
+    """The ring's entries per generation (oldest first) that hold a tick with ``x0 <= x <= x1``.
+
+    ``x`` is the session's timeline time, ``t + gen.offset``: it goes on across resets.
+    """
+    out: list[list[Entry]] = []
+    for entry in ring.snapshot():
+        if not out or out[-1][-1].gen is not entry.gen:
+            out.append([])
+        out[-1].append(entry)
+    return [run for run in out if any(x0 <= e.t + e.gen.offset <= x1 for e in run)]
+
+
+def span_history(ring: Ring, x0: int, x1: int, every: int = 1) -> tuple[list[Generation], int, Iterator[bytes]]:
+    """The ``history`` of every generation in the ring with timeline times ``x0 <= x <= x1``.
+
+    Returns the generations (oldest first), about how many frames follow and the frames: per
+    generation a full frame, then deltas (as :func:`history`); each frame names its generation.
+    """
+    found = runs(ring, x0, x1)
+    count = 0
+    for run in found:
+        n = sum(1 for e in run if x0 <= e.t + e.gen.offset <= x1)
+        count += 1 + (n - 1) // every if n else 0
+
+    def frames() -> Iterator[bytes]:
+        for run in found:
+            offset = run[0].gen.offset
+            yield from _run_frames(run, x0 - offset, x1 - offset, every)
+
+    return [run[0].gen for run in found], count, frames()
+
+
+def _run_frames(entries: list[Entry], t0: int, t1: int, every: int) -> Iterator[bytes]:
+    """The frames of ``entries`` (one generation, oldest first) with ``t0 <= t <= t1``."""
     start = next((k for k, e in enumerate(entries) if e.t >= t0), None)
     if start is None:
         return
@@ -600,6 +662,8 @@ def history(ring: Ring, t0: int, t1: int, every: int = 1) -> Iterator[bytes]:
         if first_key is None:
             return
         key = start = first_key
+    if entries[start].t > t1:
+        return
     state = orjson.loads(entries[key].full)  # type: ignore[arg-type]
     for e in entries[key + 1 : start + 1]:
         _merge(state, orjson.loads(e.delta))

@@ -644,6 +644,8 @@ class SessionInfo:
     seq: int
     t: int
     token_required: bool
+    #: ms the timeline adds to this generation's ``t`` (a reset restarts the clock, not the timeline)
+    offset: int = 0
 
 
 @with_config(_SCHEMA)
@@ -890,10 +892,32 @@ class ReloadResult:
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class HistoryResult:
-    """The result of ``history``: how many frames and chunks follow."""
+    """The result of ``history``: how many frames and chunks follow, and the generations they belong to."""
 
     frames: int
     chunks: int
+    generations: list[GenerationInfo] = field(default_factory=list)
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GenerationInfo:
+    """A generation whose ticks a ``history`` answer holds (docs/protocol.md "history").
+
+    ``structure`` and ``scene`` (as in its hello) are sent for every generation but the current
+    one, whose hello the client has; ``offset`` is what the timeline adds to its ticks' ``t``;
+    ``seq``, ``t``: its first tick still in the ring buffer; ``changed_files``: the behavior files
+    whose text differs from the previous generation's (``GET /api/generations/{number}/diff``).
+    """
+
+    number: int
+    reason: HelloReason
+    offset: int
+    seq: int
+    t: int
+    changed_files: list[str]
+    structure: Structure | None = None
+    scene: dict[str, Any] | None = None
 
 
 @with_config(_SCHEMA)

@@ -45,6 +45,7 @@ from server import frames, worker
 from server.breakpoints import BreakpointStore, validate
 from server.channel import Channel, ChannelClosed
 from server.frames import Entry, FrameRecorder, Generation, Ring
+from server.generations import Generations
 from server.messages import (
     Apply,
     BreakpointCommand,
@@ -101,6 +102,8 @@ class ProgramState:
     #: shown by the studio (graph, option views, symbols) until the behavior compiles
     partial: Program | None = None
     partial_json: dict[str, Any] | None = None
+    #: the source texts (display name -> text) the running program was compiled from
+    running_sources: dict[str, str] | None = None
 
     @property
     def shown(self) -> Program | None:
@@ -167,6 +170,8 @@ class Session:
         #: called on the asyncio loop when the simulation process ended unasked (with crash info)
         self.on_crash: Callable[[dict[str, Any]], None] = lambda crash: None
         self.generation: Generation | None = None
+        #: the generations kept by number, with their sources (diffs of reloads)
+        self.generations = Generations()
         self.crash: dict[str, Any] | None = None
         self.restarts = 0
         self.pid: int | None = None
@@ -182,6 +187,7 @@ class Session:
         #: records the session to a folder from the samples (``server.recording``); None: off
         self.live_recorder: LiveRecorder | None = None
         self._incoming: dict[str, Program] = {}
+        self._incoming_sources: dict[str, dict[str, str]] = {}
         for key in self.programs:
             self._store_compilation(key, self.compile(key))
         #: called on the asyncio loop when a breakpoint hit (after the sample of its tick)
@@ -209,6 +215,7 @@ class Session:
         if compilation.program is not None:
             state.running = compilation.program
             state.running_json = program_to_json(compilation.program, compilation.source_text)
+            state.running_sources = compilation.sources
         else:
             _store_partial(state, compilation)
 
@@ -302,13 +309,15 @@ class Session:
                     future.set_result((message.ok, message.result, message.error))
             elif isinstance(message, NewGeneration):
                 self.generation = Generation.from_message(message)
+                sources = {k: self._incoming_sources.get(k) or s.running_sources for k, s in self.programs.items()}
+                self.generations.add(self.generation, {k: v for k, v in sources.items() if v is not None}, self.ring)
                 self.seed = message.seed
                 for key, error in message.errors.items():
                     if key in self.programs:
                         self.programs[key].error = error
                 if self.live_recorder is not None:
                     programs = {k: self._incoming.get(k) or s.running for k, s in self.programs.items()}
-                    self.live_recorder.generation(self.generation, programs, message.seed, {})
+                    self.live_recorder.generation(self.generation, programs, message.seed, self.generation.changed)
             elif isinstance(message, Hit):
                 hits.append(message)
             elif isinstance(message, Crash):
@@ -592,7 +601,10 @@ class Session:
             seq = latest.seq
         else:
             seq = command.seq
-        option_id = live["option"] if live is not None else self._option_id(command.robot, command.option)
+        # A tick of an earlier generation (before a reload) names options with that generation's ids.
+        recorded = self.ring.get(seq) if live is None else None
+        gen = recorded.gen if recorded is not None else self.generation
+        option_id = live["option"] if live is not None else self._option_id(command.robot, command.option, gen)
         if live is not None:
             # Live: continue the last scan of this robot and option (a full decode only the first time).
             cache_key = (command.robot, option_id)
@@ -614,7 +626,11 @@ class Session:
             ticks: tuple[tuple[Any, ...], ...] = (transition,)
         else:
             ticks = (at,) if transition is None else (at, transition)
-        name = _option_name(self, command.option, command.robot) if isinstance(command.option, int) else command.option
+        name = (
+            _option_name(self, command.option, command.robot, gen)
+            if isinstance(command.option, int)
+            else command.option
+        )
         ok, results, error = await self._send(ExplainRecorded(command.robot, name, generation, ticks), owner)
         if not ok:
             raise CommandError(error)
@@ -624,11 +640,12 @@ class Session:
         decision["last_transition"] = _transition(results[1]) if len(results) > 1 else None
         return decision
 
-    def _option_id(self, robot: int, option: int | str) -> int:
+    def _option_id(self, robot: int, option: int | str, gen: Generation | None = None) -> int:
         if isinstance(option, int):
             return option
+        gen = gen or self.generation
         key = self._breakpoint_key(None, robot)
-        program = self.generation.structure["programs"].get(key) if self.generation is not None else None
+        program = gen.structure["programs"].get(key) if gen is not None else None
         for item in program.get("options", []) if program else []:
             if item.get("name") == option:
                 return int(item["id"])
@@ -653,10 +670,12 @@ class Session:
         program_json = program_to_json(program, compilation.source_text)
         if self.running:
             self._incoming[key] = program  # the new generation arrives before the answer
+            self._incoming_sources[key] = compilation.sources
             try:
                 ok, problem, error = await self._send(Apply(key, program, program_json), None)
             finally:
                 self._incoming.pop(key, None)
+                self._incoming_sources.pop(key, None)
             if not ok:
                 raise CommandError(error)
             if problem is not None:
@@ -665,6 +684,7 @@ class Session:
         state.error = None
         state.running = program
         state.running_json = program_json
+        state.running_sources = compilation.sources
         state.partial = state.partial_json = None
         return None
 
@@ -729,9 +749,10 @@ def _store_partial(state: ProgramState, compilation: Compilation) -> None:
     state.partial = partial if state.partial_json is not None else None
 
 
-def _option_name(session: Session, option: int, robot: int) -> str:
+def _option_name(session: Session, option: int, robot: int, gen: Generation | None = None) -> str:
+    gen = gen or session.generation
     key = session._breakpoint_key(None, robot)
-    program = session.generation.structure["programs"].get(key) if session.generation is not None else None
+    program = gen.structure["programs"].get(key) if gen is not None else None
     for item in program.get("options", []) if program else []:
         if item.get("id") == option:
             return str(item["name"])

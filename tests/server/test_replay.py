@@ -184,6 +184,8 @@ def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Pa
         kinds = [e["kind"] for e in recording.events]
         assert kinds[:3] == ["pause", "step", "resume"] and "reload" in kinds
         assert recording.events[1]["data"] == {"ticks": 5}
+        reload = next(e for e in recording.events if e["kind"] == "reload")
+        assert reload["data"]["changed_files"] == ["behavior/options/approach_ball.xabsl"]
         assert ("behavior", 1) in recording.programs
         new = recording.programs[("behavior", 1)].description
         approach = next(o for o in new["options"] if o["name"] == "approach_ball")

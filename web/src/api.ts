@@ -158,3 +158,26 @@ export async function draftTest(body: unknown): Promise<TestDraft> {
   if (status === 409 || status === 422) throw new ApiError(data?.detail ?? `tests/draft: HTTP ${status}`, status, data);
   return data;
 }
+
+/// One behavior file a generation changed (`GET /api/generations/{n}/diff`).
+export interface ChangedFile {
+  program: string;
+  path: string;
+  change: "changed" | "added" | "removed";
+  /// A unified diff from the previous generation's text to this one's.
+  diff: string;
+}
+
+/// What generation `n` (a hot reload, reset, fork) changed against generation `n - 1`.
+export interface GenerationDiff {
+  number: number;
+  reason: string;
+  previous: number;
+  files: ChangedFile[];
+}
+
+/// `GET /api/generations/{n}/diff` (an ApiError with status 404 when the server keeps it no more).
+export async function generationDiff(n: number): Promise<GenerationDiff> {
+  const { data } = await request<GenerationDiff>("GET", `generations/${n}/diff`);
+  return data;
+}

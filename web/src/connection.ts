@@ -6,6 +6,7 @@
 /// connection asks for a `resync` once per generation. Commands pending when the socket closes
 /// fail at once (the caller shows the error); nothing is retried behind the user's back.
 import { Backoff } from "./backoff";
+import type { GenerationInfo } from "./messages.gen";
 import {
   type ClientMessage,
   type CommandArgs,
@@ -279,6 +280,12 @@ export class Connection {
 
   /// Frames of the server's ring buffer between behavior times t0 and t1 (ms, inclusive).
   async history(t0: number, t1: number, every = 1): Promise<Frame[]> {
+    return (await this.historyOf(t0, t1, every)).frames;
+  }
+
+  /// `history` with the generations its frames belong to (a live session: timeline times, every
+  /// generation still in the ring, the descriptions of the earlier ones).
+  async historyOf(t0: number, t1: number, every = 1): Promise<{ frames: Frame[]; generations: GenerationInfo[] }> {
     const id = this.nextId++;
     const frames = new Promise<Frame[]>((resolve, reject) => {
       this.histories.set(id, { frames: [], resolve, reject });
@@ -303,10 +310,11 @@ export class Connection {
       this.histories.delete(id);
       throw error;
     }
+    const generations = result?.generations ?? [];
     if (!result || !result.chunks) {
       this.histories.delete(id);
-      return [];
+      return { frames: [], generations };
     }
-    return frames;
+    return { frames: await frames, generations };
   }
 }

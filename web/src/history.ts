@@ -1,12 +1,14 @@
 /// The client's buffer of decoded ticks: live frames as they arrive, merged with frames of the
 /// server's ring buffer (the `history` command) so the timeline covers time before the page
-/// was opened. Ordered by `seq`; older than `windowMs` behind the newest is dropped.
+/// was opened, of every generation (reloads and resets keep the ticks before them). Ordered by
+/// `seq`; times are timeline times (`Tick.x`, which go on across resets); older than `windowMs`
+/// behind the newest is dropped.
 import type { Tick } from "./protocol";
 
 export class TickBuffer {
   private ticks: Tick[] = [];
 
-  constructor(public windowMs = 60_000) {}
+  constructor(public windowMs = 120_000) {}
 
   get length(): number {
     return this.ticks.length;
@@ -50,26 +52,26 @@ export class TickBuffer {
   private trim(): void {
     const newest = this.newest;
     if (!newest) return;
-    const limit = newest.t - this.windowMs;
+    const limit = newest.x - this.windowMs;
     let drop = 0;
-    while (drop < this.ticks.length && (this.ticks[drop] as Tick).t < limit) drop++;
+    while (drop < this.ticks.length && (this.ticks[drop] as Tick).x < limit) drop++;
     if (drop) this.ticks.splice(0, drop);
   }
 
-  /// Index of the last tick with `t <= time` (0 when time is before the first).
+  /// Index of the last tick with `x <= time` (0 when time is before the first).
   indexAt(time: number): number {
     let lo = 0;
     let hi = this.ticks.length - 1;
     if (hi < 0) return -1;
     while (lo < hi) {
       const mid = (lo + hi + 1) >> 1;
-      if ((this.ticks[mid] as Tick).t <= time) lo = mid;
+      if ((this.ticks[mid] as Tick).x <= time) lo = mid;
       else hi = mid - 1;
     }
     return lo;
   }
 
-  /// The tick shown at behavior time `time`.
+  /// The tick shown at timeline time `time`.
   at(time: number): Tick | null {
     const i = this.indexAt(time);
     return i >= 0 ? (this.ticks[i] as Tick) : null;
@@ -88,10 +90,26 @@ export class TickBuffer {
     return null;
   }
 
-  /// Ticks with `t0 <= t <= t1`.
-  range(t0: number, t1: number): Tick[] {
+  /// Ticks with timeline times `x0 <= x <= x1`.
+  range(x0: number, x1: number): Tick[] {
     const out: Tick[] = [];
-    for (const t of this.ticks) if (t.t >= t0 && t.t <= t1) out.push(t);
+    for (const t of this.ticks) if (t.x >= x0 && t.x <= x1) out.push(t);
     return out;
+  }
+
+  /// The first buffered tick of each generation after the oldest buffered one (where a reload,
+  /// reset or fork started it), oldest first.
+  starts(): Tick[] {
+    const out: Tick[] = [];
+    for (let i = 1; i < this.ticks.length; i++) {
+      const tick = this.ticks[i] as Tick;
+      if (tick.gen !== (this.ticks[i - 1] as Tick).gen) out.push(tick);
+    }
+    return out;
+  }
+
+  /// Drop the ticks of generations `keep` says no to (their description is unknown).
+  retain(keep: (gen: number) => boolean): void {
+    this.ticks = this.ticks.filter((t) => keep(t.gen));
   }
 }

@@ -28,7 +28,8 @@ import { ProblemBanner } from "./panels/banner";
 import { Session, type SessionEvent } from "./session";
 import { h, isTyping, toast } from "./ui";
 
-const HISTORY_MS = 60_000;
+/// The server's ring buffer holds 120 s; the page keeps as much (every generation in it).
+const HISTORY_MS = 120_000;
 
 function main(): void {
   const app = document.getElementById("app") as HTMLElement;
@@ -45,7 +46,9 @@ function main(): void {
         void optionView.breakpoints.refresh();
         // Fill the timeline with what the server buffered before we came (or before a reload);
         // a replay: with the whole recording.
-        const t = hello.session.t;
+        const t = hello.session.t + (hello.session.offset ?? 0); // timeline time
+        // After a reload or reset the buffer holds the earlier ticks already: fetch only the gap.
+        const from = hello.reason === "connect" ? t - HISTORY_MS : Math.min(t, session.buffer.newest?.x ?? t - HISTORY_MS);
         void connection
           .command("status", {})
           .then((status) => replayOf(status as Record<string, unknown>))
@@ -53,7 +56,7 @@ function main(): void {
           .then((replay) =>
             replay
               ? loadReplay(connection, session, replay)
-              : connection.history(Math.max(0, t - HISTORY_MS), t, 1).then((frames) => session.applyHistory(frames)),
+              : connection.historyOf(Math.max(0, from), t, 1).then((h) => session.applyHistory(h.frames, h.generations)),
           )
           .catch(() => undefined);
       },
@@ -264,7 +267,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 

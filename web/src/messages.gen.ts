@@ -178,6 +178,25 @@ export interface Frame {
   status?: Record<string, unknown> | null;
 }
 
+/**
+ * A generation whose ticks a `history` answer holds (docs/protocol.md "history").
+ *
+ * `structure` and `scene` (as in its hello) are sent for every generation but the current
+ * one, whose hello the client has; `offset` is what the timeline adds to its ticks' `t`;
+ * `seq`, `t`: its first tick still in the ring buffer; `changed_files`: the behavior files
+ * whose text differs from the previous generation's (`GET /api/generations/{number}/diff`).
+ */
+export interface GenerationInfo {
+  number: number;
+  reason: HelloReason;
+  offset: number;
+  seq: number;
+  t: number;
+  changed_files: string[];
+  structure?: Structure | null;
+  scene?: Record<string, unknown> | null;
+}
+
 /** Sent on connect, after every reload and reset, and in answer to `resync`: the ids from now on. */
 export interface Hello {
   type: "hello";
@@ -208,10 +227,11 @@ export interface HistoryChunk {
   frames: Frame[];
 }
 
-/** The result of `history`: how many frames and chunks follow. */
+/** The result of `history`: how many frames and chunks follow, and the generations they belong to. */
 export interface HistoryResult {
   frames: number;
   chunks: number;
+  generations?: GenerationInfo[];
 }
 
 /** The last transition of the option up to the explained tick: when, from where to where, why. */
@@ -404,6 +424,7 @@ export interface SessionInfo {
   seq: number;
   t: number;
   token_required: boolean;
+  offset?: number;
 }
 
 /**

@@ -226,6 +226,9 @@ export interface Tick {
   seq: number;
   gen: number;
   t: number;
+  /// Timeline time (ms): `t` plus its generation's offset, so it goes on across resets (the
+  /// world's clock restarts, the timeline does not); the session sets it, the decoder copies `t`.
+  x: number;
   wall: number;
   robots: RobotState[];
   scene: DynamicScene | null;
@@ -268,6 +271,7 @@ export class FrameDecoder {
       seq: frame.seq,
       gen: frame.gen,
       t: frame.t,
+      x: frame.t,
       wall: frame.wall,
       robots,
       scene: frame.scene ?? prev?.scene ?? null,

@@ -1,7 +1,8 @@
 import { describe, expect, it } from "vitest";
-import { indexDescription } from "../src/description";
+import { type BehaviorDescription, indexDescription } from "../src/description";
 import { TickBuffer } from "../src/history";
-import { FrameDecoder, type Tick } from "../src/protocol";
+import { FrameDecoder, type Hello, type Tick } from "../src/protocol";
+import type { GenerationInfo } from "../src/messages.gen";
 import { Session } from "../src/session";
 import { buildRobotTimeline, buildTeamTimeline } from "../src/timeline";
 import { description, frame, hello, playPath } from "./fake";
@@ -100,5 +101,103 @@ describe("Session", () => {
     s.applyFrame(frame(10, 250, [{ id: 0, path: playPath(1) }], true, 3));
     s.applyHistory([frame(8, 200, [{ id: 0, path: playPath(0) }], true, 3), frame(9, 225, [{ id: 0, path: playPath(0) }], false, 3), frame(7, 175, [], true, 2)]);
     expect(s.buffer.all.map((t) => t.seq)).toEqual([8, 9, 10]);
+  });
+});
+
+describe("history across generations", () => {
+  /// The demo description with option `play` renamed and the ids of play's states reversed.
+  function edited(): BehaviorDescription {
+    const d = structuredClone(description) as BehaviorDescription & { options: Array<{ id: number; name: string; states: Array<{ id: number; name: string }> }> };
+    const play = d.options.find((o) => o.id === 1);
+    if (!play) throw new Error("the demo has no option 1");
+    play.name = "play_edited";
+    play.states = play.states.map((s, i, all) => ({ ...s, id: all.length - 1 - i })).reverse();
+    return d as BehaviorDescription;
+  }
+
+  function next(generation: number, reason: "reload" | "reset", offset = 0, programs = { behavior: edited() }): Hello {
+    const h = hello(generation);
+    return { ...h, reason, session: { ...h.session, offset }, structure: { ...h.structure, programs } };
+  }
+
+  it("keeps the ticks of a reload's previous generation and reads each tick with its own ids", () => {
+    const s = new Session();
+    s.applyHello(hello(1));
+    s.applyFrame(frame(1, 0, [{ id: 0, path: playPath(0) }], true));
+    s.applyFrame(frame(2, 25, [{ id: 0, path: playPath(0) }]));
+    s.applyHello(next(2, "reload"));
+    s.applyFrame(frame(3, 25, [{ id: 0, path: playPath(0) }], true, 2));
+    s.applyFrame(frame(4, 50, [{ id: 0, path: playPath(0) }], false, 2));
+    expect(s.buffer.all.map((t) => [t.seq, t.gen])).toEqual([[1, 1], [2, 1], [3, 2], [4, 2]]);
+    expect(s.buffer.starts().map((t) => t.seq)).toEqual([3]);
+    expect(s.generations.get(2)?.reason).toBe("reload");
+    const stateName = (): string | undefined => {
+      const node = s.robotInView()?.path[0];
+      return node?.kind === "option" ? s.indexOf(0)?.optionById.get(node.option)?.states[node.state]?.name : undefined;
+    };
+    expect(s.indexOf(0)?.optionById.get(1)?.name).toBe("play_edited");
+    const live = stateName();
+    s.takeChanges();
+    s.setCursor(10);
+    expect(s.view?.seq).toBe(1);
+    expect(s.shownGeneration?.number).toBe(1);
+    expect(s.indexOf(0)?.optionById.get(1)?.name).toBe("play");
+    expect(stateName()).toBe("wait");
+    expect(live).not.toBe("wait"); // the same state id names another state in the edited behavior
+    expect(s.takeChanges().has("hello")).toBe(true); // panels rebuild with the old ids
+    expect(s.currentIds(0).option(1)).toBe(-1); // "play" is gone from the current generation
+    expect(s.currentIds(0).option(0)).toBe(0); // approach_ball kept its name and id
+    s.setCursor(null);
+    expect(s.indexOf(0)?.optionById.get(1)?.name).toBe("play_edited");
+    const rows = buildRobotTimeline(s.buffer.all, 0, (gen) => s.indexIn(gen, 0));
+    expect(rows.map((r) => r.label).slice(0, 2)).toEqual(["play", "play_edited"]);
+  });
+
+  it("puts a reset's ticks after the earlier ones on the timeline (x = t + offset)", () => {
+    const s = new Session();
+    s.applyHello(hello(1));
+    s.applyFrame(frame(1, 0, [{ id: 0, path: playPath(0) }], true));
+    s.applyFrame(frame(2, 25, [{ id: 0, path: playPath(1) }]));
+    s.applyHello(next(2, "reset", 50, { behavior: description }));
+    s.applyFrame(frame(3, 0, [{ id: 0, path: playPath(2) }], true, 2));
+    s.applyFrame(frame(4, 25, [{ id: 0, path: playPath(2) }], false, 2));
+    expect(s.buffer.all.map((t) => [t.t, t.x])).toEqual([[0, 0], [25, 25], [0, 50], [25, 75]]);
+    s.setCursor(30);
+    expect(s.view?.seq).toBe(2);
+    s.setCursor(60);
+    expect(s.view?.seq).toBe(3);
+    expect(s.buffer.range(40, 100).map((t) => t.seq)).toEqual([3, 4]);
+    // A server time (a breakpoint hit, a fact): of the current generation, or of its tick's seq.
+    s.seekTick(25);
+    expect(s.view?.seq).toBe(4);
+    s.seekTick(25, 2);
+    expect(s.view?.seq).toBe(2);
+  });
+
+  it("takes earlier generations' descriptions from a history answer and drops ticks it cannot read", () => {
+    const s = new Session();
+    s.applyHello(next(3, "reload"));
+    s.applyFrame(frame(10, 250, [{ id: 0, path: playPath(1) }], true, 3));
+    const info = (number: number, reason: "connect" | "reload", withStructure: boolean): GenerationInfo => ({
+      number,
+      reason,
+      offset: 0,
+      seq: 0,
+      t: 0,
+      changed_files: reason === "reload" ? ["options/play.xabsl"] : [],
+      ...(withStructure ? { structure: hello(number).structure as unknown as GenerationInfo["structure"], scene: hello(number).scene as unknown as Record<string, unknown> } : {}),
+    });
+    s.applyHistory(
+      [frame(7, 175, [{ id: 0, path: playPath(0) }], true, 2), frame(8, 200, [{ id: 0, path: playPath(0) }], false, 2), frame(5, 100, [], true, 1), frame(9, 225, [{ id: 0, path: playPath(1) }], true, 3)],
+      [info(2, "connect", true), info(3, "reload", false)],
+    );
+    expect(s.buffer.all.map((t) => t.seq)).toEqual([7, 8, 9, 10]); // generation 1 is unknown
+    expect(s.generations.get(3)?.changedFiles).toEqual(["options/play.xabsl"]);
+    expect(s.indexIn(2, 0)?.optionById.get(1)?.name).toBe("play");
+    expect(s.indexIn(3, 0)?.optionById.get(1)?.name).toBe("play_edited");
+    // A reconnect may be another server: it starts over.
+    s.applyHello(hello(1));
+    expect(s.buffer.length).toBe(0);
+    expect([...s.generations.keys()]).toEqual([1]);
   });
 });

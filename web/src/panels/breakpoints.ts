@@ -250,7 +250,7 @@ export class BreakpointsPanel {
     if (!batch.robots.includes(event.robot)) batch.robots.push(event.robot);
     if (!batch.descriptions.includes(event.description)) batch.descriptions.push(event.description);
     if (!batch.robots.includes(this.session.selectedRobot) || batch.robots.length === 1) this.session.selectRobot(batch.robots[0] as number);
-    this.session.setCursor(event.t);
+    this.session.seekTick(event.t, event.seq);
     clearTimeout(this.toastTimer);
     this.toastTimer = window.setTimeout(() => {
       const names = batch.robots.map((r) => this.session.robotInfo(r)?.name ?? `robot ${r}`).join(", ");
@@ -281,7 +281,7 @@ export class BreakpointsPanel {
   /// "Save as test" of hit `hit`: the robot at the hit's tick, the breakpoint named for the server.
   async saveAsTest(hit: Hit): Promise<void> {
     this.session.selectRobot(hit.robot);
-    this.session.setCursor(hit.t);
+    this.session.seekTick(hit.t, hit.seq);
     const state = this.session.robotInView();
     const index = this.session.indexOf(hit.robot);
     const name = this.session.robotInfo(hit.robot)?.name;

@@ -123,7 +123,7 @@ export class CoveragePanel {
           {},
           h(
             "button",
-            { title: `left at tick ${o.left_seq}, back at ${o.reentered_seq}`, onclick: () => this.session.setCursor(o.left_t) },
+            { title: `left at tick ${o.left_seq}, back at ${o.reentered_seq}`, onclick: () => this.session.seekTick(o.left_t, o.left_seq) },
             `${o.option}${o.state ? `.${o.state}` : ""}${o.via.length ? ` via ${o.via.join(" → ")}` : ""}: away ${o.away_ms.toFixed(0)} ms at ${(o.left_t / 1000).toFixed(1)} s`,
           ),
         ),

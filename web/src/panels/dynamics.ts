@@ -112,7 +112,7 @@ export class DynamicsPanel {
   private ticks(): Tick[] {
     const newest = this.session.buffer.newest;
     const span = Number(this.windowSelect.value) * 1000;
-    return newest ? this.session.buffer.range(newest.t - span, newest.t) : [];
+    return newest ? this.session.buffer.range(newest.x - span, newest.x) : [];
   }
 
   private draw(force: boolean): void {
@@ -122,7 +122,7 @@ export class DynamicsPanel {
     this.lastDraw = now;
     const dd = this.dd;
     const ticks = this.ticks();
-    const xs = ticks.map((t) => t.t / 1000);
+    const xs = ticks.map((t) => t.x / 1000);
     const scenes = ticks.map((t) => t.scene as DDScene | null);
     // α of every behavior.
     this.chart(

@@ -163,8 +163,8 @@ export class FactsPanel {
     const muted = style.getPropertyValue("--grid").trim() || "rgba(128,128,128,0.2)";
     ctx.font = "11px ui-monospace, monospace";
     if (!ticks.length) return;
-    this.t0 = (ticks[0] as Tick).t;
-    this.t1 = Math.max(this.t0 + 1, (ticks[ticks.length - 1] as Tick).t);
+    this.t0 = (ticks[0] as Tick).x;
+    this.t1 = Math.max(this.t0 + 1, (ticks[ticks.length - 1] as Tick).x);
     const plotW = width - LABEL_W - 4;
     const xOf = (t: number): number => LABEL_W + ((t - this.t0) / (this.t1 - this.t0)) * plotW;
     let agree = 0;
@@ -180,8 +180,8 @@ export class FactsPanel {
       const tick = ticks[i] as Tick;
       const scene = tick.scene as DDScene | null;
       if (!scene?.facts || !scene.truth) continue;
-      const x0 = xOf(tick.t);
-      const x1 = i + 1 < ticks.length ? xOf((ticks[i + 1] as Tick).t) : x0 + 1;
+      const x0 = xOf(tick.x);
+      const x1 = i + 1 < ticks.length ? xOf((ticks[i + 1] as Tick).x) : x0 + 1;
       const derived = new Set(scene.facts);
       const truth = new Set(scene.truth);
       const tentative = new Set(scene.tentative ?? []);
@@ -241,7 +241,7 @@ export class FactsPanel {
               title: "Why, and go to this moment",
               onclick: () => {
                 this.selectedEvent = e;
-                this.session.setCursor(e.t);
+                this.session.seekTick(e.t);
                 this.listKey = "";
                 this.drawList();
               },

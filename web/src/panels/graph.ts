@@ -159,19 +159,22 @@ export class GraphPanel {
     const parents = pathParents(path);
     let deepest: string | null = null;
     let deepestDepth = -1;
+    // The graph is the current generation's: a tick before a reload is shown by option names.
+    const to = this.session.currentIds(this.session.selectedRobot);
+    const optionOf = (n: { option: number }): number => to.option(n.option);
     path.forEach((n, i) => {
-      const id = n.kind === "option" ? `option_${n.option}` : `behavior_${n.behavior}`;
+      const id = n.kind === "option" ? `option_${optionOf(n)}` : `behavior_${to.behavior(n.behavior)}`;
       ids.push(id);
       if (n.kind === "option" && n.depth > deepestDepth) {
         deepest = id;
         deepestDepth = n.depth;
       }
       const parent = path[parents[i] ?? -1];
-      if (parent?.kind === "option") ids.push(`call_${parent.option}_${n.kind === "option" ? `o${n.option}` : `b${n.behavior}`}`);
+      if (parent?.kind === "option") ids.push(`call_${optionOf(parent)}_${n.kind === "option" ? `o${optionOf(n)}` : `b${to.behavior(n.behavior)}`}`);
     });
     this.deepest = deepest;
     this.view.setClasses("active", ids);
     const root = path[0];
-    this.view.setClasses("root", root ? [root.kind === "option" ? `option_${root.option}` : `behavior_${root.behavior}`] : []);
+    this.view.setClasses("root", root ? [root.kind === "option" ? `option_${optionOf(root)}` : `behavior_${to.behavior(root.behavior)}`] : []);
   }
 }

@@ -177,7 +177,7 @@ export class PlanPanel {
     }
     const items: Array<[number, HTMLElement]> = this.interventions.map((i) => [
       i.t,
-      h("li.plan-intervention", { "data-t": i.t }, h("button.link", { title: "Go to this moment", onclick: () => this.session.setCursor(i.t) }, seconds(i.t)), ` by hand: ${i.what}`),
+      h("li.plan-intervention", { "data-t": i.t }, h("button.link", { title: "Go to this moment", onclick: () => this.session.seekTick(i.t) }, seconds(i.t)), ` by hand: ${i.what}`),
     ]);
     for (const v of this.versions) {
       items.push([
@@ -187,7 +187,7 @@ export class PlanPanel {
           { class: `plan-version${v === shown ? " shown" : ""}`, "data-version": v.version },
           h("button.link", { title: "Show this version", onclick: () => { this.picked = v.version === this.picked ? null : v.version; this.drawnKey = ""; this.draw(); } }, `v${v.version}`),
           " ",
-          h("button.link", { title: "Go to this moment", onclick: () => this.session.setCursor(v.t) }, seconds(v.t)),
+          h("button.link", { title: "Go to this moment", onclick: () => this.session.seekTick(v.t) }, seconds(v.t)),
           ` ${v.kind} (${v.reason}): ${v.detail}`,
         ),
       ]);

@@ -1,6 +1,8 @@
 /// Plots of pinned symbols over the last N seconds of buffered ticks (uPlot), several series,
 /// with the timeline cursor drawn as a vertical line. Enum and boolean values plot as their
-/// numbers (element index, 0/1). Redrawn at most ~15 times a second.
+/// numbers (element index, 0/1). Redrawn at most ~15 times a second. The x axis is timeline
+/// time, across hot reloads and resets; a pin names a symbol by its id in the current
+/// generation, and ticks of earlier generations are read by that symbol's name in theirs.
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { Session, SessionEvent } from "../session";
@@ -24,11 +26,13 @@ export class PlotPanel {
   private pins: Pin[] = [];
   private plotKey = "";
   private lastDraw = 0;
+  /// Symbol ids of pins in earlier generations (`idIn`).
+  private readonly ids = new Map<string, number | null>();
 
   constructor(private readonly session: Session) {
     this.host = h("div.plot-host");
     this.legend = h("div.plot-legend");
-    this.seconds = h("select", { "aria-label": "Plot window", title: "Seconds shown" }, ...[10, 20, 30, 60].map((s) => h("option", { value: s }, `${s} s`)));
+    this.seconds = h("select", { "aria-label": "Plot window", title: "Seconds shown" }, ...[10, 20, 30, 60, 120].map((s) => h("option", { value: s }, `${s} s`)));
     this.seconds.value = "20";
     this.seconds.addEventListener("change", () => this.draw(true));
     this.element = h("div.panel.plot-panel", {}, h("div.toolbar", {}, h("strong", {}, "Plot"), this.seconds, this.legend), this.host);
@@ -58,7 +62,7 @@ export class PlotPanel {
 
   private label(p: Pin): string {
     const s = this.session;
-    const index = s.indexOf(p.robot);
+    const index = s.hello ? s.indexIn(s.hello.generation, p.robot) : s.indexOf(p.robot); // pins hold current ids
     const list = p.kind === "input" ? index?.description.inputs : index?.description.outputs;
     const name = list?.find((x) => x.id === p.id)?.name ?? `${p.kind} ${p.id}`;
     return `${s.robotInfo(p.robot)?.name ?? p.robot}: ${name}`;
@@ -133,16 +137,34 @@ export class PlotPanel {
   private data(): uPlot.AlignedData {
     const newest = this.session.buffer.newest;
     const window = Number(this.seconds.value) * 1000;
-    const ticks = newest ? this.session.buffer.range(newest.t - window, newest.t) : [];
-    const xs = ticks.map((t) => t.t / 1000);
+    const ticks = newest ? this.session.buffer.range(newest.x - window, newest.x) : [];
+    const xs = ticks.map((t) => t.x / 1000);
     const series = this.pins.map((p) =>
       ticks.map((t) => {
         const robot = t.robots.find((a) => a.id === p.robot);
-        const v = (p.kind === "input" ? robot?.inputs : robot?.outputs)?.[p.id];
+        const id = this.idIn(t.gen, p);
+        if (id === null) return null;
+        const v = (p.kind === "input" ? robot?.inputs : robot?.outputs)?.[id];
         return v === undefined ? null : typeof v === "boolean" ? (v ? 1 : 0) : v;
       }),
     );
     return [xs, ...series] as uPlot.AlignedData;
+  }
+
+  /// The id of pin `p`'s symbol in generation `gen` (by name; null: it has none there).
+  private idIn(gen: number, p: Pin): number | null {
+    const current = this.session.hello?.generation;
+    if (gen === current || current === undefined) return p.id;
+    const key = `${gen}|${current}|${p.robot}|${p.kind}|${p.id}`;
+    let id = this.ids.get(key);
+    if (id === undefined) {
+      const list = (index: ReturnType<Session["indexIn"]>) => (p.kind === "input" ? index?.description.inputs : index?.description.outputs);
+      const name = list(this.session.indexIn(current, p.robot))?.find((x) => x.id === p.id)?.name;
+      id = name === undefined ? null : (list(this.session.indexIn(gen, p.robot))?.find((x) => x.name === name)?.id ?? null);
+      if (this.ids.size > 1000) this.ids.clear();
+      this.ids.set(key, id);
+    }
+    return id;
   }
 
   private draw(force: boolean): void {
@@ -158,5 +180,12 @@ export class PlotPanel {
     if (!force && now - this.lastDraw < 66) return;
     this.lastDraw = now;
     this.plot?.setData(this.data());
+  }
+
+  /// What the plot shows now: x (timeline seconds) and one array of values per pin (tests, tools).
+  points(): { x: number[]; series: Array<Array<number | null>> } {
+    const data = this.plot?.data;
+    if (!data) return { x: [], series: [] };
+    return { x: Array.from(data[0] as ArrayLike<number>), series: data.slice(1).map((s) => Array.from(s as ArrayLike<number | null>)) };
   }
 }

@@ -2,15 +2,25 @@
 /// robot (the team overview: root option and state) and one row per option of the selected robot,
 /// coloured by state. Click or drag to scrub: every panel shows that moment. ←/→ step a tick
 /// (Shift: ten), Home goes to the oldest, End or L back to live.
+///
+/// The history goes across hot reloads and resets (timeline times, `Tick.x`): each new
+/// generation is marked on the axis by its reason (reload, reset, fork, ...); clicking a mark
+/// shows what changed (panels/changes.ts).
 import { buildRobotTimeline, buildTeamTimeline, segmentHue, type TimelineRow } from "../timeline";
 import type { Session, SessionEvent } from "../session";
 import { formatClock, formatMs, h } from "../ui";
+import { ChangesDialog, type Mark } from "./changes";
 
 const LABEL_W = 150;
 const AXIS_H = 18;
 const TEAM_ROW = 13;
 const OPTION_ROW = 17;
 const GAP = 16;
+/// Colours of generation marks by reason (others: MARK_OTHER).
+const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726" };
+const MARK_OTHER = "#ab47bc";
+/// The letter on a mark's flag by reason (others: the reason's first letter).
+const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0" };
 
 export class TimelinePanel {
   readonly element: HTMLElement;
@@ -27,7 +37,11 @@ export class TimelinePanel {
   private width = 300;
   private dirty = true;
   /// Breakpoint hits, marked on the axis (red) at their time.
-  private hits: ReadonlyArray<{ t: number; robot: number; description: string }> = [];
+  private hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }> = [];
+  /// Where a generation started in the buffered history (timeline time), as drawn.
+  private marks: Array<Mark & { x: number }> = [];
+  /// The dialog a click on a mark opens (in the page once the first mark is clicked).
+  readonly changes = new ChangesDialog();
 
   constructor(
     private readonly session: Session,
@@ -47,7 +61,7 @@ export class TimelinePanel {
   }
 
   /// Mark breakpoint hits (a red triangle and line at each hit's time).
-  markHits(hits: ReadonlyArray<{ t: number; robot: number; description: string }>): void {
+  markHits(hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }>): void {
     this.hits = hits;
     this.dirty = true;
   }
@@ -56,7 +70,7 @@ export class TimelinePanel {
     const n = ev.shiftKey ? 10 : 1;
     if (ev.key === "ArrowLeft") this.session.stepCursor(-n);
     else if (ev.key === "ArrowRight") this.session.stepCursor(n);
-    else if (ev.key === "Home") this.session.setCursor(this.session.buffer.oldest?.t ?? null);
+    else if (ev.key === "Home") this.session.setCursor(this.session.buffer.oldest?.x ?? null);
     else if (ev.key === "End") this.session.setCursor(null);
     else return;
     ev.preventDefault();
@@ -75,6 +89,13 @@ export class TimelinePanel {
       this.clickLabel(y);
       return;
     }
+    if (y < AXIS_H) {
+      const mark = this.markAt(x);
+      if (mark) {
+        this.openMark(mark);
+        return;
+      }
+    }
     this.session.setCursor(this.timeAt(x));
     this.canvas.setPointerCapture(ev.pointerId);
     const move = (e: PointerEvent): void => this.session.setCursor(this.timeAt(e.clientX - this.canvas.getBoundingClientRect().left));
@@ -84,6 +105,26 @@ export class TimelinePanel {
     };
     this.canvas.addEventListener("pointermove", move);
     this.canvas.addEventListener("pointerup", up);
+  }
+
+  /// The mark drawn within a few pixels of `x` on the axis.
+  private markAt(x: number): Mark | null {
+    let best: (Mark & { x: number }) | null = null;
+    for (const m of this.marks) {
+      const px = this.xOf(m.x);
+      if (Math.abs(px - x) <= 7 && (!best || Math.abs(px - x) < Math.abs(this.xOf(best.x) - x))) best = m;
+    }
+    return best;
+  }
+
+  /// Show what the generation of `mark` changed.
+  openMark(mark: Mark): void {
+    if (!this.changes.element.isConnected) document.body.append(this.changes.element);
+    void this.changes.show(mark, formatClock);
+  }
+
+  private xOf(t: number): number {
+    return LABEL_W + ((t - this.t0) / Math.max(1, this.t1 - this.t0)) * (this.width - LABEL_W - 6);
   }
 
   private clickLabel(y: number): void {
@@ -112,10 +153,17 @@ export class TimelinePanel {
     if (structural || (changes.has("tick") && session.isLive && now - this.builtAt > 250)) {
       this.builtAt = now;
       const ticks = session.buffer.all;
-      this.team = buildTeamTimeline(ticks, session.robots.filter((a) => a.program !== null), (id) => session.indexOf(id));
-      this.rows = buildRobotTimeline(ticks, session.selectedRobot, session.indexOf(session.selectedRobot));
-      this.t0 = session.buffer.oldest?.t ?? 0;
-      this.t1 = Math.max(this.t0 + 1, session.buffer.newest?.t ?? 1);
+      const indexes = new Map<number, ReturnType<Session["indexIn"]>>(); // per generation and robot, once per build
+      const indexIn = (gen: number, id: number): ReturnType<Session["indexIn"]> => {
+        const key = gen * 65536 + id;
+        if (!indexes.has(key)) indexes.set(key, session.indexIn(gen, id));
+        return indexes.get(key) ?? null;
+      };
+      this.team = buildTeamTimeline(ticks, session.robots.filter((a) => a.program !== null), (id, gen) => indexIn(gen, id));
+      this.rows = buildRobotTimeline(ticks, session.selectedRobot, (gen) => indexIn(gen, session.selectedRobot));
+      this.t0 = session.buffer.oldest?.x ?? 0;
+      this.t1 = Math.max(this.t0 + 1, session.buffer.newest?.x ?? 1);
+      this.marks = session.buffer.starts().map((tick) => ({ gen: tick.gen, reason: session.generations.get(tick.gen)?.reason ?? "reload", t: tick.t, x: tick.x }));
       this.dirty = true;
     }
     if (changes.has("cursor")) this.dirty = true;
@@ -203,8 +251,9 @@ export class TimelinePanel {
     ctx.fillStyle = "#e53935";
     ctx.strokeStyle = "rgba(229,57,53,0.6)";
     for (const hit of this.hits) {
-      if (hit.t < this.t0 || hit.t > this.t1) continue;
-      const x = xOf(hit.t);
+      const at = (hit.seq !== undefined ? session.buffer.bySeq(hit.seq)?.x : undefined) ?? hit.t;
+      if (at < this.t0 || at > this.t1) continue;
+      const x = xOf(at);
       ctx.beginPath();
       ctx.moveTo(x - 5, 0);
       ctx.lineTo(x + 5, 0);
@@ -217,6 +266,26 @@ export class TimelinePanel {
       ctx.stroke();
     }
     this.canvas.dataset.hits = String(this.hits.length);
+    // Generation marks: a flag on the axis and a dashed line, coloured by reason.
+    const drawn: Array<{ gen: number; reason: string; px: number }> = [];
+    for (const mark of this.marks) {
+      const x = xOf(mark.x);
+      const color = MARK_COLORS[mark.reason] ?? MARK_OTHER;
+      ctx.fillStyle = color;
+      ctx.strokeStyle = color;
+      ctx.fillRect(x - 5, 1, 10, AXIS_H - 4);
+      ctx.fillStyle = "#fff";
+      ctx.fillText(MARK_LETTERS[mark.reason] ?? mark.reason.charAt(0).toUpperCase(), x - 3, AXIS_H / 2 - 1);
+      ctx.setLineDash([3, 3]);
+      ctx.beginPath();
+      ctx.moveTo(x, AXIS_H - 3);
+      ctx.lineTo(x, height);
+      ctx.stroke();
+      ctx.setLineDash([]);
+      drawn.push({ gen: mark.gen, reason: mark.reason, px: Math.round(x) });
+    }
+    // For tests and tools: where the marks are (canvas pixels).
+    this.canvas.dataset.marks = JSON.stringify(drawn);
     const cursor = session.cursor;
     if (cursor !== null) {
       const x = xOf(cursor);
@@ -229,6 +298,8 @@ export class TimelinePanel {
       ctx.lineWidth = 1;
     }
     const tick = session.view;
-    this.info.textContent = `${formatMs(this.t1 - this.t0)} buffered${tick ? ` · showing t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
+    const n = this.marks.length;
+    const reloads = n ? ` · ${n} reload${n === 1 ? "" : "s"} or reset${n === 1 ? "" : "s"}: click ${n === 1 ? "its" : "a"} mark on the axis to see what changed` : "";
+    this.info.textContent = `${formatMs(this.t1 - this.t0)} buffered${reloads}${tick ? ` · showing t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
   }
 }
