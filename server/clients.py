@@ -319,7 +319,7 @@ class Hub:
             t=latest.t if latest else 0,
             token_required=self.token_required,
         )
-        return encode_hello(reason, gen.number, info, gen.structure_bytes, gen.scene_bytes)
+        return encode_hello(reason, gen.number, info, gen.structure_bytes, gen.scene_bytes, session.fork)
 
     token_required = False
 
