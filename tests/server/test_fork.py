@@ -275,11 +275,17 @@ def test_fork_over_the_websocket_announces_the_fork_and_serves_the_original(socc
         body = answer.json()
         assert body["t"] == frame["t"] and body["seq"] < reply["result"]["start"]
         assert body["fork"] == hello["fork"]
-        # Unchanged behavior: the original's path is the fork's (compared by name).
-        options = {o["id"]: o["name"] for o in hello["structure"]["programs"]["behavior"]["options"]}
-        own = [options[n[2]] for n in frame["robots"][0]["path"] if n[0] == 0]
-        assert own[0] == "play_soccer"
-        assert [n["option"] for n in body["robots"][0]["path"] if "option" in n] == own
+        # Unchanged behavior: the original's paths are the fork's (compared by name), every robot.
+        structure = hello["structure"]
+        roots = set()
+        for robot in frame["robots"]:
+            program = structure["programs"][structure["robots"][robot["id"]]["program"]]
+            options = {o["id"]: o for o in program["options"]}
+            own = [(options[n[2]]["name"], options[n[2]]["states"][n[3]]["name"]) for n in robot["path"] if n[0] == 0]
+            theirs = [(n["option"], n["state"]) for n in body["robots"][robot["id"]]["path"] if "option" in n]
+            assert own and own == theirs
+            roots.add(own[0][0])
+        assert roots == {"play_soccer", "chase_play"}
         refused = client.command("fork", seq=0)
         assert refused["ok"] is False and "not in the history" in refused["error"]
         assert http.get("/api/fork/original", params={"seq": 1}).status_code == 404

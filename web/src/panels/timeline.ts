@@ -28,6 +28,10 @@ export class TimelinePanel {
   private dirty = true;
   /// Breakpoint hits, marked on the axis (red) at their time.
   private hits: ReadonlyArray<{ t: number; robot: number; description: string }> = [];
+  /// Where the running world was forked ("Run from here", panels/fork.ts): marked at its time.
+  private fork: number | null = null;
+  /// The toolbar, for controls of other modules (panels/fork.ts).
+  readonly toolbar: HTMLElement;
 
   constructor(
     private readonly session: Session,
@@ -38,7 +42,8 @@ export class TimelinePanel {
     this.liveButton = h("button.live", { title: "Back to live (L or End)", onclick: () => this.session.setCursor(null) }, "● Live");
     this.info = h("span.muted");
     this.scroller = h("div.timeline-scroll", {}, this.canvas);
-    this.element = h("div.panel.timeline-panel", {}, h("div.toolbar", {}, h("strong", {}, "Timeline"), this.liveButton, this.info), this.scroller);
+    this.toolbar = h("div.toolbar", {}, h("strong", {}, "Timeline"), this.liveButton, this.info);
+    this.element = h("div.panel.timeline-panel", {}, this.toolbar, this.scroller);
     this.canvas.addEventListener("pointerdown", (ev) => this.pointer(ev));
     this.canvas.addEventListener("keydown", (ev) => this.key(ev));
     new ResizeObserver(() => {
@@ -49,6 +54,13 @@ export class TimelinePanel {
   /// Mark breakpoint hits (a red triangle and line at each hit's time).
   markHits(hits: ReadonlyArray<{ t: number; robot: number; description: string }>): void {
     this.hits = hits;
+    this.dirty = true;
+  }
+
+  /// Mark the fork point (a violet line at its time; null: no fork).
+  markFork(t: number | null): void {
+    if (t === this.fork) return;
+    this.fork = t;
     this.dirty = true;
   }
 
@@ -217,6 +229,18 @@ export class TimelinePanel {
       ctx.stroke();
     }
     this.canvas.dataset.hits = String(this.hits.length);
+    if (this.fork !== null && this.fork >= this.t0 && this.fork <= this.t1) {
+      const x = xOf(this.fork);
+      ctx.fillStyle = ctx.strokeStyle = "#9c6ade";
+      ctx.fillText("⑂", x + 3, 7);
+      ctx.setLineDash([4, 3]);
+      ctx.beginPath();
+      ctx.moveTo(x, 0);
+      ctx.lineTo(x, height);
+      ctx.stroke();
+      ctx.setLineDash([]);
+    }
+    this.canvas.dataset.fork = this.fork === null ? "" : String(this.fork);
     const cursor = session.cursor;
     if (cursor !== null) {
       const x = xOf(cursor);
