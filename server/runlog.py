@@ -82,7 +82,18 @@ class RunLog:
         offset: ``seq - v`` for the run's own samples.
     """
 
-    __slots__ = ("_anchor_ticks", "_anchor_v", "end", "events", "full_at", "offset", "programs", "seed", "start")
+    __slots__ = (
+        "_anchor_ticks",
+        "_anchor_v",
+        "end",
+        "events",
+        "full_at",
+        "offset",
+        "problem",
+        "programs",
+        "seed",
+        "start",
+    )
 
     def __init__(self, seed: int, programs: Programs, start: int, offset: int = 0) -> None:
         self.seed = seed
@@ -94,6 +105,8 @@ class RunLog:
         self.events: list[LoggedCommand] = []
         #: the run-local sample from which commands were no longer kept (None: complete)
         self.full_at: int | None = None
+        #: why this run cannot be replayed at all (a world that did not start from ``build_world(seed)``)
+        self.problem: str | None = None
         # Samples that did not come from a tick: run-local seq and the ticks run by then.
         self._anchor_v: list[int] = [start - offset]
         self._anchor_ticks: list[int] = [0]

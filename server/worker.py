@@ -584,6 +584,8 @@ class Simulation:
         log = next((run for run in reversed(self.logs) if run.covers(seq)), None)
         if log is None:
             raise CommandError(f"tick {seq} is older than the session log: a fork starts from a tick of the history")
+        if log.problem is not None:
+            raise CommandError(f"tick {seq} cannot be forked: {log.problem}")
         v = seq - log.offset
         if log.full_at is not None and v > log.full_at:
             raise CommandError(

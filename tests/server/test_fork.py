@@ -293,3 +293,27 @@ def test_fork_over_the_websocket_announces_the_fork_and_serves_the_original(socc
         client.wait_hello("reset")
         gone = http.get("/api/fork/original", params={"seq": frame["seq"]})
         assert gone.status_code == 404 and "not a fork" in gone.json()["detail"]
+
+
+def test_the_log_bounds_refuse_with_the_reason(soccer_dir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from server import runlog, worker
+
+    monkeypatch.setattr(runlog, "MAX_EVENTS", 3)
+    joined = Joined(SoccerExample(soccer_dir, players_per_team=2))
+    joined.run(20)
+    for value in (True, False, True):
+        joined.do(OverrideInput(op="override_input", robot=1, symbol="ball.seen", value=value))
+        joined.run(10)
+    within = max(joined.samples)
+    joined.do(OverrideInput(op="override_input", robot=1, symbol="ball.seen", value=False))  # not kept any more
+    joined.run(10)
+    with pytest.raises(CommandError, match=r"session log stopped at tick \d+ \(more than 3 commands"):
+        joined.fork(max(joined.samples) - 2)
+    assert joined.fork(within)["seq"] == within, "ticks before the log filled up still fork"
+    joined.run(10)
+    monkeypatch.setattr(worker, "FORK_MAX_SECONDS", 1.0)
+    with pytest.raises(CommandError, match=r"re-simulates \d+ s since the world was built \(at most 1 s\)"):
+        joined.fork(max(joined.samples) - 1)
+    joined.sim.logs[-1].problem = "the world started from a recording"
+    with pytest.raises(CommandError, match="cannot be forked: the world started from a recording"):
+        joined.fork(max(joined.samples) - 1)
