@@ -317,3 +317,24 @@ def test_the_log_bounds_refuse_with_the_reason(soccer_dir: Path, monkeypatch: py
     joined.sim.logs[-1].problem = "the world started from a recording"
     with pytest.raises(CommandError, match="cannot be forked: the world started from a recording"):
         joined.fork(max(joined.samples) - 1)
+
+
+def test_the_errands_world_forks_exactly_with_its_commands_replayed() -> None:
+    from examples.errands.studio import example
+
+    joined = Joined(example(Path(__file__).resolve().parents[2] / "examples" / "errands"), seed=2)
+    joined.run(200)
+    joined.do(WorldCommand(op="world_command", name="teleport", args={"object": "mug", "to": "c"}))
+    joined.run(40)
+    joined.do(Pause(op="pause"))
+    joined.do(WorldCommand(op="world_command", name="block", args={"from": "a", "to": "b"}))
+    joined.do(WorldCommand(op="world_command", name="plan_stats", args={}))  # a query: replayed, harmless
+    joined.run(100)
+    fork_at = max(joined.samples) - 60
+    joined.run(50)
+    original = joined.tick_samples(fork_at, max(joined.samples))
+    result = joined.fork(fork_at)
+    joined.run(150)
+    forked = joined.tick_samples(result["start"] + 1, max(joined.samples))
+    compared = [t for t in forked if t in original]
+    assert len(compared) == 111 and all(_same(forked[t], original[t]) for t in compared)

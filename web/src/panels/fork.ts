@@ -78,7 +78,13 @@ export class ForkControls {
         toast(`Running from t = ${formatClock(result.t)} with the current behavior (${result.ticks} ticks re-simulated in ${Math.round(result.ms)} ms)`, "ok");
         if (this.session.hello?.session.paused) await this.connection.command("resume");
       })
-      .catch((error: unknown) => toast(`Run from here: ${error instanceof Error ? error.message : String(error)}`, "error", 8000))
+      .catch((error: unknown) => {
+        const message = error instanceof Error ? error.message : String(error);
+        // A long run since the last reset re-simulates for more than the reply timeout: the fork
+        // still happens (its hello follows), only its reply came too late.
+        if (message.startsWith("no reply")) toast("Run from here: still re-simulating (a long run since the last reset); the fork starts when it is done", "info", 8000);
+        else toast(`Run from here: ${message}`, "error", 8000);
+      })
       .finally(() => {
         this.busy = false;
         setText(this.button, "⑂ Run from here");
