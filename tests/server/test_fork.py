@@ -19,6 +19,7 @@ from server.bench_world import BenchExample
 from server.frames import FrameRecorder, Generation, Ring
 from server.messages import (
     Apply,
+    Explain,
     ForceOption,
     FromWorker,
     NewGeneration,
@@ -107,7 +108,11 @@ def test_a_fork_with_the_unchanged_behavior_continues_exactly_like_the_original(
     joined.do(Pause(op="pause"))
     joined.do(Step(op="step", ticks=40))
     joined.do(Speed(op="speed", speed=4.0))
-    joined.run(PLAYING + 100)
+    joined.run(PLAYING + 50)
+    # Nor does asking why: explain re-evaluates conditions, it changes nothing (not logged).
+    for option in ("play_soccer", "game_playing", "role_selection"):
+        joined.do(Explain(op="explain", robot=0, option=option))
+    joined.run(50)
     fork_at = max(joined.samples) - 120
     joined.run(200)
     original = joined.tick_samples(fork_at, max(joined.samples))
