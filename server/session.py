@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import itertools
 import logging
 import multiprocessing
@@ -707,6 +708,7 @@ class Session:
             "seq": latest.seq if latest else 0,
             "t": latest.t if latest else 0,
             "generation": gen.number if gen is not None else 0,
+            "fork": dataclasses.asdict(self.fork) if self.fork is not None else None,
             "real_time_factor": sim.get("real_time_factor", 0.0) if self.running else 0.0,
             "tick_ms": sim.get("tick_ms", 0.0),
             # raw counters of the simulation process, for windowed measurements (benchmarks/stream_load.py)

@@ -273,6 +273,7 @@ def test_fork_over_the_websocket_announces_the_fork_and_serves_the_original(socc
         assert reply["result"]["seq"] == fork_at and reply["result"]["t"] == t
         hello = client.wait_hello("fork")
         assert hello["fork"] == {"seq": fork_at, "t": t, "start": reply["result"]["start"]}
+        assert http.get("/api/status").json()["fork"] == hello["fork"]
         assert client.command("step", ticks=10)["ok"]
         frame = client.wait_frame(lambda f: f["gen"] == hello["generation"] and f["t"] > t)
         answer = http.get("/api/fork/original", params={"seq": frame["seq"]})
