@@ -23,13 +23,13 @@ def command(studio: StudioServer, op: str, **args: Any) -> Any:
 def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page: Any, studio: StudioServer) -> None:
     # Into the playing phase (from 8.5 s of match time), then look back in time.
     assert command(studio, "speed", speed=4)["ok"]
-    page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 11000", timeout=30000)
+    page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 15000", timeout=30000)
     assert command(studio, "pause")["ok"]
     button = page.locator("#run-from-here")
     assert button.is_disabled(), "live: nothing to fork from"
     canvas = page.locator(".timeline-canvas")
     box = canvas.bounding_box()
-    canvas.click(position={"x": box["width"] * 0.8, "y": 30})
+    canvas.click(position={"x": box["width"] * 0.85, "y": 30})  # about 12.5 s: playing
     page.wait_for_function(f"() => {STUDIO}.session.cursor !== null")
     cursor = page.evaluate(f"() => {STUDIO}.session.view.t")
     assert button.is_enabled()
