@@ -23,7 +23,7 @@ def command(studio: StudioServer, op: str, **args: Any) -> Any:
 def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page: Any, studio: StudioServer) -> None:
     # Into the playing phase (from 8.5 s of match time), then look back in time.
     assert command(studio, "speed", speed=4)["ok"]
-    page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 15000", timeout=30000)
+    page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 15000", timeout=60000)
     assert command(studio, "pause")["ok"]
     button = page.locator("#run-from-here")
     assert button.is_disabled(), "live: nothing to fork from"
@@ -35,7 +35,7 @@ def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page
     assert button.is_enabled()
     button.click()
     # A fork generation arrives: the badge and the timeline's mark say where it comes from.
-    page.wait_for_function(f"() => {STUDIO}.session.hello.reason === 'fork'", timeout=30000)
+    page.wait_for_function(f"() => {STUDIO}.session.hello.reason === 'fork'", timeout=60000)
     fork = page.evaluate(f"() => {STUDIO}.session.hello.fork")
     assert fork["t"] == cursor
     badge = page.locator(".fork-badge")
@@ -43,14 +43,14 @@ def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page
     assert "fork of t =" in badge.inner_text()
     page.wait_for_function(f"() => document.querySelector('.timeline-canvas').dataset.fork === '{fork['t']}'")
     # It runs on live (the button resumes a paused session); then look at a tick of the fork.
-    page.wait_for_function(f"() => {STUDIO}.session.live.t > {fork['t'] + 300}", timeout=30000)
+    page.wait_for_function(f"() => {STUDIO}.session.live.t > {fork['t'] + 300}", timeout=60000)
     assert command(studio, "pause")["ok"]
     page.evaluate(f"() => {STUDIO}.session.setCursor({fork['t'] + 250})")
     original = page.locator(".fork-original")
     original.wait_for(state="visible")
     page.wait_for_function(
         f"() => document.querySelector('.fork-original').dataset.seq === String({STUDIO}.session.view.seq)",
-        timeout=10000,
+        timeout=30000,
     )
     assert "play_soccer/playing" in page.locator(".fork-original-path").inner_text()
     # Unchanged behavior: the original's option path is the fork's, node for node.
