@@ -76,7 +76,9 @@ export class ForkControls {
       .command("fork", { seq: tick.seq })
       .then(async (result) => {
         toast(`Running from t = ${formatClock(result.t)} with the current behavior (${result.ticks} ticks re-simulated in ${Math.round(result.ms)} ms)`, "ok");
-        if (this.session.hello?.session.paused) await this.connection.command("resume");
+        // "Run": a paused session resumes (resuming a running one changes nothing; the fork's
+        // hello, which says whether it is paused, may arrive after this reply).
+        await this.connection.command("resume");
       })
       .catch((error: unknown) => {
         const message = error instanceof Error ? error.message : String(error);
