@@ -38,6 +38,7 @@ from server import frames
 from server.clients import Client, Hub
 from server.docs import router as docs_router
 from server.files import BehaviorFiles, FileError
+from server.forks import router as fork_router
 from server.frames import Generation
 from server.generations import GenerationGone
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
@@ -718,6 +719,7 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.include_router(router)
     app.include_router(docs_router)
     app.include_router(profile_router)
+    app.include_router(fork_router)
     _document_messages(app)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")

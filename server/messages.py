@@ -97,7 +97,7 @@ Ref = Annotated[int, Field(ge=0, le=2**31), _INTEGRAL] | str
 #: Behavior time in ms.
 Ms = Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
 
-HelloReason = Literal["connect", "reload", "reset", "resync"]
+HelloReason = Literal["connect", "reload", "reset", "resync", "fork"]
 
 
 class ProtocolError(ServerError, ValueError):
@@ -340,6 +340,22 @@ class WorldCommand:
     args: dict[str, Any] = field(default_factory=dict)
 
 
+@with_config(_STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Fork:
+    """Run from tick ``seq`` of the live history again, with the current behavior (docs/studio.md "Fork").
+
+    The world is rebuilt from its seed and re-simulated up to ``seq`` with the commands and
+    behavior versions of the original run; tick ``seq`` and the ticks after it run live with the
+    programs in force now, as a new generation (reason ``fork``).
+    """
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["fork"]
+    seq: Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
+
+
 #: A breakpoint kind (``engine.runtime.breakpoints``).
 BreakpointKindName = Literal["enter_option", "leave_option", "enter_state", "leave_state", "leaf", "condition"]
 #: A breakpoint's id within its behavior set.
@@ -439,7 +455,8 @@ Command = Annotated[
     | EnableBreakpoint
     | ListBreakpoints
     | CheckCondition
-    | Seek,
+    | Seek
+    | Fork,
     Discriminator("op"),
 ]
 #: Breakpoint commands: the server process keeps (and persists) breakpoints, the simulation checks them.
@@ -676,6 +693,19 @@ class Structure:
 
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class ForkOrigin:
+    """Where the running world was forked (``fork``): the original's tick ``seq`` (time ``t``) ran again as ``start``.
+
+    The original run's ticks stay in the ring at the older seqs (``GET /api/fork/original``).
+    """
+
+    seq: int
+    t: int
+    start: int
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Hello:
     """Sent on connect, after every reload and reset, and in answer to ``resync``: the ids from now on."""
 
@@ -687,6 +717,8 @@ class Hello:
     structure: Structure
     #: the world's static scene (world-defined)
     scene: dict[str, Any]
+    #: the fork the running world comes from (null: none since the last reset); kept across reloads
+    fork: ForkOrigin | None = None
 
 
 #: A symbol or parameter value in a frame: decimals rounded, enums as element indices (-1: none),
@@ -848,6 +880,18 @@ class SeekResult:
 
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class ForkResult:
+    """The result of ``fork``: tick ``seq`` runs again as ``start`` after re-simulating ``ticks`` ticks in ``ms``."""
+
+    seq: int
+    t: int
+    start: int
+    ticks: int
+    ms: float
+
+
+@with_config(_SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class StepResult:
     """The result of ``step``: the last tick run."""
 
@@ -975,6 +1019,7 @@ RESULTS: dict[str, Any] = {
     "status": dict[str, Any],
     "world_command": Any,
     "seek": SeekResult,
+    "fork": ForkResult,
     "set_breakpoint": BreakpointList,
     "remove_breakpoint": BreakpointList,
     "enable_breakpoint": BreakpointList,
@@ -991,14 +1036,22 @@ def encode(message: Reply | ServerEvent) -> bytes:
     return orjson.dumps(message, option=orjson.OPT_NON_STR_KEYS)
 
 
-def encode_hello(reason: HelloReason, generation: int, session: SessionInfo, structure: bytes, scene: bytes) -> bytes:
+def encode_hello(
+    reason: HelloReason,
+    generation: int,
+    session: SessionInfo,
+    structure: bytes,
+    scene: bytes,
+    fork: ForkOrigin | None = None,
+) -> bytes:
     """A :class:`Hello` spliced from the generation's pre-encoded ``structure`` and ``scene``."""
     head = b'{"type":"hello","version":%d,"reason":%s,"generation":%d,"session":' % (
         VERSION,
         orjson.dumps(reason),
         generation,
     )
-    return b"".join([head, orjson.dumps(session), b',"structure":', structure, b',"scene":', scene, b"}"])
+    tail = b',"fork":%s}' % orjson.dumps(fork)
+    return b"".join([head, orjson.dumps(session), b',"structure":', structure, b',"scene":', scene, tail])
 
 
 def encode_history_chunk(command_id: CommandId | None, index: int, last: bool, frames: list[bytes]) -> bytes:
@@ -1052,6 +1105,8 @@ class NewGeneration:
     seed: int
     #: per behavior set: why it does not run on this host (None: it runs)
     errors: dict[str, str | None]
+    #: a ``fork`` generation: ``(seq forked at, its time, the seq of this generation's first sample)``
+    fork: tuple[int, int, int] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -1116,6 +1171,20 @@ class ExplainRecorded:
     op: Literal["explain_recorded"] = "explain_recorded"
 
 
+@dataclass(frozen=True, slots=True)
+class ForkAt:
+    """Internal: ``fork`` at tick ``seq`` as the server prepared it, with what the ring recorded around it.
+
+    ``recorded`` holds ticks ``seq - 1`` and ``seq`` (those still in the ring): per robot its path
+    (decoded JSON) and the dynamic scene; the re-simulated state must equal the one the fork
+    starts from (docs/studio.md "Fork").
+    """
+
+    seq: int
+    recorded: dict[int, tuple[tuple[Any, ...], Any]]
+    op: Literal["fork"] = "fork"
+
+
 #: What the simulation carries out: the commands not handled in the server process, and internal ones.
 WorkerCommand = (
     Pause
@@ -1131,6 +1200,7 @@ WorkerCommand = (
     | ReleaseOwner
     | SetBreakpoints
     | ExplainRecorded
+    | ForkAt
 )
 
 

@@ -167,9 +167,10 @@ class LiveRecorder:
                         "tables": tables_of(program).to_json(),
                     },
                 )
-            if gen.reason == "reset" or previous is None or gen.scene_bytes != previous.scene_bytes:
-                if gen.reason == "reset":
-                    self._event("reset", None, {"reason": "reset", "gen": gen.number, "seed": seed})
+            # A fork rebuilds the world like a reset (at an earlier tick of the same seed).
+            if gen.reason in ("reset", "fork") or previous is None or gen.scene_bytes != previous.scene_bytes:
+                if gen.reason in ("reset", "fork"):
+                    self._event("reset", None, {"reason": gen.reason, "gen": gen.number, "seed": seed})
                 self._static(gen)
             self._bind(gen)
         except Exception:  # a full disk must not stop the studio

@@ -53,6 +53,7 @@ from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.messages import (
     BreakpointCommand,
     Explain,
+    Fork,
     Pause,
     Resume,
     Seek,
@@ -448,7 +449,7 @@ class ReplaySession(Session):
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand, owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand | BreakpointCommand | Fork, owner: str | None = None) -> Any:
         """Playback commands, ``seek`` and ``explain``; anything needing a world is refused."""
         if isinstance(command, Status):
             return await self.status()

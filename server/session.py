@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import itertools
 import logging
 import multiprocessing
@@ -34,6 +35,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
+
+import orjson
 
 from engine.emit.json import program_to_json
 from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorSource, Example
@@ -54,6 +57,9 @@ from server.messages import (
     EnableBreakpoint,
     Explain,
     ExplainRecorded,
+    Fork,
+    ForkAt,
+    ForkOrigin,
     FromWorker,
     HelloReason,
     Hit,
@@ -77,7 +83,7 @@ from server.messages import (
 from server.recording import LiveRecorder
 from server.worker import CommandError, WorkerConfig, check_speed
 
-__all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session"]
+__all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session", "fork_request", "original_tick"]
 
 log = logging.getLogger("xabsl.server")
 
@@ -193,6 +199,8 @@ class Session:
         #: called on the asyncio loop when a breakpoint hit (after the sample of its tick)
         self.on_breakpoint: Callable[[Hit], None] = lambda hit: None
         self.breakpoint_store = BreakpointStore(state_dir)
+        #: the fork the running world comes from (``fork``); None since the last start or reset
+        self.fork: ForkOrigin | None = None
         #: per (robot, option id): where the last live ``explain`` scan of the ring stopped
         self._scans: dict[tuple[int, int], Scan] = {}
         #: per behavior key: its breakpoints by id (stored per agents file)
@@ -265,6 +273,7 @@ class Session:
             generation=self.generation.number if self.generation is not None else 0,
             reason=reason,
             breakpoints={key: tuple(points.values()) for key, points in self.breakpoints.items()},
+            history_ticks=self.ring.capacity,
         )
         ours, theirs = socket.socketpair()
         process = _context(self.example).Process(
@@ -312,6 +321,10 @@ class Session:
                 sources = {k: self._incoming_sources.get(k) or s.running_sources for k, s in self.programs.items()}
                 self.generations.add(self.generation, {k: v for k, v in sources.items() if v is not None}, self.ring)
                 self.seed = message.seed
+                if message.fork is not None:
+                    self.fork = ForkOrigin(seq=message.fork[0], t=message.fork[1], start=message.fork[2])
+                elif message.reason != "reload":  # a reload goes on in the same run (and fork)
+                    self.fork = None
                 for key, error in message.errors.items():
                     if key in self.programs:
                         self.programs[key].error = error
@@ -418,7 +431,7 @@ class Session:
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand, owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand | BreakpointCommand | Fork, owner: str | None = None) -> Any:
         """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
@@ -433,6 +446,8 @@ class Session:
             return await self.breakpoint_command(command)
         if isinstance(command, Explain):
             return await self.explain(command, owner)
+        if isinstance(command, Fork):
+            command = fork_request(self.ring, command.seq)
         ok, result, error = await self._send(command, owner)
         if not ok:
             raise CommandError(error)
@@ -713,6 +728,7 @@ class Session:
             "seq": latest.seq if latest else 0,
             "t": latest.t if latest else 0,
             "generation": gen.number if gen is not None else 0,
+            "fork": dataclasses.asdict(self.fork) if self.fork is not None else None,
             "real_time_factor": sim.get("real_time_factor", 0.0) if self.running else 0.0,
             "tick_ms": sim.get("tick_ms", 0.0),
             # raw counters of the simulation process, for windowed measurements (benchmarks/stream_load.py)
@@ -736,6 +752,44 @@ class Session:
             "world": sim.get("world") or _latest_world(latest),
             "recording": self.live_recorder.stats() if self.live_recorder is not None else None,
         }
+
+
+def fork_request(ring: frames.Ring, seq: int) -> ForkAt:
+    """``fork`` at ``seq`` for the simulation, with what ``ring`` recorded of ticks ``seq - 1`` and ``seq``.
+
+    Raises:
+        CommandError: tick ``seq`` is not in the ring.
+    """
+    if ring.get(seq) is None:
+        entries, latest = ring.snapshot()[:1], ring.latest
+        held = f"{entries[0].seq}..{latest.seq}" if entries and latest is not None else "none"
+        raise CommandError(f"tick {seq} is not in the history (it holds ticks {held})")
+    recorded: dict[int, tuple[tuple[Any, ...], Any]] = {}
+    for at in (seq - 1, seq):
+        entry = ring.get(at)
+        if entry is not None:
+            frame = orjson.loads(entry.delta)  # every frame holds every path and the scene
+            recorded[at] = (tuple(r["path"] for r in frame["robots"]), frame["scene"])
+    return ForkAt(seq, recorded)
+
+
+def original_tick(ring: frames.Ring, fork: ForkOrigin, seq: int) -> Entry | None:
+    """The original run's tick at the time of the fork's tick ``seq`` (None: not in the ring, or not run that far).
+
+    The original is the run before the fork's first sample: its ticks are the newest ones with
+    that time before ``fork.start``, back to where time goes down (a reset before them).
+    """
+    entry = ring.get(seq)
+    if entry is None or seq < fork.start:
+        return None
+    t, at, previous = entry.t, fork.start - 1, None
+    while (candidate := ring.get(at)) is not None:
+        if candidate.t == t:
+            return candidate
+        if candidate.t < t or (previous is not None and candidate.t > previous):
+            return None
+        previous, at = candidate.t, at - 1
+    return None
 
 
 def _store_partial(state: ProgramState, compilation: Compilation) -> None:

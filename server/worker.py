@@ -67,6 +67,7 @@ from server.messages import (
     ExplainRecorded,
     ForceBehavior,
     ForceOption,
+    ForkAt,
     FromWorker,
     HelloReason,
     Hit,
@@ -94,6 +95,11 @@ from server.messages import (
     WorldCommand,
 )
 from server.protocol import MAX_SPEED, MIN_SPEED
+from server.runlog import LOGGED_OPS, Programs, RunLog, Switch
+
+#: Simulated seconds a ``fork`` re-simulates at most (from the last reset: about 0.2 ms a tick for
+#: 10 robots, so 30 minutes take some 15 s in which the simulation answers nothing).
+FORK_MAX_SECONDS = 1800.0
 
 #: The channel as the simulation process sees it.
 WorkerChannel = Channel[FromWorker, ToWorker]
@@ -124,6 +130,8 @@ class WorkerConfig:
     reason: HelloReason = "connect"
     #: per behavior key: its breakpoints (the server keeps and stores them)
     breakpoints: dict[str, tuple[Breakpoint, ...]] = field(default_factory=dict)
+    #: samples the server's ring holds: run logs older than that are dropped (``fork``)
+    history_ticks: int = 4800
 
 
 @dataclass(slots=True)
@@ -188,6 +196,11 @@ class Simulation:
         self.hits: list[Hit] = []
         #: the codecs of recent generations (``explain_recorded`` of a tick before a reload)
         self.codecs: dict[int, dict[str, ProgramCodec]] = {}
+        #: the run logs whose samples the server's ring may still hold, oldest first (``fork``)
+        self.logs: list[RunLog] = []
+        self.history_ticks = config.history_ticks
+        #: whether commands are logged (not while re-simulating a run for a fork)
+        self.logging = True
         self._build_world(self.seed)
 
     # -- world and generations ---------------------------------------------------------------------
@@ -215,9 +228,22 @@ class Simulation:
         self.seed = seed
         self.loop = BehaviorLoop(world, self.physics_hz, self.behavior_hz)
         self._owners.clear()
+        # The next sample is the build's: a new run starts there.
+        self._start_log(RunLog(seed, self.programs, self.seq + 1))
 
-    def generation(self, reason: HelloReason) -> NewGeneration:
-        """Start a new generation of ids; returns its message for the server."""
+    def _start_log(self, log: RunLog) -> None:
+        if self.logs:
+            self.logs[-1].end = log.start
+        self.logs.append(log)
+        self._prune_logs()
+
+    def _prune_logs(self) -> None:
+        """Drop the logs of runs whose samples have all left the server's ring."""
+        oldest = self.seq - self.history_ticks
+        self.logs = [log for log in self.logs if log.end is None or log.end > oldest]
+
+    def generation(self, reason: HelloReason, fork: tuple[int, int, int] | None = None) -> NewGeneration:
+        """Start a new generation of ids; returns its message for the server (``fork``: its origin)."""
         self.generation_number += 1
         self.reason = reason
         codecs: dict[str, ProgramCodec] = {}
@@ -266,6 +292,7 @@ class Simulation:
             tuple(output_ids),
             self.seed,
             dict(self.errors),
+            fork,
         )
 
     def _tick_time(self) -> int:
@@ -368,10 +395,14 @@ class Simulation:
         handler = getattr(self, f"_op_{body.op}", None)
         if handler is None:
             raise CommandError(f"unknown op {body.op!r}")
+        seq, ticks = self.seq, self.loop.ticks
         try:
-            return handler(body, owner)
+            result = handler(body, owner)
         except (DebugError, EngineError) as error:
             raise CommandError(str(error)) from None
+        if self.logging and body.op in LOGGED_OPS and _changed_run(body, result):
+            self.logs[-1].record(seq, ticks, body, owner, self.seq - seq)
+        return result
 
     def _op_pause(self, command: Pause, owner: str | None) -> Any:
         self.paused = True
@@ -535,6 +566,130 @@ class Simulation:
         """Internal: release what the client ``owner`` forced and overrode (it disconnected)."""
         return self.release_owner(str(owner))
 
+    # -- fork ----------------------------------------------------------------------------------------
+
+    def _op_fork(self, command: ForkAt, owner: str | None) -> Any:
+        """``fork``: rebuild the run of tick ``seq`` to just before it, check it, go on with the programs in force.
+
+        Tick ``seq`` (a tick sample) runs again live; a sample that no tick made (a build, a
+        reload, a fork) is restored as it was. The re-simulated state must equal what the ring
+        recorded of the sample before (or of ``seq`` itself when no tick made it); otherwise the
+        command fails and the running world is left as it was.
+        """
+        started = time.perf_counter()
+        seq = command.seq
+        if seq > self.seq:
+            raise CommandError(f"tick {seq} has not run yet (the newest is {self.seq})")
+        self._prune_logs()
+        log = next((run for run in reversed(self.logs) if run.covers(seq)), None)
+        if log is None:
+            raise CommandError(f"tick {seq} is older than the session log: a fork starts from a tick of the history")
+        if log.problem is not None:
+            raise CommandError(f"tick {seq} cannot be forked: {log.problem}")
+        v = seq - log.offset
+        if log.full_at is not None and v > log.full_at:
+            raise CommandError(
+                f"the session log stopped at tick {log.full_at + log.offset} (more than {len(log.events)} commands "
+                "since the world was built): reset the world to fork later ticks"
+            )
+        anchor = log.is_anchor(v)
+        ticks = log.ticks_at(v) - (0 if anchor else 1)
+        if ticks > FORK_MAX_SECONDS * self.behavior_hz:
+            raise CommandError(
+                f"forking tick {seq} re-simulates {ticks / self.behavior_hz:.0f} s since the world was built "
+                f"(at most {FORK_MAX_SECONDS:.0f} s): reset the world to fork later ticks"
+            )
+        check = seq if anchor else seq - 1
+        recorded = command.recorded.get(check)
+        if recorded is None:
+            raise CommandError(f"tick {check} is not in the history any more: the fork cannot be checked")
+        replay = self._replay(log, v, check, recorded, ticks)
+        # Adopt the re-simulated world, then run the programs in force now.
+        current = dict(self.programs)
+        self.world, self.loop, self.engines, self.keys = replay.world, replay.loop, replay.engines, replay.keys
+        self._owners = replay._owners
+        self.errors = dict(replay.errors)
+        self.programs = dict(replay.programs)
+        self.seed = log.seed
+        self._switch(current)
+        self.timing.window.clear()  # the simulated clock went back
+        start = self.seq + 1
+        self._start_log(log.child(v, ticks, Switch(dict(self.programs)), start))
+        t = self.loop.start_ms + round(max(log.ticks_at(v) - 1, 0) * 1000 / self.behavior_hz)
+        self.emit(self.generation("fork", (seq, t, start)), False)
+        self.emit(self.sample(), False)
+        ms = round(1000 * (time.perf_counter() - started), 1)
+        return {"seq": seq, "t": t, "start": start, "ticks": ticks, "ms": ms}
+
+    def _replay(self, log: RunLog, v: int, check: int, recorded: tuple[tuple[Any, ...], Any], ticks: int) -> Simulation:
+        """Run ``log`` again from its seed up to run-local sample ``v`` (``ticks`` ticks), checking sample ``check``."""
+        replay = Simulation(
+            WorkerConfig(
+                self.example,
+                seed=log.seed,
+                paused=True,
+                behavior_hz=self.behavior_hz,
+                physics_hz=self.physics_hz,
+                programs=dict(log.programs),
+                descriptions=dict(self.descriptions),
+            )
+        )
+        replay.logging = False
+        replay.generation("connect")  # the samplers: commands name options and symbols by id
+        check_v = check - log.offset
+        checked = False
+        for event in log.events:
+            if event.at >= v:
+                break
+            if not checked and event.at >= check_v:
+                replay._advance(log.ticks_at(check_v))
+                replay._verify(check, recorded)
+                checked = True
+            replay._advance(event.ticks)
+            if isinstance(event.command, Switch):
+                replay._switch(event.command.programs)
+                replay.generation("fork")
+                continue
+            try:
+                replay.execute(event.command, event.owner)
+            except CommandError as error:
+                raise CommandError(f"the session log does not replay at tick {replay.loop.ticks}: {error}") from None
+        if not checked:
+            replay._advance(log.ticks_at(check_v))
+            replay._verify(check, recorded)
+        replay._advance(ticks)
+        return replay
+
+    def _advance(self, ticks: int) -> None:
+        """Run ticks (without sampling them) until ``ticks`` have run."""
+        loop = self.loop
+        if loop.ticks > ticks:
+            raise CommandError(f"the session log is out of order at tick {ticks}")
+        while loop.ticks < ticks:
+            loop.tick()
+
+    def _verify(self, seq: int, recorded: tuple[tuple[Any, ...], Any]) -> None:
+        """The state now must be what sample ``seq`` recorded: every robot's path, the world's scene."""
+        paths, scene = recorded
+        for index, sampler in enumerate(self.samplers):
+            try:
+                path = orjson.loads(orjson.dumps(sampler.path())) if sampler is not None else []
+            except Exception:  # as ``sample``: a broken tree reads as an empty path
+                path = []
+            if index >= len(paths) or path != paths[index]:
+                name = self.world.agents[index].name
+                raise CommandError(
+                    f"the re-simulated run differs from the history at tick {seq} ({name}'s activation path): "
+                    "the world is not deterministic or something changed it outside the session log; "
+                    "the run goes on unchanged"
+                )
+        if orjson.loads(orjson.dumps(self.world.dynamic_scene())) != scene:
+            raise CommandError(
+                f"the re-simulated run differs from the history at tick {seq} (the world's scene): "
+                "the world is not deterministic or something changed it outside the session log; "
+                "the run goes on unchanged"
+            )
+
     # -- helpers for commands -----------------------------------------------------------------------
 
     def _robot(self, index: int) -> tuple[int, Engine, ProgramCodec]:
@@ -593,6 +748,15 @@ class Simulation:
         Returns:
             None when swapped, else why the running behavior was kept.
         """
+        problem = self._swap(key, program, program_json)
+        if problem is not None:
+            return problem
+        self.emit(self.generation("reload"), False)
+        self.emit(self.sample(), False)
+        return None
+
+    def _swap(self, key: str, program: Program, program_json: dict[str, Any]) -> str | None:
+        """The engines of ``key`` run ``program`` (states kept where they still exist); None, or why not."""
         try:
             for index, engine in enumerate(self.engines):
                 if self.keys[index] != key:
@@ -611,9 +775,14 @@ class Simulation:
         self.errors[key] = None
         self.programs[key] = (program, program_json)
         self.descriptions.pop(key, None)
-        self.emit(self.generation("reload"), False)
-        self.emit(self.sample(), False)
         return None
+
+    def _switch(self, programs: Programs) -> None:
+        """Run ``programs`` where another version runs (``fork``; a program that does not link is not run)."""
+        for key, running in programs.items():
+            have = self.programs.get(key)
+            if running is not None and (have is None or have[0] is not running[0]):
+                self._swap(key, *running)
 
     # -- status ----------------------------------------------------------------------------------------
 
@@ -657,6 +826,15 @@ def check_speed(speed: Any) -> float:
 
 
 def _collect(message: FromWorker, droppable: bool) -> bool:
+    return True
+
+
+def _changed_run(command: Any, result: Any) -> bool:
+    """Whether a logged op that succeeded changed the run (a list of world commands, a refused swap did not)."""
+    if command.op == "world_command":
+        return command.name is not None
+    if command.op == "apply":
+        return result is None
     return True
 
 

@@ -66,6 +66,7 @@ NUMERIC_ARGS: list[tuple[dict[str, Any], str]] = [
     ({"type": "command", "op": "force_behavior", "robot": 0, "behavior": "kick"}, "params"),
     ({"type": "command", "op": "release"}, "robot"),
     ({"type": "command", "op": "seek"}, "seq"),
+    ({"type": "command", "op": "fork"}, "seq"),
     ({"type": "command", "op": "override_input", "symbol": "ball.seen", "value": 1}, "robot"),
     ({"type": "command", "op": "override_input", "robot": 0, "value": 1}, "symbol"),
     ({"type": "command", "op": "override_input", "robot": 0, "symbol": "ball.distance"}, "value"),

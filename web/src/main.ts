@@ -18,6 +18,7 @@ import { SymbolsPanel } from "./panels/symbols";
 import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
+import { ForkControls } from "./panels/fork";
 import { loadReplay, replayOf } from "./replay";
 import { TopBar } from "./panels/topbar";
 import { DynamicsPanel } from "./panels/dynamics";
@@ -106,6 +107,7 @@ function main(): void {
         [".", "step one tick (pauses first)"],
         ["← →  (in the timeline)", "step back / forward in time"],
         ["L  or  End", "back to live (End also from a dropdown)"],
+        ["⑂ Run from here (timeline)", "restart the world at the cursor's tick with the current behavior"],
         ["G / O", "option graph / option view"],
         ["E", "editor, at the option shown in the option view"],
         ["Esc then Tab (in the editor)", "move the focus out of the editor"],
@@ -149,6 +151,9 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
+  const fork = new ForkControls(session, connection);
+  timeline.toolbar.append(fork.button, fork.badge);
+  activation.element.firstElementChild?.after(fork.original);
   optionView.breakpoints.onHitsChanged = () => {
     timeline.markHits(optionView.breakpoints.hits);
     pending.add("cursor"); // paused: no tick follows that would redraw
@@ -250,6 +255,7 @@ function main(): void {
       if (right.isActive("symbols")) symbols.render(changes);
       if (right.isActive("test")) tester.render(changes);
       if (right.isActive("coverage")) coverage.render(changes);
+      fork.render(changes);
       timeline.render(changes);
       plot.render(changes);
       stats.renderMs = stats.renderMs * 0.9 + (performance.now() - started) * 0.1;

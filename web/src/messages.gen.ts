@@ -165,6 +165,40 @@ export interface ForceOption {
   params?: Record<string, CommandValue>;
 }
 
+/**
+ * Run from tick `seq` of the live history again, with the current behavior (docs/studio.md "Fork").
+ *
+ * The world is rebuilt from its seed and re-simulated up to `seq` with the commands and
+ * behavior versions of the original run; tick `seq` and the ticks after it run live with the
+ * programs in force now, as a new generation (reason `fork`).
+ */
+export interface Fork {
+  type: "command";
+  id?: number | string | null;
+  op: "fork";
+  seq: number;
+}
+
+/**
+ * Where the running world was forked (`fork`): the original's tick `seq` (time `t`) ran again as `start`.
+ *
+ * The original run's ticks stay in the ring at the older seqs (`GET /api/fork/original`).
+ */
+export interface ForkOrigin {
+  seq: number;
+  t: number;
+  start: number;
+}
+
+/** The result of `fork`: tick `seq` runs again as `start` after re-simulating `ticks` ticks in `ms`. */
+export interface ForkResult {
+  seq: number;
+  t: number;
+  start: number;
+  ticks: number;
+  ms: number;
+}
+
 /** One tick: full, or the changes since the previous frame this client received. */
 export interface Frame {
   type: "frame";
@@ -206,6 +240,7 @@ export interface Hello {
   session: SessionInfo;
   structure: Structure;
   scene: Record<string, unknown>;
+  fork?: ForkOrigin | null;
 }
 
 /** Stream the ring buffer between behavior times `t0` and `t1` (every `every`-th frame). */
@@ -514,9 +549,9 @@ export type BehaviorNode = [1, number, number, number, (WireValue)[]];
 
 export type PathNode = OptionNode | BehaviorNode;
 
-export type HelloReason = "connect" | "reload" | "reset" | "resync";
+export type HelloReason = "connect" | "reload" | "reset" | "resync" | "fork";
 
-export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek;
+export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek | Fork;
 
 export type ClientMessage = Subscribe | Resync | Command;
 
@@ -544,6 +579,7 @@ export interface CommandResults {
   status: Record<string, unknown>;
   world_command: unknown;
   seek: SeekResult;
+  fork: ForkResult;
   set_breakpoint: BreakpointList;
   remove_breakpoint: BreakpointList;
   enable_breakpoint: BreakpointList;

@@ -17,10 +17,10 @@ const TEAM_ROW = 13;
 const OPTION_ROW = 17;
 const GAP = 16;
 /// Colours of generation marks by reason (others: MARK_OTHER).
-const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726" };
+const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726", fork: "#9c6ade" };
 const MARK_OTHER = "#ab47bc";
 /// The letter on a mark's flag by reason (others: the reason's first letter).
-const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0" };
+const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0", fork: "⑂" };
 
 export class TimelinePanel {
   readonly element: HTMLElement;
@@ -38,10 +38,13 @@ export class TimelinePanel {
   private dirty = true;
   /// Breakpoint hits, marked on the axis (red) at their time.
   private hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }> = [];
-  /// Where a generation started in the buffered history (timeline time), as drawn.
+  /// Where a generation started in the buffered history (timeline time), as drawn; a fork is
+  /// one (reason "fork"), so "Run from here" needs no mark of its own.
   private marks: Array<Mark & { x: number }> = [];
   /// The dialog a click on a mark opens (in the page once the first mark is clicked).
   readonly changes = new ChangesDialog();
+  /// The toolbar, for controls of other modules (panels/fork.ts).
+  readonly toolbar: HTMLElement;
 
   constructor(
     private readonly session: Session,
@@ -52,7 +55,8 @@ export class TimelinePanel {
     this.liveButton = h("button.live", { title: "Back to live (L or End)", onclick: () => this.session.setCursor(null) }, "● Live");
     this.info = h("span.muted");
     this.scroller = h("div.timeline-scroll", {}, this.canvas);
-    this.element = h("div.panel.timeline-panel", {}, h("div.toolbar", {}, h("strong", {}, "Timeline"), this.liveButton, this.info), this.scroller);
+    this.toolbar = h("div.toolbar", {}, h("strong", {}, "Timeline"), this.liveButton, this.info);
+    this.element = h("div.panel.timeline-panel", {}, this.toolbar, this.scroller);
     this.canvas.addEventListener("pointerdown", (ev) => this.pointer(ev));
     this.canvas.addEventListener("keydown", (ev) => this.key(ev));
     new ResizeObserver(() => {

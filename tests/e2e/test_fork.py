@@ -1,0 +1,72 @@
+"""Fork in headless chromium: "Run from here" on the timeline, the fork mark, the original's path beside the fork's."""
+
+from __future__ import annotations
+
+import json
+import urllib.request
+from typing import Any
+
+from tests.e2e.conftest import StudioServer, screenshot
+
+STUDIO = "window.xabslStudio"
+
+
+def command(studio: StudioServer, op: str, **args: Any) -> Any:
+    body = json.dumps({"op": op, **args}).encode()
+    request = urllib.request.Request(
+        studio.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
+    )
+    with urllib.request.urlopen(request, timeout=20) as response:
+        return json.loads(response.read())
+
+
+def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page: Any, studio: StudioServer) -> None:
+    # Into the playing phase (from 8.5 s of match time), then look back in time.
+    assert command(studio, "speed", speed=4)["ok"]
+    page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 15000", timeout=60000)
+    assert command(studio, "pause")["ok"]
+    button = page.locator("#run-from-here")
+    assert button.is_disabled(), "live: nothing to fork from"
+    canvas = page.locator(".timeline-canvas")
+    box = canvas.bounding_box()
+    canvas.click(position={"x": box["width"] * 0.85, "y": 30})  # about 12.5 s: playing
+    page.wait_for_function(f"() => {STUDIO}.session.cursor !== null")
+    cursor = page.evaluate(f"() => {STUDIO}.session.view.t")
+    assert button.is_enabled()
+    button.click()
+    # A fork generation arrives: the badge and the timeline's mark say where it comes from.
+    page.wait_for_function(f"() => {STUDIO}.session.hello.reason === 'fork'", timeout=60000)
+    fork = page.evaluate(f"() => {STUDIO}.session.hello.fork")
+    assert fork["t"] == cursor
+    badge = page.locator(".fork-badge")
+    badge.wait_for(state="visible")
+    assert "fork of t =" in badge.inner_text()
+    # The fork is a generation of the history: marked where its ticks start, after the original's.
+    page.wait_for_function(
+        "() => JSON.parse(document.querySelector('.timeline-canvas').dataset.marks || '[]')"
+        ".some((m) => m.reason === 'fork')"
+    )
+    # It runs on live (the button resumes a paused session); then look at a tick of the fork.
+    page.wait_for_function(f"() => {STUDIO}.session.live.t > {fork['t'] + 300}", timeout=60000)
+    assert command(studio, "pause")["ok"]
+    start = page.evaluate(f"() => {STUDIO}.session.buffer.bySeq({fork['start']}).x")
+    assert start > cursor  # the original run stays on the timeline before the fork
+    page.evaluate(f"() => {STUDIO}.session.setCursor({start + 250})")
+    original = page.locator(".fork-original")
+    original.wait_for(state="visible")
+    page.wait_for_function(
+        f"() => document.querySelector('.fork-original').dataset.seq === String({STUDIO}.session.view.seq)",
+        timeout=30000,
+    )
+    assert "play_soccer/playing" in page.locator(".fork-original-path").inner_text()
+    # Unchanged behavior: the original's option path is the fork's, node for node.
+    own = page.evaluate(
+        f"""() => {{
+          const s = {STUDIO}.session, index = s.indexOf(s.selectedRobot);
+          return s.robotInView().path.map((n) => n.kind === 'option'
+            ? `${{index.optionById.get(n.option).name}}/${{index.optionById.get(n.option).states[n.state].name}}`
+            : index.behaviorById.get(n.behavior).name).join(' › ');
+        }}"""
+    )
+    assert page.locator(".fork-original-path").inner_text() == own
+    screenshot(page, "fork")
