@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import operator
 import time
+from bisect import bisect_left
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -412,15 +413,21 @@ class Ring:
             except IndexError:
                 return None
             back = last - seq
-            if back < 0 or back >= len(entries):
+            if back < 0:
                 return None
+            if back >= len(entries):
+                break  # older than a gap-free ring reaches: maybe there, behind a gap
             try:
                 entry = entries[-back - 1]
             except IndexError:
                 continue
             if entry.seq == seq:
                 return entry
-        return None
+            break
+        # Gaps (samples the pipe dropped) shift the entries behind them: search by seq.
+        held = self.snapshot()
+        index = bisect_left(held, seq, key=lambda e: e.seq)
+        return held[index] if index < len(held) and held[index].seq == seq else None
 
     def snapshot(self) -> list[Entry]:
         """A copy of the entries, oldest first (a C-level copy, safe against a racing append)."""
