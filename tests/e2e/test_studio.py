@@ -225,3 +225,6 @@ def test_reconnect_after_a_server_restart(page: Any, studio: StudioServer) -> No
     assert page.locator(".team-strip .chip").count() == 10
     page.keyboard.press("g")
     wait_until(page, "() => document.querySelectorAll('.graph-panel g.node.active').length >= 3")
+    # The editor's language server connection comes back too (it closed with the server).
+    wait_until(page, f"() => !{STUDIO}.editor.lsp.closed", timeout=30000)
+    assert page.evaluate(f"() => {STUDIO}.editor.lsp.ready.then(() => true)")

@@ -273,7 +273,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline, editor };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 

@@ -2,7 +2,7 @@
 // the messages sent are checked as the protocol defines them, the answers mapped into CodeMirror.
 import { CompletionContext, type CompletionResult, type CompletionSource } from "@codemirror/autocomplete";
 import { EditorState, Text } from "@codemirror/state";
-import { describe, expect, it } from "vitest";
+import { describe, expect, it, vi } from "vitest";
 import { fromPosition, toCompletionResult, toPosition, xabslCompletion } from "../src/xabsl/complete";
 import { xabsl } from "../src/xabsl/language";
 import { lspToCodeMirror, toServerDiagnostics } from "../src/xabsl/lint";
@@ -44,6 +44,34 @@ describe("positions", () => {
 });
 
 describe("LspClient", () => {
+  it("connects again after the server went away and opens its documents again", async () => {
+    vi.useFakeTimers();
+    try {
+      const connections: Array<ReturnType<typeof fakeServer> & { close: () => void }> = [];
+      const client = new LspClient(() => {
+        const server = fakeServer(() => null);
+        let closed: () => void = () => {};
+        server.transport.onClose = (listener) => (closed = listener);
+        connections.push({ ...server, close: () => closed() });
+        return server.transport;
+      });
+      await client.sync("options/play.xabsl", "a");
+      connections[0]?.close(); // the server stopped: no unhandled rejection, a text kept
+      await client.sync("options/play.xabsl", "ab");
+      expect(client.closed).toBe(true);
+      await vi.advanceTimersByTimeAsync(1000);
+      await client.ready;
+      expect(connections).toHaveLength(2);
+      const methods = connections[1]?.sent.map((m) => m.method);
+      expect(methods).toEqual(["initialize", "initialized", "xabsl/root", "textDocument/didOpen"]);
+      expect(connections[1]?.sent[3]?.params.textDocument).toMatchObject({ version: 1, text: "ab" });
+      await client.sync("options/play.xabsl", "abc");
+      expect(connections[1]?.sent[4]?.params).toMatchObject({ textDocument: { version: 2 }, contentChanges: [{ text: "abc" }] });
+    } finally {
+      vi.useRealTimers();
+    }
+  });
+
   it("opens, then changes a document, and knows paths by the server's root", async () => {
     const server = fakeServer(() => null);
     const client = new LspClient(server.transport);

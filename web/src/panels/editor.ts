@@ -72,7 +72,7 @@ export class EditorPanel {
   private readonly refs: HTMLElement;
   private readonly title: HTMLElement;
   /// completion, diagnostics, hover, definition, references and rename: the language server
-  private readonly lsp = new LspClient(websocketTransport(lspUrl(token)));
+  readonly lsp = new LspClient(() => websocketTransport(lspUrl(token)));
   private readonly buffers = new Map<string, Buffer>();
   private files: FileEntry[] = [];
   private current: Buffer | null = null;

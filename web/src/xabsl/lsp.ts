@@ -76,9 +76,16 @@ export function lspUrl(token: string | null): string {
   return `${scheme}//${loc.host}/lsp${token ? `?token=${encodeURIComponent(token)}` : ""}`;
 }
 
+/// The pause before connecting again after a close, doubled each failed attempt up to the maximum.
+const RETRY_FIRST_MS = 1000;
+const RETRY_MAX_MS = 10000;
+
 type Pending = { resolve: (value: unknown) => void; reject: (error: Error) => void };
 
-/// One connection to the language server.
+/// The language server's client: one connection at a time. Given a way to connect (rather than one
+/// transport), it connects again after the connection closed (a server restart), with a growing
+/// pause, and opens the documents it knew with their latest text, so the editor's diagnostics and
+/// completion come back by themselves.
 export class LspClient {
   private nextId = 0;
   private readonly pending = new Map<number, Pending>();
@@ -88,16 +95,52 @@ export class LspClient {
   readonly diagnostics = new Map<string, LspDiagnostic[]>();
   private root = "";
   closed = false;
-  readonly ready: Promise<void>;
+  /// Settles when the current connection is initialized (rejects if it closed first).
+  ready: Promise<void>;
+  private transport: Transport;
+  private retryMs = RETRY_FIRST_MS;
+  private stopped = false;
 
-  constructor(private readonly transport: Transport) {
-    transport.onMessage((text) => this.receive(text));
+  constructor(connect: Transport | (() => Transport)) {
+    const reconnect = typeof connect === "function" ? connect : null;
+    this.transport = reconnect ? reconnect() : (connect as Transport);
+    this.ready = this.attach(reconnect);
+  }
+
+  private attach(reconnect: (() => Transport) | null): Promise<void> {
+    const transport = this.transport;
+    transport.onMessage((text) => {
+      if (transport === this.transport) this.receive(text);
+    });
     transport.onClose(() => {
+      if (transport !== this.transport) return;
       this.closed = true;
       for (const p of this.pending.values()) p.reject(new Error("the language server connection closed"));
       this.pending.clear();
+      if (reconnect && !this.stopped) {
+        setTimeout(() => {
+          if (this.stopped) return;
+          this.transport = reconnect();
+          this.closed = false;
+          this.ready = this.attach(reconnect);
+        }, this.retryMs);
+        this.retryMs = Math.min(this.retryMs * 2, RETRY_MAX_MS);
+      }
     });
-    this.ready = this.start();
+    const ready = this.start().then(() => {
+      this.retryMs = RETRY_FIRST_MS;
+      this.reopen();
+    });
+    ready.catch(() => undefined); // a connection that closes before it is ready is not an error of the page
+    return ready;
+  }
+
+  /// After a new connection: the server knows no document; open every known one again.
+  private reopen(): void {
+    for (const [path, known] of this.versions) {
+      known.version = 1;
+      this.notify("textDocument/didOpen", { textDocument: { uri: this.uriOf(path), languageId: "xabsl", version: 1, text: known.text } });
+    }
   }
 
   private async start(): Promise<void> {
@@ -164,7 +207,11 @@ export class LspClient {
 
   /// Tell the server the current text of `path` (didOpen the first time, didChange after).
   async sync(path: string, text: string): Promise<void> {
-    await this.ready;
+    try {
+      await this.ready;
+    } catch {
+      // Closed: the text is kept below and opened again on the next connection.
+    }
     const known = this.versions.get(path);
     if (known?.text === text) return;
     const uri = this.uriOf(path);
@@ -217,6 +264,7 @@ export class LspClient {
   }
 
   close(): void {
+    this.stopped = true;
     this.transport.close();
   }
 }
