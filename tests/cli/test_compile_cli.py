@@ -23,10 +23,10 @@ def test_clean_compile_writes_ic_and_json(tmp_path: Path, capsys: pytest.Capture
     approach = data["options"][0]
     assert approach["name"] == "approach" and approach["params"][0]["name"] == "approach.stop_at"
     transition = next(t for t in approach["transitions"] if t["from"] == "go" and t["to"] == "arrived")
-    assert transition["conditions"] == [
-        {"text": "robot.fallen", "value": False},
-        {"text": "ball.distance < @stop_at", "value": True},
-    ]
+    # The conditions leading to the leaf are its path in the state's decision tree.
+    decision = next(s for s in approach["states"] if s["name"] == "go")["decision"]
+    assert (decision["if"], decision["else"]["if"]) == ("robot.fallen", "ball.distance < @stop_at")
+    assert decision["else"]["then"] == {**decision["else"]["then"], "to": "arrived", "leaf": transition["leaf"]}
     summary = capsys.readouterr().out.strip().splitlines()[-1]
     assert summary.startswith("ok: 4 files, 1 options, 0 errors, 0 warnings in ")
 
