@@ -31,10 +31,10 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 import orjson
-from mcap.writer import CompressionType, Writer
 
 from engine.record import foxglove
 from engine.record import schema as S
+from engine.record.mcapfile import McapWriter
 from engine.record.sampler import ProgramTables
 from engine.types import Value
 
@@ -211,7 +211,7 @@ class RecordingEncoder:
         self._key = True
         self._part = self.path.with_name(self.path.name + ".part")
         self._stream: BinaryIO = open(self._part, "wb")  # noqa: SIM115 -- closed in close()
-        self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        self._writer = McapWriter(self._stream, chunk_size=chunk_size)
         self._writer.start(profile=S.PROFILE, library="xabsl-studio")
         schemas = {**S.SCHEMAS, foxglove.SCENE_UPDATE_SCHEMA["title"]: foxglove.SCENE_UPDATE_SCHEMA}
         self._schemas = {
@@ -321,7 +321,7 @@ class RecordingEncoder:
         """Finish the file (summary, indexes), move it to its final name; ``(path, ticks, messages, bytes)``."""
         if not self._closed:
             self._closed = True
-            self._writer.finish()  # type: ignore[no-untyped-call]
+            self._writer.finish()
             self._stream.close()
             os.replace(self._part, self.path)
         return str(self.path), self.ticks, self.messages, self.path.stat().st_size
