@@ -275,7 +275,9 @@ class RecordingEncoder:
         every = self._key or seq % self.key_every == 0
         self._key = False
         dumps = orjson.dumps
-        add = self._add
+        write = self._writer.add_message  # every message of the tick has the tick's time
+        time_ns = S.tick_time_ns(seq, self.behavior_hz)
+        written = 0
         agents = self._agents
         for index, sample in enumerate(samples):
             if sample is None:
@@ -298,23 +300,30 @@ class RecordingEncoder:
             if unread:
                 message["unread"] = list(unread)
             agent.inputs, agent.outputs = inputs, outputs
-            add(agent.channel, seq, dumps(message))
+            write(agent.channel, time_ns, dumps(message), time_ns, seq)
+            written += 1
             changed = fault is not NO_CHANGE and fault != agent.fault
             if changed:
                 agent.fault = fault
             if changed or (key and agent.fault is not None):
-                add(agent.fault_channel, seq, dumps({"seq": seq, "t": now_ms, "fault": agent.fault}))
-        add(self._channel(S.WORLD_SCENE, "xabsl.DynamicScene"), seq, dumps({"seq": seq, "t": now_ms, "scene": scene}))
+                write(
+                    agent.fault_channel, time_ns, dumps({"seq": seq, "t": now_ms, "fault": agent.fault}), time_ns, seq
+                )
+                written += 1
+        self._add(
+            self._channel(S.WORLD_SCENE, "xabsl.DynamicScene"), seq, dumps({"seq": seq, "t": now_ms, "scene": scene})
+        )
         builder = self._scene_builder
         if builder is not None:
-            update = builder.update(scene, S.tick_time_ns(seq, self.behavior_hz))
-            add(self._channel(S.FOXGLOVE_SCENE, "foxglove.SceneUpdate"), seq, dumps(update))
+            update = builder.update(scene, time_ns)
+            self._add(self._channel(S.FOXGLOVE_SCENE, "foxglove.SceneUpdate"), seq, dumps(update))
         if status is not None:
-            add(
+            self._add(
                 self._channel(S.WORLD_STATUS, "xabsl.WorldStatus"),
                 seq,
                 dumps({"seq": seq, "t": now_ms, "status": status}),
             )
+        self.messages += written
         self.ticks = max(self.ticks, seq + 1)
 
     def close(self) -> tuple[str, int, int, int]:

@@ -4,7 +4,7 @@
 the engine's public per-tick views only and without converting anything:
 
 * the activation path (``Engine.path()``: flat lists with IR ids and raw parameter values);
-* the values the tick's output assignments wrote (``Engine.snapshot().assignments``), so the
+* the values the tick's output assignments wrote (``Engine.assignment_values()``), so the
   activation *tree* (assignment nodes included) can be rebuilt from a recording;
 * the input symbols without parameters (``Engine.input_sampler``, overrides included) and the
   output/internal symbols (``Engine.output_sampler``), as tuples of raw values (exact floats,
@@ -186,7 +186,7 @@ class AgentSampler:
         except Exception:
             outputs, bad_out = self._one_by_one(self.tables.outputs, engine.output)
             unread += bad_out
-        assignments = engine.snapshot().assignments if self._sites else ()
+        assignments = engine.assignment_values() if self._sites else ()
         roots = engine.root_actions.roots
         return AgentSample(engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread)
 
