@@ -31,6 +31,8 @@ from engine.types import Kind, Value
 
 __all__ = ["AgentSample", "AgentSampler", "ProgramTables"]
 
+_new_tuple = tuple.__new__
+
 
 class AgentSample(NamedTuple):
     """What one agent's tick left behind (raw; see the module docstring)."""
@@ -188,7 +190,8 @@ class AgentSampler:
             unread += bad_out
         assignments = engine.assignment_values() if self._sites else ()
         roots = engine.root_actions.roots
-        return AgentSample(engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread)
+        # tuple.__new__ directly: the NamedTuple's own __new__ is a Python function (it ran 10 times a tick)
+        return _new_tuple(AgentSample, (engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread))
 
     @staticmethod
     def _one_by_one(
