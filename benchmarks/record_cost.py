@@ -70,6 +70,20 @@ def recorded(
     return time.perf_counter() - wall, time.process_time() - cpu, world.dynamic_scene(), stats
 
 
+class Discard:
+    """Stands in for the encoder: the recorder samples and captures every tick, nothing is encoded."""
+
+    def __init__(self, **_options: object) -> None:
+        self.path = ""
+
+    def handle(self, op: tuple[object, ...]) -> None:
+        """Drop the operation."""
+
+    def close(self) -> tuple[str, int, int, int]:
+        """No file."""
+        return self.path, 0, 0, 0
+
+
 def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -> dict[str, float]:
     """CPU seconds per tick of the tick-path parts of recording and of the studio, in one match.
 
@@ -219,6 +233,7 @@ def main() -> None:
         "without recording": [],
         "recorded inline": [],
         "recorded, writer process": [],
+        "captured only (no encoder)": [],
     }
     stats = None
     path = folder / f"match_{args.seconds:.0f}s.mcap"
@@ -230,6 +245,9 @@ def main() -> None:
             runs[label].append((wall, cpu))
             if scene_plain != scene_recorded:
                 raise SystemExit("recording changed the match: the final scenes differ")
+        with patch("engine.record.writer.RecordingEncoder", Discard):
+            wall, cpu, _, _ = recorded(args.seconds, args.seed, programs, folder / "discarded.mcap", False)
+        runs["captured only (no encoder)"].append((wall, cpu))
     assert stats is not None
     ticks = stats.ticks
     size = path.stat().st_size
@@ -245,7 +263,7 @@ def main() -> None:
     for label, values in runs.items():
         wall = statistics.median(w for w, _ in values)
         cpu = statistics.median(c for _, c in values)
-        line = f"  {label:<25} {wall:7.2f} s wall {cpu:7.2f} s cpu  {1e3 * wall / ticks:.3f} ms/tick"
+        line = f"  {label:<27} {wall:7.2f} s wall {cpu:7.2f} s cpu  {1e3 * wall / ticks:.3f} ms/tick"
         if label != "without recording":
             line += f"  overhead {100 * (wall / base_wall - 1):4.0f} % wall, {100 * (cpu / base_cpu - 1):4.0f} % cpu"
         print(line)
