@@ -13,9 +13,9 @@ the engine's public per-tick views only and without converting anything:
 
 Converting for display (rounding, enum names) and comparing with the previous tick are left to
 the consumer: the recorder's encoder rounds and encodes deltas, the studio's
-``server.frames.FrameSampler`` converts to the frames' display values. :class:`ProgramTables` holds what a
-consumer needs to interpret the raw values of one program (symbol names in sample order, enum
-host values, basic-behavior parameter names in path order, assignment sites).
+``server.frames.FrameSampler`` converts to the frames' display values. :class:`ProgramTables`
+holds what a consumer needs to interpret the raw values of one program (symbol names in sample
+order, enum host values, basic-behavior parameter names in path order, assignment sites).
 """
 
 from __future__ import annotations
