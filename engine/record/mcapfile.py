@@ -138,7 +138,7 @@ class McapWriter:
             _MESSAGE, _MESSAGE_FIXED + len(data), channel, sequence & 0xFFFFFFFF, log_time, publish_time
         )
         chunk += data
-        if self._chunk_start < 0:
+        if log_time < self._chunk_start or self._chunk_start < 0:  # (recordings: times never go back)
             self._chunk_start = log_time
         if log_time > self._chunk_end:
             self._chunk_end = log_time
@@ -183,7 +183,7 @@ class McapWriter:
             )
         )
         self._chunks += 1
-        if self._first < 0:
+        if start < self._first or self._first < 0:
             self._first = start
         self._last = max(self._last, end)
         self._chunk = bytearray()

@@ -105,3 +105,20 @@ def test_a_file_without_messages_is_valid() -> None:
     assert list(reader.iter_messages()) == []
     summary = reader.get_summary()
     assert summary is not None and [c.topic for c in summary.channels.values()] == ["/empty"]
+
+
+def test_chunk_and_file_time_ranges_hold_messages_out_of_order() -> None:
+    stream = io.BytesIO()
+    writer = McapWriter(stream, chunk_size=1 << 20)
+    writer.start()
+    channel = writer.register_channel("/t", "json", writer.register_schema("s", "jsonschema", b"{}"))
+    for time_ns in (50, 20, 70, 10):
+        writer.add_message(channel, time_ns, b"{}", time_ns)
+    writer.finish()
+    reader = make_reader(io.BytesIO(stream.getvalue()), validate_crcs=True)
+    summary = reader.get_summary()
+    assert summary is not None and summary.statistics is not None
+    (index,) = summary.chunk_indexes
+    assert (index.message_start_time, index.message_end_time) == (10, 70)
+    assert (summary.statistics.message_start_time, summary.statistics.message_end_time) == (10, 70)
+    assert sorted(m.log_time for _, _, m in reader.iter_messages()) == [10, 20, 50, 70]
