@@ -7,11 +7,14 @@ studio and for recordings) should cost at most 0.2 ms per tick for 10 agents.
 Runs, alternating so that drift of a shared machine hits both sides alike (``--repeat`` pairs):
 ``--seconds`` simulated seconds of the soccer example (example team vs chase team, seed
 ``--seed``) without recording, then the same match recorded with ``engine.record.Recorder``
-(exactly what ``xabsl run examples/soccer --record FILE.mcap`` does). Printed: wall and CPU time
-of each, the overhead in percent, where the recorder's time goes (sampling the engines alone is
-measured in a third run that samples and discards), the file size and its extrapolation to 10
+(exactly what ``xabsl run examples/soccer --record FILE.mcap`` does), inline and with the writer
+process. Printed: wall and CPU time of each, the overhead in percent; then where the time goes,
+per tick of 10 agents in CPU time and as a ratio of the plain tick: sampling the engines for a
+recording and for the studio (the same sampler; measured in a run that samples and discards),
+the world's ``dynamic_scene()``, and the encoder fed the operations a recorder captured (with the
+Foxglove scene's and the MCAP writer's shares); the file size and its extrapolation to 10
 simulated minutes, and how long seeking a random tick of the file takes. ``--full`` adds one
-recorded run of 600 simulated seconds and prints its real size and seek times.
+run of 600 simulated seconds recorded inline and prints its real size and seek times.
 
     .venv/bin/python benchmarks/record_cost.py [--seconds 120] [--repeat 2] [--full]
 """
@@ -25,9 +28,14 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
+from unittest.mock import patch
+
+import orjson
 
 from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
 from engine.record import AgentSampler, Recorder, RecorderStats, Recording, engines_of
+from engine.record.encoder import RecordingEncoder
+from engine.record.mcapfile import McapWriter
 from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 TEN_MINUTES_TICKS = 600 * DEFAULT_BEHAVIOR_HZ
@@ -62,23 +70,132 @@ def recorded(
     return time.perf_counter() - wall, time.process_time() - cpu, world.dynamic_scene(), stats
 
 
-def sampling_only(seconds: float, seed: int, programs: tuple[object, object]) -> tuple[float, int]:
-    """Seconds spent in ``AgentSampler.sample`` for all agents, and the number of ticks."""
+class Discard:
+    """Stands in for the encoder: the recorder samples and captures every tick, nothing is encoded."""
+
+    def __init__(self, **_options: object) -> None:
+        self.path = ""
+
+    def handle(self, op: tuple[object, ...]) -> None:
+        """Drop the operation."""
+
+    def close(self) -> tuple[str, int, int, int]:
+        """No file."""
+        return self.path, 0, 0, 0
+
+
+def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -> dict[str, float]:
+    """CPU seconds per tick of the tick-path parts of recording and of the studio, in one match.
+
+    Each tick: the project's one sampler for all agents as the recorder calls it
+    (``AgentSampler.sample``), as the studio's simulation process calls it (``FrameSampler``:
+    path as JSON bytes, extras, input and output display values, exactly what
+    ``server.worker.Simulation.sample`` does per robot), and the world's ``dynamic_scene()``.
+    """
+    from server.frames import FrameSampler, ProgramCodec  # the studio's side (imports the server)
+
     world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
-    samplers = [AgentSampler(e) for e in engines_of(world) if e is not None]
-    spent = 0.0
+    engines = [e for e in engines_of(world) if e is not None]
+    recorder = [AgentSampler(e) for e in engines]
+    codecs: dict[int, ProgramCodec] = {}
+    studio = []
+    for index, engine in enumerate(engines):
+        codec = codecs.setdefault(id(engine.program), ProgramCodec.build(str(index), engine.program, engine))
+        studio.append(FrameSampler(index, engine, codec))
+    spent = {"recorder": 0.0, "studio": 0.0, "scene": 0.0}
     ticks = 0
+    clock = time.thread_time  # CPU time: on a shared machine wall time also counts other processes
+    dumps = orjson.dumps
 
     def on_tick(_now: int) -> None:
-        nonlocal spent, ticks
-        started = time.perf_counter()
-        for sampler in samplers:
+        nonlocal ticks
+        started = clock()
+        for sampler in recorder:
             sampler.sample()
-        spent += time.perf_counter() - started
+        sampled = clock()
+        for frame in studio:
+            dumps(frame.path())
+            frame.extras()
+            frame.inputs()
+            frame.outputs()
+        framed = clock()
+        world.dynamic_scene()
+        spent["recorder"] += sampled - started
+        spent["studio"] += framed - sampled
+        spent["scene"] += clock() - framed
         ticks += 1
 
     run_headless(world, duration_s=seconds, on_tick=on_tick)
-    return spent, ticks
+    return {key: value / ticks for key, value in spent.items()}
+
+
+def encoder_costs(seconds: float, seed: int, programs: tuple[object, object], folder: Path) -> dict[str, float]:
+    """CPU seconds per tick of the encoding half, fed the operations a recorder captured (best of 3).
+
+    ``encoder``: the whole :class:`RecordingEncoder` (symbols and paths to JSON, the Foxglove
+    scene, MCAP records and zstd); ``no foxglove``: the same without the Foxglove scene channels;
+    ``mcap``: only writing the recording's messages (already JSON) with the MCAP writer.
+    """
+    world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
+    ops: list[tuple[object, ...]] = []
+
+    class Capture:  # stands in for the encoder: keeps the operations
+        def __init__(self, **_options: object) -> None:
+            pass
+
+        def handle(self, op: tuple[object, ...]) -> None:
+            ops.append(op)
+
+        def abort(self) -> None:
+            pass
+
+    with patch("engine.record.writer.RecordingEncoder", Capture):
+        recorder = Recorder.for_world(
+            folder / "capture.mcap",
+            world,
+            lambda agent: ("behavior", "chase")[agent.team_index],  # type: ignore[attr-defined]
+            example="soccer",
+            behavior_hz=DEFAULT_BEHAVIOR_HZ,
+            physics_hz=DEFAULT_PHYSICS_HZ,
+        )
+        run_headless(world, duration_s=seconds, on_tick=recorder.on_tick)
+        recorder.abort()
+    ticks = sum(1 for op in ops if op[0] == "tick")
+    messages: list[tuple[int, int, bytes, int, int]] = []
+
+    class Keep(McapWriter):
+        def add_message(self, channel: int, log_time: int, data: bytes, publish_time: int, sequence: int = 0) -> None:
+            messages.append((channel, log_time, data, publish_time, sequence))
+            super().add_message(channel, log_time, data, publish_time, sequence)
+
+    def encode(foxglove_scene: bool) -> float:
+        encoder = RecordingEncoder(folder / "encoded.mcap", DEFAULT_BEHAVIOR_HZ, foxglove_scene=foxglove_scene)
+        started = time.process_time()
+        for op in ops:
+            encoder.handle(op)
+        encoder.close()
+        return time.process_time() - started
+
+    def write() -> float:
+        with open(folder / "written.mcap", "wb") as stream:
+            writer = McapWriter(stream)
+            writer.start()
+            for topic in range(max(m[0] for m in messages) + 1):
+                writer.register_channel(f"/{topic}", "json", 0)
+            started = time.process_time()
+            for message in messages:
+                writer.add_message(*message)
+            writer.finish()
+            return time.process_time() - started
+
+    with patch("engine.record.encoder.McapWriter", Keep):
+        encode(True)  # collect the messages once
+    costs = {
+        "encoder": min(encode(True) for _ in range(3)),
+        "no foxglove": min(encode(False) for _ in range(3)),
+        "mcap": min(write() for _ in range(3)),
+    }
+    return {key: value / ticks for key, value in costs.items()}
 
 
 def seek_times(path: Path, n: int, seed: int) -> list[float]:
@@ -116,6 +233,7 @@ def main() -> None:
         "without recording": [],
         "recorded inline": [],
         "recorded, writer process": [],
+        "captured only (no encoder)": [],
     }
     stats = None
     path = folder / f"match_{args.seconds:.0f}s.mcap"
@@ -127,10 +245,14 @@ def main() -> None:
             runs[label].append((wall, cpu))
             if scene_plain != scene_recorded:
                 raise SystemExit("recording changed the match: the final scenes differ")
+        with patch("engine.record.writer.RecordingEncoder", Discard):
+            wall, cpu, _, _ = recorded(args.seconds, args.seed, programs, folder / "discarded.mcap", False)
+        runs["captured only (no encoder)"].append((wall, cpu))
     assert stats is not None
     ticks = stats.ticks
     size = path.stat().st_size
-    sample_seconds, sample_ticks = sampling_only(args.seconds, args.seed, programs)
+    sampling = sampling_costs(args.seconds, args.seed, programs)
+    encoding = encoder_costs(args.seconds, args.seed, programs, folder)
 
     print(
         f"soccer 5 vs 5, {args.seconds:.0f} simulated s ({ticks} ticks), seed {args.seed}, "
@@ -141,14 +263,26 @@ def main() -> None:
     for label, values in runs.items():
         wall = statistics.median(w for w, _ in values)
         cpu = statistics.median(c for _, c in values)
-        line = f"  {label:<25} {wall:7.2f} s wall {cpu:7.2f} s cpu  {1e3 * wall / ticks:.3f} ms/tick"
+        line = f"  {label:<27} {wall:7.2f} s wall {cpu:7.2f} s cpu  {1e3 * wall / ticks:.3f} ms/tick"
         if label != "without recording":
             line += f"  overhead {100 * (wall / base_wall - 1):4.0f} % wall, {100 * (cpu / base_cpu - 1):4.0f} % cpu"
         print(line)
     print("  (goal: overhead < 10 %)")
-    print(
-        f"  sampling the 10 engines alone (AgentSampler.sample): {1e3 * sample_seconds / sample_ticks:.3f} ms per tick "
-        "(goal <= 0.2 ms)"
+    tick = base_cpu / ticks
+
+    def part(label: str, seconds: float, goal: str = "") -> None:
+        print(f"    {label:<58} {1e3 * seconds:6.3f} ms  {seconds / tick:5.2f} x the plain tick {goal}")
+
+    print(f"  per tick, 10 agents (the plain tick: {1e3 * tick:.3f} ms cpu):")
+    part("sampling for a recording (AgentSampler.sample)", sampling["recorder"], "(goal <= 0.2 ms)")
+    part("sampling for the studio (FrameSampler, display values)", sampling["studio"], "(goal <= 0.2 ms)")
+    part("the world's dynamic_scene()", sampling["scene"])
+    part("encoding (RecordingEncoder, cpu, best of 3)", encoding["encoder"])
+    part("  of which the Foxglove scene", encoding["encoder"] - encoding["no foxglove"])
+    part("  of which MCAP records, indexes and zstd", encoding["mcap"])
+    part(
+        "  the rest: paths and symbol changes to JSON",
+        encoding["no foxglove"] - encoding["mcap"],
     )
     per_tick = size / ticks
     print(
@@ -160,10 +294,13 @@ def main() -> None:
 
     if args.full:
         full = folder / "match_600s.mcap"
-        wall, cpu, _, stats = recorded(600.0, args.seed, programs, full, True)
+        wall, cpu, _, stats = recorded(600.0, args.seed, programs, full, False)  # inline, as the command line
         size = full.stat().st_size
         seeks = seek_times(full, 50, args.seed)
-        print(f"full 10 minutes recorded ({stats.ticks} ticks): {wall:.1f} s wall, {size / MB:.1f} MB (goal <= 50 MB)")
+        print(
+            f"full 10 minutes recorded inline ({stats.ticks} ticks): {wall:.1f} s wall, {cpu:.1f} s cpu, "
+            f"{size / MB:.1f} MB (goal <= 50 MB)"
+        )
         print(f"  seek a random tick + rebuild 10 trees: {_spread(seeks)} (goal < 100 ms)")
     if not args.keep:
         for file in folder.glob("*.mcap"):

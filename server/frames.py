@@ -2,10 +2,11 @@
 
 Three stages, split between the two processes (docs/server.md):
 
-1. **Sampling** (simulation process, ``server.worker``, every tick): :class:`AgentSampler` turns
-   an engine's activation tree into the compact ``path`` of docs/protocol.md (integer ids) and
-   reads its input and output symbols into tuples of display values (decimals rounded, enums as
-   element indices); the tick's sample goes to the server process. There
+1. **Sampling** (simulation process, ``server.worker``, every tick): :class:`FrameSampler` reads
+   an engine through the project's one sampler (``engine.record.sampler.AgentSampler``, the
+   recorder's too): the compact ``path`` of docs/protocol.md (integer ids) and the input and
+   output symbols, turned into display values (decimals rounded, enums as element indices); the
+   tick's sample goes to the server process. There
    :class:`FrameRecorder` compares the values with the previous sample and stores, per robot, a
    bit mask of the symbols that changed, encodes the tick's delta (and, every :data:`KEY_EVERY`
    ticks, a full frame), then appends an :class:`Entry` to the :class:`Ring`.
@@ -35,6 +36,7 @@ from typing import Any
 import orjson
 
 from engine.ir.model import Program
+from engine.record.sampler import AgentSampler, ProgramTables
 from engine.runtime import Engine
 from engine.types import Kind, Value
 from server.messages import (
@@ -74,6 +76,8 @@ class ProgramCodec:
     inputs: tuple[tuple[int, str, Kind, str | None], ...]
     outputs: tuple[tuple[int, str, Kind, str | None], ...]
     enum_index: dict[str, dict[int, int]]
+    #: what the shared sampler needs to read the program's engines (symbols in the order above)
+    tables: ProgramTables
 
     @classmethod
     def build(cls, key: str, program: Program, engine: Engine) -> ProgramCodec:
@@ -97,6 +101,7 @@ class ProgramCodec:
             inputs=tuple((s.index, s.name, s.kind, s.enum) for s in program.inputs.values() if not s.params),
             outputs=tuple((s.index, s.name, s.kind, s.enum) for s in program.outputs.values()),
             enum_index=enum_index,
+            tables=ProgramTables.of(engine),
         )
 
     def display(self, kind: Kind, enum: str | None, value: Any) -> Value | None:
@@ -120,34 +125,34 @@ class ProgramCodec:
         return elements[index] if 0 <= index < len(elements) else None
 
 
-class AgentSampler:
-    """Reads one engine after a tick: path, input values, output values, extras (fault, force)."""
+class FrameSampler:
+    """One robot's part of a frame after a tick: display path, input and output values, extras.
+
+    The engine is read by the one sampler of the project, :class:`engine.record.sampler.AgentSampler`
+    (the recorder's too); this class only turns its raw values into the display values of frames
+    (docs/protocol.md "Values": decimals rounded, booleans, enum element indices).
+    """
 
     __slots__ = (
         "_behavior_params",
         "_input_converters",
-        "_input_plan",
         "_option_params",
         "_output_converters",
-        "_output_plan",
-        "_sample_inputs",
-        "_sample_outputs",
         "codec",
         "engine",
         "index",
+        "reader",
     )
 
     def __init__(self, index: int, engine: Engine, codec: ProgramCodec) -> None:
         self.index = index
         self.engine = engine
         self.codec = codec
-        # Per symbol: its name and the conversion to a display value, decided once.
-        self._input_plan = [(name, self._converter(kind, enum)) for _, name, kind, enum in codec.inputs]
-        self._input_converters = tuple(convert for _, convert in self._input_plan)
-        self._sample_inputs = engine.input_sampler([name for name, _ in self._input_plan])
-        self._output_plan = [(name, self._converter(kind, enum)) for _, name, kind, enum in codec.outputs]
-        self._output_converters = tuple(convert for _, convert in self._output_plan)
-        self._sample_outputs = engine.output_sampler([name for name, _ in self._output_plan])
+        #: the shared sampler (assignment values are not part of frames)
+        self.reader = AgentSampler(engine, codec.tables, assignments=False)
+        # Per symbol (in the sampler's order, which is the codec's): the conversion to a display value.
+        self._input_converters = tuple(self._converter(kind, enum) for _, _, kind, enum in codec.inputs)
+        self._output_converters = tuple(self._converter(kind, enum) for _, _, kind, enum in codec.outputs)
         # Per option / basic behavior id: the conversion of each parameter, in declaration order.
         program = codec.program
         self._option_params = {
@@ -163,7 +168,7 @@ class AgentSampler:
         The engine's compact path already has the frame's node layout and the JSON ids; only the
         parameter values are turned into display values (rounded decimals, enum element indices).
         """
-        nodes = self.engine.path()
+        nodes = self.reader.path()
         option_params, behavior_params = self._option_params, self._behavior_params
         for node in nodes:
             if node[KIND_INDEX] == OPTION_NODE:
@@ -189,32 +194,13 @@ class AgentSampler:
 
     def inputs(self) -> tuple[Value | None, ...]:
         """The display values of the plain input symbols (None: the host getter failed)."""
-        # One engine sampler reads all plain inputs (overrides included), converted in C.
-        try:
-            return tuple(map(operator.call, self._input_converters, self._sample_inputs()))
-        except Exception:  # a host getter that raises must not stop the simulation thread
-            reads = self.engine.input_reads
-            values: list[Value | None] = []
-            for name, convert in self._input_plan:
-                try:
-                    values.append(convert(reads[name]()))
-                except Exception:
-                    values.append(None)
-            return tuple(values)
+        values, unread = self.reader.inputs()
+        return _display(self._input_converters, values, unread)
 
     def outputs(self) -> tuple[Value | None, ...]:
         """The display values of the output and internal symbols."""
-        try:
-            return tuple(map(operator.call, self._output_converters, self._sample_outputs()))
-        except Exception:
-            output = self.engine.output
-            values: list[Value | None] = []
-            for name, convert in self._output_plan:
-                try:
-                    values.append(convert(output(name)))
-                except Exception:
-                    values.append(None)
-            return tuple(values)
+        values, unread = self.reader.outputs()
+        return _display(self._output_converters, values, unread)
 
     def extras(self) -> bytes:
         """``,"fault":...,"forced":...,"overrides":...`` for the robot's object, or b''."""
@@ -241,6 +227,24 @@ class AgentSampler:
         if not parts:
             return b""
         return b"," + orjson.dumps(parts, option=_OPT)[1:-1]
+
+
+def _display(
+    converters: tuple[Callable[[Any], Value | None], ...], values: tuple[Value | None, ...], unread: tuple[str, ...]
+) -> tuple[Value | None, ...]:
+    """``values`` converted for display, in C when every value was read and converts."""
+    if not unread:
+        try:
+            return tuple(map(operator.call, converters, values))
+        except Exception:  # a value that does not convert (NaN, a stray type): one by one below
+            pass
+    out: list[Value | None] = []
+    for convert, value in zip(converters, values, strict=True):
+        try:
+            out.append(None if value is None else convert(value))
+        except Exception:
+            out.append(None)
+    return tuple(out)
 
 
 @dataclass(slots=True)

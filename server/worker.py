@@ -59,7 +59,7 @@ from engine.runtime.debug import Unknown, explain_decision, render, show_value
 from engine.types import Kind, Value
 from server.channel import Channel, ChannelClosed
 from server.explain import explanation_result, mark_values, tree_result
-from server.frames import AgentSampler, ProgramCodec
+from server.frames import FrameSampler, ProgramCodec
 from server.messages import (
     Apply,
     Crash,
@@ -181,7 +181,7 @@ class Simulation:
         self.loop: BehaviorLoop
         self.engines: list[Engine | None] = []
         self.keys: list[str | None] = []
-        self.samplers: list[AgentSampler | None] = []
+        self.samplers: list[FrameSampler | None] = []
         self.reason: HelloReason = config.reason
         #: the channel to the server (its counters show in the status), None in tests
         self.channel: WorkerChannel | None = None
@@ -247,7 +247,7 @@ class Simulation:
         self.generation_number += 1
         self.reason = reason
         codecs: dict[str, ProgramCodec] = {}
-        samplers: list[AgentSampler | None] = []
+        samplers: list[FrameSampler | None] = []
         input_ids: list[tuple[int, ...]] = []
         output_ids: list[tuple[int, ...]] = []
         robots = []
@@ -272,7 +272,7 @@ class Simulation:
             codec = codecs.get(key)
             if codec is None or codec.program is not engine.program:
                 codec = codecs[key] = ProgramCodec.build(key, engine.program, engine)
-            samplers.append(AgentSampler(index, engine, codec))
+            samplers.append(FrameSampler(index, engine, codec))
             input_ids.append(tuple(i for i, *_ in codec.inputs))
             output_ids.append(tuple(i for i, *_ in codec.outputs))
         self.samplers = samplers

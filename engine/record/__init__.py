@@ -1,7 +1,8 @@
 """Recordings: every tick of a run kept in an MCAP file, readable by Foxglove and any MCAP reader.
 
 * :mod:`engine.record.schema`   topic names, JSON Schemas, timestamps (the format's one source)
-* :mod:`engine.record.sampler`  the cheap per-tick read of one engine (shared with the studio)
+* :mod:`engine.record.sampler`  the per-tick read of one engine (the one sampler: the studio's too)
+* :mod:`engine.record.mcapfile` the MCAP file itself, written from the spec (fast, indexed)
 * :mod:`engine.record.foxglove` the world as ``foxglove.SceneUpdate`` messages (2D field view)
 * :mod:`engine.record.encoder`  :class:`RecordingEncoder`: samples -> MCAP messages (no engine needed)
 * :mod:`engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder

@@ -4,7 +4,7 @@
 the engine's public per-tick views only and without converting anything:
 
 * the activation path (``Engine.path()``: flat lists with IR ids and raw parameter values);
-* the values the tick's output assignments wrote (``Engine.snapshot().assignments``), so the
+* the values the tick's output assignments wrote (``Engine.assignment_values()``), so the
   activation *tree* (assignment nodes included) can be rebuilt from a recording;
 * the input symbols without parameters (``Engine.input_sampler``, overrides included) and the
   output/internal symbols (``Engine.output_sampler``), as tuples of raw values (exact floats,
@@ -12,10 +12,10 @@ the engine's public per-tick views only and without converting anything:
 * the root actions (``Engine.root_actions.roots``) and the fault.
 
 Converting for display (rounding, enum names) and comparing with the previous tick are left to
-the consumer, which can do it off the simulation's tick: the recorder encodes deltas, the
-studio's frame encoder can do the same on the server side. :class:`ProgramTables` holds what a
-consumer needs to interpret the raw values of one program (symbol names in sample order, enum
-host values, basic-behavior parameter names in path order, assignment sites).
+the consumer: the recorder's encoder rounds and encodes deltas, the studio's
+``server.frames.FrameSampler`` converts to the frames' display values. :class:`ProgramTables`
+holds what a consumer needs to interpret the raw values of one program (symbol names in sample
+order, enum host values, basic-behavior parameter names in path order, assignment sites).
 """
 
 from __future__ import annotations
@@ -30,6 +30,8 @@ from engine.runtime import Engine, Fault, Root
 from engine.types import Kind, Value
 
 __all__ = ["AgentSample", "AgentSampler", "ProgramTables"]
+
+_new_tuple = tuple.__new__
 
 
 class AgentSample(NamedTuple):
@@ -124,20 +126,50 @@ class ProgramTables:
 class AgentSampler:
     """Reads one engine after each tick (see the module docstring); valid until a load or reload.
 
+    The one sampling mechanism of the project: the recorder calls :meth:`sample` every tick; the
+    studio's simulation process (``server.frames.FrameSampler``) calls :meth:`path`,
+    :meth:`inputs` and :meth:`outputs` and turns the raw values into display values. Without
+    ``assignments`` the sample's ``assignments`` stay empty (the studio does not record them).
+
     Cost for the soccer team behavior: about 10 us per agent and tick (see
-    benchmarks/record_cost.py), most of it ``Engine.path()``.
+    benchmarks/record_cost.py), most of it ``Engine.path()`` and the host's input getters.
     """
 
     __slots__ = ("_read_inputs", "_read_outputs", "_sites", "engine", "program", "tables")
 
-    def __init__(self, engine: Engine, tables: ProgramTables | None = None) -> None:
+    def __init__(self, engine: Engine, tables: ProgramTables | None = None, assignments: bool = True) -> None:
         self.engine = engine
         self.program: Program = engine.program
         self.tables = tables if tables is not None else ProgramTables.of(engine)
         self._read_inputs: Callable[[], tuple[Value, ...]] = engine.input_sampler(self.tables.inputs)
         self._read_outputs: Callable[[], tuple[Value, ...]] = engine.output_sampler(self.tables.outputs)
         #: the program has output assignments (only then their values are copied each tick)
-        self._sites = bool(self.tables.assignment_sites)
+        self._sites = assignments and bool(self.tables.assignment_sites)
+
+    def path(self) -> list[list[Any]]:
+        """The activation path of the last tick (``Engine.path()``; empty if the tree is broken)."""
+        try:
+            return self.engine.path()
+        except Exception:  # a tree broken by a fault mid-tick must not stop the simulation
+            return []
+
+    def inputs(self) -> tuple[tuple[Value | None, ...], tuple[str, ...]]:
+        """The raw values of ``tables.inputs`` and the names whose getter raised (their value: None)."""
+        try:
+            return self._read_inputs(), ()
+        except Exception:  # a host getter that raises: read one by one, None where it raises
+            return self._inputs_one_by_one()
+
+    def outputs(self) -> tuple[tuple[Value | None, ...], tuple[str, ...]]:
+        """The raw values of ``tables.outputs`` and the names whose getter raised (their value: None)."""
+        try:
+            return self._read_outputs(), ()
+        except Exception:
+            return self._one_by_one(self.tables.outputs, self.engine.output)
+
+    def _inputs_one_by_one(self) -> tuple[tuple[Value | None, ...], tuple[str, ...]]:
+        reads = self.engine.input_reads
+        return self._one_by_one(self.tables.inputs, lambda name: reads[name]())
 
     def sample(self) -> AgentSample:
         """The engine's state after its last tick."""
@@ -150,16 +182,16 @@ class AgentSampler:
         try:
             inputs: tuple[Value | None, ...] = self._read_inputs()
         except Exception:  # a host getter that raises: read one by one, None where it raises
-            inputs, bad_in = self._one_by_one(self.tables.inputs, lambda name: engine.input_reads[name]())
-            unread += bad_in
+            inputs, unread = self._inputs_one_by_one()
         try:
             outputs: tuple[Value | None, ...] = self._read_outputs()
         except Exception:
             outputs, bad_out = self._one_by_one(self.tables.outputs, engine.output)
             unread += bad_out
-        assignments = engine.snapshot().assignments if self._sites else ()
+        assignments = engine.assignment_values() if self._sites else ()
         roots = engine.root_actions.roots
-        return AgentSample(engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread)
+        # tuple.__new__ directly: the NamedTuple's own __new__ is a Python function (it ran 10 times a tick)
+        return _new_tuple(AgentSample, (engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread))
 
     @staticmethod
     def _one_by_one(

@@ -32,7 +32,7 @@ from engine.emit.json import program_to_json
 from engine.host import Agent, World
 from engine.ir.model import Program
 from engine.record import schema as S
-from engine.record.encoder import CHUNK_SIZE, DECIMALS, NO_CHANGE, RecordingEncoder, TickSample
+from engine.record.encoder import CHUNK_SIZE, DECIMALS, FOXGLOVE_EVERY, NO_CHANGE, RecordingEncoder, TickSample
 from engine.record.sampler import AgentSampler, ProgramTables
 from engine.runtime import Engine, Fault, Root
 from engine.types import Ms
@@ -173,6 +173,7 @@ class Recorder:
         engines: per agent the engine to record (default: :func:`engines_of`).
         key_every: a symbols key frame every this many ticks.
         foxglove_scene: also write the Foxglove 2D scene channels (for planar worlds).
+        foxglove_every: write ``/foxglove/scene`` every this many ticks (and right after a reset).
         deterministic: whether the run is a pure function of seed and programs (for fork).
         decimals: decimal symbol values are rounded to this many fractional digits (the studio's
             display precision; None: exact). Activation paths and assignment values are always exact.
@@ -195,6 +196,7 @@ class Recorder:
         engines: Sequence[Engine | None] | None = None,
         key_every: int = S.KEY_EVERY,
         foxglove_scene: bool = True,
+        foxglove_every: int = FOXGLOVE_EVERY,
         deterministic: bool = True,
         decimals: int | None = DECIMALS,
         chunk_size: int = CHUNK_SIZE,
@@ -202,6 +204,8 @@ class Recorder:
     ) -> None:
         if key_every < 1:
             raise ValueError(f"key_every must be at least 1, got {key_every}")
+        if foxglove_every < 1:
+            raise ValueError(f"foxglove_every must be at least 1, got {foxglove_every}")
         self.path = Path(path)
         self.world = world
         self.programs = dict(programs)
@@ -230,6 +234,7 @@ class Recorder:
             "decimals": decimals,
             "chunk_size": chunk_size,
             "foxglove_scene": foxglove_scene,
+            "foxglove_every": foxglove_every,
         }
         self._sink: RecordingEncoder | _Background = (
             _Background(**options) if background else RecordingEncoder(**options)

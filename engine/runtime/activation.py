@@ -300,18 +300,41 @@ def compact_path(
     options, behaviors = plan.options, plan.behaviors
     out: list[list[Any]] = []
     append = out.append
-    # An explicit stack instead of nested recursive closures: paths are walked every tick, and
-    # defining two closures per call plus a Python call per node cost more than the nodes.
-    stack: list[tuple[bool, int, int]] = []
-    for root in reversed(roots):
-        found = plan.roots.get(root)
-        if found is not None:
-            stack.append((found[0], found[1], 0))
-    pop, push = stack.pop, stack.extend
-    while stack:
-        is_option, i, depth = pop()
-        if not is_option:
-            if b_last[i] == tick:
+    # A stack of the iterators over the calls of the options above (pre-order, no recursion): a
+    # node's children are walked by iterating its state's call tuple from the plan, so nothing is
+    # built per child; that and no closures per call matter, as paths are walked every tick.
+    calls: Any = iter([found for found in map(plan.roots.get, roots) if found is not None])
+    depth = 0
+    stack: list[tuple[Any, int]] = []
+    push, pop = stack.append, stack.pop
+    while True:
+        for is_option, i in calls:
+            if is_option:
+                if last_tick[i] != tick:
+                    continue
+                index, offset, count, state_calls = options[i]
+                state = states[i]
+                record = decisions[i]
+                append(
+                    [
+                        OPTION_NODE,
+                        depth,
+                        index,
+                        state,
+                        (now - activated[i]) & MS_MASK,
+                        (now - entered[i]) & MS_MASK,
+                        record[2] if record is not None else state,
+                        record[1] if record is not None else -1,
+                        option_params[offset : offset + count],
+                    ]
+                )
+                children = state_calls[state]
+                if children:
+                    push((calls, depth))
+                    calls = iter(children)
+                    depth += 1
+                    break
+            elif b_last[i] == tick:
                 index, offset, count = behaviors[i]
                 append(
                     [
@@ -322,27 +345,7 @@ def compact_path(
                         behavior_params[offset : offset + count],
                     ]
                 )
-            continue
-        if last_tick[i] != tick:
-            continue
-        index, offset, count, calls = options[i]
-        state = states[i]
-        record = decisions[i]
-        append(
-            [
-                OPTION_NODE,
-                depth,
-                index,
-                state,
-                (now - activated[i]) & MS_MASK,
-                (now - entered[i]) & MS_MASK,
-                record[2] if record is not None else state,
-                record[1] if record is not None else -1,
-                option_params[offset : offset + count],
-            ]
-        )
-        children = calls[state]
-        if children:
-            child_depth = depth + 1
-            push([(kind, k, child_depth) for kind, k in reversed(children)])
-    return out
+        else:  # these calls are done: back to the option above
+            if not stack:
+                return out
+            calls, depth = pop()

@@ -280,6 +280,13 @@ class Engine:
         # 15 arguments; this is half the cost, and recorders snapshot every tick.
         return _new_tuple(Snapshot, (self._now, self._tick, self.root_actions.roots, *map(tuple, lists)))
 
+    def assignment_values(self) -> tuple[Value | None, ...]:
+        """The values the last tick's output assignments wrote, per site: ``snapshot().assignments`` alone.
+
+        For recorders, which need only this part of a snapshot every tick (one list copy, not 15).
+        """
+        return tuple(self._require().assignments)
+
     def path(self) -> list[list[Any]]:
         """The activation path of the last tick, compact (see :func:`~engine.runtime.activation.compact_path`).
 

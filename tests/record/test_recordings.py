@@ -19,6 +19,7 @@ from engine.host import BehaviorLoop
 from engine.lang import compile_file
 from engine.record import Recorder, Recording, RecordingError, RecordingFailed
 from engine.record import schema as S
+from engine.record.encoder import FOXGLOVE_EVERY
 from engine.runtime import Engine, Snapshot
 from examples.soccer.game import GameState
 from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team, play_match
@@ -172,7 +173,8 @@ def test_every_message_validates_against_its_json_schema(live: Live) -> None:
             validators[schema.id].validate(orjson.loads(message.data))
             checked[schema.name] += 1
     assert checked["xabsl.AgentTick"] == TICKS * len(live.names)
-    assert checked["foxglove.SceneUpdate"] == TICKS + 1
+    # the field once, the scene every FOXGLOVE_EVERY ticks
+    assert checked["foxglove.SceneUpdate"] == 1 + len(range(0, TICKS, FOXGLOVE_EVERY))
     assert {"xabsl.Recording", "xabsl.Program", "xabsl.StaticScene", "xabsl.DynamicScene"} <= set(checked)
 
 
@@ -480,7 +482,8 @@ def test_the_foxglove_scene_shows_the_world_scene_in_metres(live: Live) -> None:
             else:
                 updates[message.log_time] = data
     with Recording(live.path) as recording:
-        for seq in (0, 333, TICKS - 1):
+        assert sorted(updates) == [recording.time_ns(seq) for seq in range(0, TICKS, FOXGLOVE_EVERY)]
+        for seq in (0, 332, TICKS - 1 - (TICKS - 1) % FOXGLOVE_EVERY):
             scene, update = scenes[seq], updates[recording.time_ns(seq)]
             entity = update["entities"][0]
             assert entity["frame_id"] == "field"
@@ -561,3 +564,31 @@ def test_a_failing_writer_process_is_reported(tmp_path: Path) -> None:
         recorder.close()
     recorder.abort()  # after a failure: no file, no process left, no second error
     assert not (tmp_path / "missing").exists()
+
+
+def test_the_foxglove_scene_is_written_every_few_ticks_and_after_a_reset(tmp_path: Path) -> None:
+    home, away = load_team(DEFAULT_HOME), load_team(DEFAULT_AWAY)
+    world = build_world(3, home, away, players=1)
+    programs = {"behavior": home, "chase": away}
+    with pytest.raises(ValueError, match="foxglove_every"):
+        Recorder(
+            tmp_path / "x.mcap", world, programs, example="soccer", behavior_hz=40, physics_hz=120, foxglove_every=0
+        )
+    recorder = Recorder(
+        tmp_path / "fox.mcap", world, programs, example="soccer", behavior_hz=40, physics_hz=120, foxglove_every=3
+    )
+    loop = BehaviorLoop(world)
+    for seq in range(10):
+        if seq == 5:  # a reset: the next tick is a key frame, and shows the new world at once
+            world = build_world(4, home, away, players=1)
+            recorder.rebind(world, [a.controller.engine for a in world.agents], 0)  # type: ignore[union-attr]
+            loop = BehaviorLoop(world)
+        now = loop.now_ms
+        loop.tick()
+        recorder.tick(now)
+    recorder.close()
+    with open(tmp_path / "fox.mcap", "rb") as stream:
+        reader = make_reader(stream)
+        scenes = [m.sequence for _, _, m in reader.iter_messages(topics=["/foxglove/scene"])]
+        worlds = [m.sequence for _, _, m in reader.iter_messages(topics=["/world/scene"])]
+    assert scenes == [0, 3, 5, 6, 9] and worlds == list(range(10))
