@@ -44,6 +44,7 @@ from engine.runtime.breakpoints import Breakpoint, BreakpointError
 from server import frames, worker
 from server.breakpoints import BreakpointStore, validate
 from server.channel import Channel, ChannelClosed
+from server.forkstart import ForkStart
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.messages import (
     Apply,
@@ -181,6 +182,8 @@ class Session:
         self._restart_lock: asyncio.Lock | None = None
         #: records the session to a folder from the samples (``server.recording``); None: off
         self.live_recorder: LiveRecorder | None = None
+        #: start the first simulation at a tick of a recording (``server.forkstart``); None: fresh
+        self.fork_start: ForkStart | None = None
         self._incoming: dict[str, Program] = {}
         for key in self.programs:
             self._store_compilation(key, self.compile(key))
@@ -231,6 +234,8 @@ class Session:
         loop = self._loop
         assert loop is not None
         latest = self.ring.latest
+        fork = self.fork_start if reason == "connect" else None
+        first = fork.at - 2 if fork is not None else 0  # its first sample: tick at - 1, as recorded
         config = WorkerConfig(
             example=self.example,
             seed=seed,
@@ -249,10 +254,11 @@ class Session:
                 for key, state in self.programs.items()
                 if state.running is None and state.partial_json is not None
             },
-            seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
+            seq=max(latest.seq if latest else first, self.crash.get("seq", 0) if self.crash else 0),
             generation=self.generation.number if self.generation is not None else 0,
             reason=reason,
             breakpoints={key: tuple(points.values()) for key, points in self.breakpoints.items()},
+            fork=fork,
         )
         ours, theirs = socket.socketpair()
         process = _context(self.example).Process(

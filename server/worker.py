@@ -58,6 +58,7 @@ from engine.runtime.breakpoints import Breakpoint, BreakpointHit, BreakpointSet
 from engine.runtime.debug import Explanation, Unknown, decision_tree, explain_decision, render, show_value
 from engine.types import Kind, Value
 from server.channel import Channel, ChannelClosed
+from server.forkstart import ForkStart
 from server.frames import AgentSampler, ProgramCodec
 from server.messages import (
     Apply,
@@ -123,6 +124,8 @@ class WorkerConfig:
     reason: HelloReason = "connect"
     #: per behavior key: its breakpoints (the server keeps and stores them)
     breakpoints: dict[str, tuple[Breakpoint, ...]] = field(default_factory=dict)
+    #: start at a tick of a recording instead of a fresh world ("run from here", ``server.forkstart``)
+    fork: ForkStart | None = None
 
 
 @dataclass(slots=True)
@@ -187,7 +190,10 @@ class Simulation:
         self.hits: list[Hit] = []
         #: the codecs of recent generations (``explain_recorded`` of a tick before a reload)
         self.codecs: dict[int, dict[str, ProgramCodec]] = {}
-        self._build_world(self.seed)
+        if config.fork is not None:
+            self._fork_world(config.fork)
+        else:
+            self._build_world(self.seed)
 
     # -- world and generations ---------------------------------------------------------------------
 
@@ -213,6 +219,14 @@ class Simulation:
         self.keys = keys
         self.seed = seed
         self.loop = BehaviorLoop(world, self.physics_hz, self.behavior_hz)
+        self._owners.clear()
+
+    def _fork_world(self, fork: ForkStart) -> None:
+        """The recorded world at the fork tick, with the behaviors on disk (``server.forkstart``)."""
+        from server.forkstart import resimulated
+
+        start = resimulated(self.example, self.programs, fork, self.physics_hz, self.behavior_hz)
+        self.world, self.loop, self.engines, self.keys = start.world, start.loop, start.engines, start.keys
         self._owners.clear()
 
     def generation(self, reason: HelloReason) -> NewGeneration:
@@ -834,7 +848,13 @@ def main(sock: socket.socket, config: WorkerConfig) -> None:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     channel: WorkerChannel = Channel(sock)
     try:
-        run(channel, Simulation(config))
+        try:
+            sim = Simulation(config)
+        except Exception as error:  # say why (a fork that cannot re-simulate), then end
+            channel.send(Crash(f"{type(error).__name__}: {error}", traceback.format_exc(), config.seq, 0))
+            _drain(channel)
+            raise SystemExit(1) from None
+        run(channel, sim)
     except ChannelClosed:
         pass
     finally:
