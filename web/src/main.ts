@@ -18,7 +18,8 @@ import { SymbolsPanel } from "./panels/symbols";
 import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
-import { loadReplay, replayOf } from "./replay";
+import { forkable, loadReplay, replayOf } from "./replay";
+import { Recordings } from "./recordings";
 import { TopBar } from "./panels/topbar";
 import { DynamicsPanel } from "./panels/dynamics";
 import { FactsPanel } from "./panels/facts";
@@ -48,7 +49,10 @@ function main(): void {
         const t = hello.session.t;
         void connection
           .command("status", {})
-          .then((status) => replayOf(status as Record<string, unknown>))
+          .then((status) => {
+            recordings.setReplay(forkable(status as Record<string, unknown>));
+            return replayOf(status as Record<string, unknown>);
+          })
           .catch(() => null)
           .then((replay) =>
             replay
@@ -123,6 +127,9 @@ function main(): void {
   document.body.append(help);
 
   const topbar = new TopBar(session, connection, { toggleTheme: () => layout.toggleTheme(), help: () => help.showModal() });
+  // Recordings (a dialog, opens a replay in a new tab) and, in a replay, "Run from here".
+  const recordings = new Recordings(session);
+  topbar.element.querySelector(".spacer")?.before(recordings.button, recordings.forkButton);
   const field = new FieldPanel(session);
   const team = new TeamStrip(session);
   const graph = new GraphPanel(session, openOption, openBehavior);
@@ -264,7 +271,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, recordings };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 
