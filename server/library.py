@@ -212,6 +212,7 @@ async def fork_recording(studio: StudioDep, body: ForkBody) -> dict[str, Any]:
         )
     except StudioFull as error:
         raise HTTPException(409, str(error)) from None
-    except (RuntimeError, OSError) as error:
-        raise HTTPException(422, f"the fork did not start: {error}") from None
+    except (RuntimeError, OSError) as error:  # the simulation ended while re-simulating: its reason
+        reason = str(error).removeprefix("the simulation stopped: ").removesuffix("; reset starts it again")
+        raise HTTPException(422, f"the fork did not start: {reason}") from None
     return opened.describe()

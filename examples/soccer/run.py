@@ -296,7 +296,13 @@ def play_match(
             behavior_hz=DEFAULT_BEHAVIOR_HZ,
             physics_hz=DEFAULT_PHYSICS_HZ,
             sources={k: v for k, v in zip(record_keys, record_sources, strict=True) if v is not None},
-            world_options={"robots": players, "half_duration_s": half_duration_s, **options},
+            # How the world was built, for forks (options that are not plain JSON values are left
+            # out: a fork rebuilds without them, and its check against the recording says so).
+            world_options={
+                "robots": players,
+                "half_duration_s": half_duration_s,
+                **{k: v for k, v in options.items() if isinstance(v, bool | int | float | str)},
+            },
         )
         watch = on_tick
 

@@ -306,3 +306,29 @@ def test_a_forks_recording_replays_from_its_fork_tick(folder: Path, tmp_path: Pa
         assert not refused["ok"] and "outside the recording (720..839)" in refused["error"]
         answer = httpx.post(f"{server.url}/api/fork", json={"seq": 800})
         assert answer.status_code == 422 and "itself a fork" in answer.json()["detail"]
+
+
+def test_a_fork_that_does_not_reach_the_recorded_state_is_a_422(tmp_path: Path) -> None:
+    """A recording whose world options lie: the simulation cannot re-simulate it and says why."""
+    from engine.host import BehaviorLoop
+    from engine.record import Recorder
+    from examples.soccer.run import build_world
+
+    path = tmp_path / "lying.mcap"
+    world = build_world(3, players=1, half_duration_s=600.0)
+    recorder = Recorder.for_world(
+        path, world, lambda a: ("behavior", "chase")[a.team_index], example="soccer", behavior_hz=40, physics_hz=120,
+        world_options={"robots": 2, "half_duration_s": 600.0},
+    )  # fmt: skip
+    loop = BehaviorLoop(world)
+    for _ in range(60):
+        now = loop.now_ms
+        loop.tick()
+        recorder.tick(now)
+    recorder.close()
+    with LiveServer(ReplaySession(path)) as server:
+        answer = httpx.post(f"{server.url}/api/fork", json={"seq": 50}, timeout=90)
+        assert answer.status_code == 422, answer.text
+        detail = answer.json()["detail"]
+        assert detail.startswith("the fork did not start: RecordingError: the rebuilt world has other agents"), detail
+        assert httpx.get(f"{server.url}/api/recordings").json()["open"] == []
