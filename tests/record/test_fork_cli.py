@@ -19,6 +19,7 @@ from engine.host import BehaviorLoop
 from engine.record import Recorder, Recording
 from engine.record import schema as S
 from examples.soccer.run import build_world
+from tests.record.test_recordings import _validate_all
 
 ROOT = Path(__file__).resolve().parents[2]
 SOCCER = ROOT / "examples" / "soccer"
@@ -59,6 +60,8 @@ def test_a_fork_with_the_unchanged_behavior_continues_the_recording_exactly(orig
         assert after.header["forked_from"] == {"file": original.name, "seq": FORK_AT}
         assert after.first == FORK_AT and len(after) == 8 * 40 and after.end == FORK_AT + 320
         assert after.header["deterministic"] and after.header["seed"] == before.header["seed"]
+        assert after.header["world_options"] == before.header["world_options"] == {"robots": 2, "half_duration_s": 10.0}
+        assert after.programs[("chase", 0)].sources == before.programs[("chase", 0)].sources is not None
         compared = 0
         for old, new in zip(before.ticks(FORK_AT, after.end), after.ticks(), strict=True):
             assert (new.seq, new.t, new.scene) == (old.seq, old.t, old.scene)
@@ -74,6 +77,10 @@ def test_a_fork_with_the_unchanged_behavior_continues_the_recording_exactly(orig
                 ), (new.seq, name)
                 compared += 1
         assert compared == 4 * 320
+    # Both files are valid against their schemas (the new header fields and the program sources too).
+    for path in (original, out):
+        checked = _validate_all(path)
+        assert checked["xabsl.Recording"] == 1 and checked["xabsl.Program"] == 2
     # From a key frame tick on, the messages are the same bytes (same key frames, same deltas).
     keyed = tmp_path / "keyed.mcap"
     assert _fork(original, keyed, KEY_AT) == 0
