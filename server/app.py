@@ -705,6 +705,7 @@ def create_app(
     studio.library = library
     studio.studios = studios if studios is not None else Studios(policy, web_dist)
     if studios is None:  # the main app: serves the others under their prefixes, behind its checks
+        studio.studios.library = library
         app.add_middleware(StudiosMiddleware, studios=studio.studios)
         app.state.serves_studios = True
         if not isinstance(session, ReplaySession):

@@ -110,6 +110,8 @@ class Studios:
         #: the main studio's example (a live one) as ``(path, world)`` for ``load_example``: forks
         #: of a recording of that example run its behaviors
         self.home_example: tuple[Path, str | None] | None = None
+        #: the main studio's recordings (its Recordings dialog lists them in every tab)
+        self.library: Any = None
 
     def get(self, kind: str, ident: int) -> SubStudio | None:
         """The open studio ``/KIND/ID/``, or None."""
@@ -133,7 +135,7 @@ class Studios:
 
         try:
             await self._make_room(kind)
-            app = create_app(session, self.policy, self.web_dist, studios=self)
+            app = create_app(session, self.policy, self.web_dist, library=self.library, studios=self)
             stack = contextlib.AsyncExitStack()
             await stack.enter_async_context(app.router.lifespan_context(app))
         except BaseException:

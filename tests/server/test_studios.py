@@ -46,7 +46,7 @@ def _serve(folder: Path, policy: SecurityPolicy | None = None, limit: int = 4) -
     """A replay of ``first.mcap`` as the main studio, listing ``folder`` (replays open beside it)."""
     server = LiveServer(ReplaySession(folder / "first.mcap"), policy)
     studio = server.studio
-    studio.library = RecordingLibrary(folder)
+    studio.library = studio.studios.library = RecordingLibrary(folder)
     studio.studios.limits = {"replay": limit, "fork": 1}
     return server
 
@@ -77,6 +77,8 @@ def test_a_recording_opens_as_a_replay_under_its_own_prefix(folder: Path) -> Non
         with Recording(folder / "second.mcap") as recording:
             assert status["replay"]["ticks"] == len(recording)
         assert status["replay"]["file"].endswith("second.mcap")
+        inner = httpx.get(base + "api/recordings").json()  # its Recordings dialog lists the same folder
+        assert inner["folder"] == str(folder.resolve()) and inner["open"][0]["id"] == opened["id"]
         assert httpx.get(server.url + f"/replay/{opened['id']}", follow_redirects=False).status_code == 307
         # Its websocket is the replay's; the main one stays the main studio's.
         with connect(server.ws_url.replace("/ws", opened["url"] + "ws")) as ws:
@@ -236,7 +238,7 @@ def test_a_live_studio_opens_its_recordings_and_forks_run_its_edited_behavior(fo
     session = Session(load_example(soccer_dir, "soccer", robots=1), seed=1)
     session.paused = True
     server = LiveServer(session)
-    server.studio.library = RecordingLibrary(folder)
+    server.studio.library = server.studio.studios.library = RecordingLibrary(folder)
     with server:
         assert httpx.post(f"{server.url}/api/fork", json={"seq": FORK_AT}).status_code == 409  # live: nothing to fork
         assert [r["name"] for r in httpx.get(f"{server.url}/api/recordings").json()["recordings"]][:2] == [
