@@ -127,9 +127,6 @@ function main(): void {
   document.body.append(help);
 
   const topbar = new TopBar(session, connection, { toggleTheme: () => layout.toggleTheme(), help: () => help.showModal() });
-  // Recordings (a dialog, opens a replay in a new tab) and, in a replay, "Run from here".
-  const recordings = new Recordings(session);
-  topbar.element.querySelector(".spacer")?.before(recordings.button, recordings.forkButton);
   const field = new FieldPanel(session);
   const team = new TeamStrip(session);
   const graph = new GraphPanel(session, openOption, openBehavior);
@@ -153,6 +150,10 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
+  // Recordings (a dialog, opens a replay in a new tab) and, in a replay, "Run from here" at the
+  // tick in view: in the timeline's toolbar, beside the history they are about.
+  const recordings = new Recordings(session);
+  timeline.element.querySelector(".toolbar")?.append(recordings.button);
   optionView.breakpoints.onHitsChanged = () => {
     timeline.markHits(optionView.breakpoints.hits);
     pending.add("cursor"); // paused: no tick follows that would redraw

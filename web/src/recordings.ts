@@ -64,7 +64,7 @@ function openTab(studio: OpenStudio): void {
   if (!tab) toast(`${studio.label} is open at ${studio.url} (the browser blocked the new tab)`, "info", 10000);
 }
 
-/// The top bar's "Recordings" button, its dialog, and the replay's "Run from here" button.
+/// The timeline's "Recordings…" button, its dialog, and the replay's "Run from here" button.
 export class Recordings {
   readonly button: HTMLButtonElement;
   readonly forkButton: HTMLButtonElement;
@@ -81,17 +81,18 @@ export class Recordings {
       h("div.dialog-buttons", {}, h("button", { onclick: () => this.dialog.close() }, "Close")),
     );
     document.body.append(this.dialog);
-    this.button = h("button#recordings", { title: "Open a recording of this studio's record folder in a new tab", onclick: () => void this.show() }, "Recordings");
+    this.button = h("button#recordings", { title: "Open a recording of this studio's record folder in a new tab", onclick: () => void this.show() }, "Recordings…");
     this.forkButton = h(
       "button#run-from-here",
-      { title: "Start a live session from the tick in view, with the behavior on disk, in a new tab", onclick: () => void this.runFromHere(), hidden: true },
+      { title: "Start a live session from the tick in view, with the behavior on disk, in a new tab", onclick: () => void this.runFromHere() },
       "Run from here",
     );
   }
 
-  /// Show "Run from here" only in a replay of a deterministic recording.
+  /// "Run from here" is beside the Recordings button only in a replay of a deterministic recording.
   setReplay(deterministic: boolean): void {
-    this.forkButton.hidden = !deterministic;
+    if (deterministic && !this.forkButton.isConnected) this.button.after(this.forkButton);
+    else if (!deterministic) this.forkButton.remove();
   }
 
   async show(): Promise<void> {
