@@ -42,6 +42,8 @@ from server.forks import router as fork_router
 from server.frames import Generation
 from server.generations import GenerationGone
 from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
+from server.library import RecordingLibrary
+from server.library import router as library_router
 from server.messages import (
     BEHAVIOR_PARAMS_INDEX,
     DEPTH_INDEX,
@@ -68,6 +70,7 @@ from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
 from server.replay import ReplaySession
 from server.security import SecurityMiddleware, SecurityPolicy
 from server.session import CommandError, Session
+from server.studios import Studios, StudiosMiddleware
 
 log = logging.getLogger("xabsl.server")
 
@@ -147,6 +150,9 @@ class Studio:
         self.graphs = GraphCache()
         self.hub: Hub | None = None
         self.write_lock = asyncio.Lock()
+        #: the recordings it may open, and the replays and forks served beside it (``create_app``)
+        self.library: RecordingLibrary
+        self.studios: Studios
 
     # -- commands -------------------------------------------------------------------------------
 
@@ -683,6 +689,8 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     try:
         yield
     finally:
+        if getattr(app.state, "serves_studios", False):
+            await studio.studios.close_all()
         await hub.close_all()
         session.notify = _ignore
         await session.aclose()
@@ -693,13 +701,22 @@ def _ignore(entry: frames.Entry) -> None:
     return None
 
 
-def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist: Path | None = WEB_DIST) -> FastAPI:
+def create_app(
+    session: Session,
+    policy: SecurityPolicy | None = None,
+    web_dist: Path | None = WEB_DIST,
+    library: RecordingLibrary | None = None,
+    studios: Studios | None = None,
+) -> FastAPI:
     """The studio app for a session (not started yet: the app's lifespan starts and stops it).
 
     Args:
         session: the simulation session to serve.
         policy: security checks (default: loopback, no token).
         web_dist: the built web UI, served at ``/`` (a help page when missing).
+        library: the recordings it may open beside itself (default: none but a replay's own file).
+        studios: the replays and forks served beside it: given, this app is one of them (served
+            under a prefix by the main app's); None: this is the main app, which serves them.
     """
     policy = policy or SecurityPolicy(token=None)
     app = FastAPI(
@@ -711,7 +728,19 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
         redoc_url=None,
         lifespan=_lifespan,
     )
-    app.state.studio = Studio(session, policy)
+    app.state.studio = studio = Studio(session, policy)
+    if library is None:
+        own = [Path(session.recording.path)] if isinstance(session, ReplaySession) else []
+        library = RecordingLibrary(None, own)
+    studio.library = library
+    studio.studios = studios if studios is not None else Studios(policy, web_dist)
+    if studios is None:  # the main app: serves the others under their prefixes, behind its checks
+        studio.studios.library = library
+        app.add_middleware(StudiosMiddleware, studios=studio.studios)
+        app.state.serves_studios = True
+        if not isinstance(session, ReplaySession):
+            plugin = session.example
+            studio.studios.home_example = (Path(getattr(plugin, "path", plugin.root)), getattr(plugin, "world", None))
     app.add_middleware(SecurityMiddleware, policy=policy)
     app.add_exception_handler(FileError, _file_error)
     app.add_exception_handler(CommandError, _command_error)
@@ -720,6 +749,7 @@ def create_app(session: Session, policy: SecurityPolicy | None = None, web_dist:
     app.include_router(docs_router)
     app.include_router(profile_router)
     app.include_router(fork_router)
+    app.include_router(library_router)
     _document_messages(app)
     if web_dist is not None and (web_dist / "index.html").is_file():
         app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")

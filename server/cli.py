@@ -179,7 +179,15 @@ def run(args: argparse.Namespace) -> int:
             for diagnostic in comp.errors[:10]:
                 print("  " + diagnostic.format(), file=sys.stderr)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
-    app = create_app(session, policy, web_dist)
+    from server.library import RecordingLibrary
+    from server.recording import default_folder
+
+    # The recordings the studio lists and opens: its record folder, and a file named here.
+    library = RecordingLibrary(
+        Path(args.record_dir) if args.record_dir else default_folder(),
+        [Path(args.replay)] if args.replay is not None else [],
+    )
+    app = create_app(session, policy, web_dist, library)
 
     config = uvicorn.Config(
         app,

@@ -185,7 +185,9 @@ class ReplaySource:
         ]
         # A new generation (a hello) where a program generation or a static scene starts.
         starts = {view.seq for view in recording.programs.values()} | {s["seq"] for s in recording.static_scenes}
-        self.boundaries = sorted(starts - {0})
+        #: the seqs of the first tick and one past the last (a fork's recording starts at its fork tick)
+        self.first, self.end = recording.first, recording.end
+        self.boundaries = sorted(seq for seq in starts if seq > self.first)
         self._generations: dict[int, Generation] = {}
         self._codecs: dict[tuple[str, int], _Codec] = {}
 
@@ -202,7 +204,7 @@ class ReplaySource:
         gen = self._generations.get(number)
         if gen is not None:
             return gen
-        start = self.boundaries[number - 1] if number else 0
+        start = self.boundaries[number - 1] if number else self.first
         recording = self.recording
         programs: dict[str, dict[str, Any]] = {}
         input_ids: list[tuple[int, ...]] = []
@@ -337,7 +339,7 @@ class ReplaySession(Session):
         self.recording = recording
         self.source = ReplaySource(recording)
         self.paused = True
-        self.position = 0
+        self.position = recording.first
         self._last_recorded: int | None = None
         self._player: asyncio.Task[None] | None = None
         self.seek_seconds = 0.0
@@ -345,8 +347,8 @@ class ReplaySession(Session):
         #: per (behavior key, generation): its program rebuilt from the recorded IC (graphs)
         self._programs_shown: dict[tuple[str, int], tuple[Program | None]] = {}
         #: behavior times of the first and the last tick (the UI's timeline extent)
-        self.t_first = recording.tick(0).t
-        self.t_last = recording.tick(len(recording) - 1).t
+        self.t_first = recording.tick(recording.first).t
+        self.t_last = recording.tick(recording.end - 1).t
 
     # -- the session's lifetime ---------------------------------------------------------------------
 
@@ -357,7 +359,7 @@ class ReplaySession(Session):
 
     async def start(self) -> None:
         """Put the first tick in the ring (paused)."""
-        self.seek(0)
+        self.seek(self.source.first)
 
     async def aclose(self) -> None:
         """Stop playing and close the file."""
@@ -396,8 +398,8 @@ class ReplaySession(Session):
         Raises:
             CommandError: ``seq`` is outside the recording.
         """
-        if not 0 <= seq < len(self.source):
-            raise CommandError(f"tick {seq} is outside the recording (0..{len(self.source) - 1})")
+        if not self.source.first <= seq < self.source.end:
+            raise CommandError(f"tick {seq} is outside the recording ({self.source.first}..{self.source.end - 1})")
         started = time.perf_counter()
         view = self.recording.tick(seq)
         entry = self._record(view)
@@ -422,7 +424,7 @@ class ReplaySession(Session):
     def _advance(self, ticks: int) -> int:
         """Record the next ``ticks`` ticks (fewer at the end); the ticks recorded."""
         start = self.position + 1
-        stop = min(len(self.source), start + ticks)
+        stop = min(self.source.end, start + ticks)
         last: Entry | None = None
         if self._last_recorded != self.position:
             self.seek(self.position)
@@ -435,7 +437,7 @@ class ReplaySession(Session):
     async def _play(self) -> None:
         period = 1.0 / self.behavior_hz
         due = time.perf_counter()
-        while not self.paused and self.position < len(self.source) - 1:
+        while not self.paused and self.position < self.source.end - 1:
             due += period / self.speed
             delay = due - time.perf_counter()
             if delay > 0:
@@ -491,11 +493,11 @@ class ReplaySession(Session):
         if not 0 <= robot < len(robots) or robots[robot]["program"] is None:
             raise CommandError(f"no XABSL robot {robot} in this recording")
         at = self.position if seq is None else seq
-        if not 0 <= at < len(self.source):
-            raise CommandError(f"tick {at} is outside the recording (0..{len(self.source) - 1})")
+        if not self.source.first <= at < self.source.end:
+            raise CommandError(f"tick {at} is outside the recording ({self.source.first}..{self.source.end - 1})")
         name = robots[robot]["name"]
         view = self.recording.tick(at)
-        previous = self.recording.tick(at - 1) if at > 0 else None
+        previous = self.recording.tick(at - 1) if at > self.source.first else None
         agent = view.agents.get(name)
         if agent is None:
             raise CommandError(f"{name} has no tick {at} in the recording")
@@ -517,8 +519,8 @@ class ReplaySession(Session):
         """
         source = self.source
         number = source.generation_number(self.position)
-        seg_start = source.boundaries[number - 1] if number else 0
-        seg_stop = source.boundaries[number] if number < len(source.boundaries) else len(source)
+        seg_start = source.boundaries[number - 1] if number else source.first
+        seg_stop = source.boundaries[number] if number < len(source.boundaries) else source.end
         base = self.recording.tick(seg_start).t
         step = 1000.0 / self.behavior_hz
         start = max(seg_start, seg_start + int((t0 - base) // step))
@@ -540,7 +542,7 @@ class ReplaySession(Session):
         return {
             "example": self.example.name,
             "paused": self.paused,
-            "finished": self.position >= len(self.source) - 1,
+            "finished": self.position >= self.source.end - 1,
             "speed": self.speed,
             "seed": self.seed,
             "behavior_hz": self.behavior_hz,
@@ -564,6 +566,7 @@ class ReplaySession(Session):
             "replay": {
                 "file": self.recording.path,
                 "ticks": len(self.source),
+                "first": self.source.first,
                 "position": self.position,
                 "t0": self.t_first,
                 "t1": self.t_last,

@@ -47,6 +47,7 @@ from engine.runtime.breakpoints import Breakpoint, BreakpointError
 from server import frames, worker
 from server.breakpoints import BreakpointStore, validate
 from server.channel import Channel, ChannelClosed
+from server.forkstart import ForkStart
 from server.frames import Entry, FrameRecorder, Generation, Ring
 from server.generations import Generations
 from server.messages import (
@@ -192,6 +193,8 @@ class Session:
         self._restart_lock: asyncio.Lock | None = None
         #: records the session to a folder from the samples (``server.recording``); None: off
         self.live_recorder: LiveRecorder | None = None
+        #: start the first simulation at a tick of a recording (``server.forkstart``); None: fresh
+        self.fork_start: ForkStart | None = None
         self._incoming: dict[str, Program] = {}
         self._incoming_sources: dict[str, dict[str, str]] = {}
         for key in self.programs:
@@ -251,6 +254,8 @@ class Session:
         loop = self._loop
         assert loop is not None
         latest = self.ring.latest
+        fork = self.fork_start if reason == "connect" else None
+        first = fork.at - 2 if fork is not None else 0  # its first sample: tick at - 1, as recorded
         config = WorkerConfig(
             example=self.example,
             seed=seed,
@@ -269,11 +274,12 @@ class Session:
                 for key, state in self.programs.items()
                 if state.running is None and state.partial_json is not None
             },
-            seq=max(latest.seq if latest else 0, self.crash.get("seq", 0) if self.crash else 0),
+            seq=max(latest.seq if latest else first, self.crash.get("seq", 0) if self.crash else 0),
             generation=self.generation.number if self.generation is not None else 0,
             reason=reason,
             breakpoints={key: tuple(points.values()) for key, points in self.breakpoints.items()},
             history_ticks=self.ring.capacity,
+            fork=fork,
         )
         ours, theirs = socket.socketpair()
         process = _context(self.example).Process(

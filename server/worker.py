@@ -59,6 +59,7 @@ from engine.runtime.debug import Unknown, explain_decision, render, show_value
 from engine.types import Kind, Value
 from server.channel import Channel, ChannelClosed
 from server.explain import explanation_result, mark_values, tree_result
+from server.forkstart import ForkStart
 from server.frames import FrameSampler, ProgramCodec
 from server.messages import (
     Apply,
@@ -132,6 +133,8 @@ class WorkerConfig:
     breakpoints: dict[str, tuple[Breakpoint, ...]] = field(default_factory=dict)
     #: samples the server's ring holds: run logs older than that are dropped (``fork``)
     history_ticks: int = 4800
+    #: start at a tick of a recording instead of a fresh world ("run from here", ``server.forkstart``)
+    fork: ForkStart | None = None
 
 
 @dataclass(slots=True)
@@ -201,7 +204,10 @@ class Simulation:
         self.history_ticks = config.history_ticks
         #: whether commands are logged (not while re-simulating a run for a fork)
         self.logging = True
-        self._build_world(self.seed)
+        if config.fork is not None:
+            self._fork_world(config.fork)
+        else:
+            self._build_world(self.seed)
 
     # -- world and generations ---------------------------------------------------------------------
 
@@ -241,6 +247,18 @@ class Simulation:
         """Drop the logs of runs whose samples have all left the server's ring."""
         oldest = self.seq - self.history_ticks
         self.logs = [log for log in self.logs if log.end is None or log.end > oldest]
+
+    def _fork_world(self, fork: ForkStart) -> None:
+        """The recorded world at the fork tick, with the behaviors on disk (``server.forkstart``)."""
+        from server.forkstart import resimulated
+
+        start = resimulated(self.example, self.programs, fork, self.physics_hz, self.behavior_hz)
+        self.world, self.loop, self.engines, self.keys = start.world, start.loop, start.engines, start.keys
+        self._owners.clear()
+        # The run log replays a run from its seed; this one started from a recording's tick.
+        log = RunLog(self.seed, self.programs, self.seq + 1)
+        log.problem = "this run started from a tick of a recording: fork the recording in its replay instead"
+        self._start_log(log)
 
     def generation(self, reason: HelloReason, fork: tuple[int, int, int] | None = None) -> NewGeneration:
         """Start a new generation of ids; returns its message for the server (``fork``: its origin)."""
@@ -938,7 +956,13 @@ def main(sock: socket.socket, config: WorkerConfig) -> None:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     channel: WorkerChannel = Channel(sock)
     try:
-        run(channel, Simulation(config))
+        try:
+            sim = Simulation(config)
+        except Exception as error:  # say why (a fork that cannot re-simulate), then end
+            channel.send(Crash(f"{type(error).__name__}: {error}", traceback.format_exc(), config.seq, 0))
+            _drain(channel)
+            raise SystemExit(1) from None
+        run(channel, sim)
     except ChannelClosed:
         pass
     finally:

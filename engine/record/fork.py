@@ -22,13 +22,16 @@ refused.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import Any
 
 from engine.host import Agent, BehaviorLoop, World
 from engine.ir.model import Program
 from engine.record.reader import Recording, RecordingError
+from engine.record.sampler import AgentSampler
+from engine.record.sources import compile_sources, same_sources
 from engine.record.writer import engines_of
 
-__all__ = ["resimulate", "switch_programs"]
+__all__ = ["fork_programs", "resimulate", "switch_programs"]
 
 
 def resimulate(recording: Recording, build_world: Callable[[int], World], at: int, verify: bool = True) -> BehaviorLoop:
@@ -52,6 +55,8 @@ def resimulate(recording: Recording, build_world: Callable[[int], World], at: in
     header = recording.header
     if not header.get("deterministic", False):
         raise RecordingError(f"{recording.path}: not a recording of a deterministic run")
+    if recording.first:
+        raise RecordingError(f"{recording.path} is itself a fork (from tick {recording.first}): fork its original")
     if not 0 <= at < len(recording):
         raise RecordingError(f"fork tick {at} is outside the recording (0..{len(recording) - 1})")
     early = [e["kind"] for e in recording.events if e["seq"] < at and e["kind"] != "note"]
@@ -62,11 +67,42 @@ def resimulate(recording: Recording, build_world: Callable[[int], World], at: in
     if names != [a["name"] for a in header["agents"]]:
         raise RecordingError(f"the rebuilt world has other agents: {names}")
     loop = BehaviorLoop(world, int(header["physics_hz"]), int(header["behavior_hz"]))
-    for _ in range(at):
+    observe = _observer(recording, world)
+    for seq in range(at):
         loop.tick()
+        observe(seq)
     if verify and at > 0:
         _verify(recording, world, at - 1)
     return loop
+
+
+def _observer(recording: Recording, world: World) -> Callable[[int], None]:
+    """Per tick, the reads the recorder made of the world in the recorded run, in its order.
+
+    Reading is not free of effects in every world: the soccer bindings compute the team queries
+    on their first read in a tick and keep the last team ball seen, so a getter read only by the
+    recorder's sampler changes what it answers later. A fork reads what the recording run read
+    (every agent's sampled symbols, the dynamic scene, the status on key frames) so that it is
+    the recorded run, read for read.
+    """
+    recorded = {a["name"] for a in recording.header["agents"] if a["program"] is not None}
+    samplers = [
+        AgentSampler(engine)
+        for agent, engine in zip(world.agents, engines_of(world), strict=True)
+        if engine is not None and agent.name in recorded
+    ]
+    key_every = recording.key_every
+    world.static_scene()  # what Recorder.__init__ reads
+    world.dynamic_scene()
+
+    def observe(seq: int) -> None:
+        for sampler in samplers:
+            sampler.sample()
+        if seq % key_every == 0:
+            world.status()
+        world.dynamic_scene()
+
+    return observe
 
 
 def _verify(recording: Recording, world: World, seq: int) -> None:
@@ -94,3 +130,42 @@ def switch_programs(world: World, programs: Mapping[str, Program], program_key: 
             engine.reload(programs[key])
             switched += 1
     return switched
+
+
+def fork_programs(
+    recording: Recording, current: Mapping[str, tuple[Program, Mapping[str, Any] | None]]
+) -> tuple[dict[str, Program], dict[str, Program]]:
+    """The programs a fork re-simulates with, and those it switches to at the fork tick.
+
+    Args:
+        recording: the recording to fork.
+        current: per program key the behavior on disk now: its program and its sources
+            (``engine.record.sources.program_sources``).
+
+    Returns:
+        ``(recorded, switch)``: per key the program of the recorded ticks (compiled again from
+        the recorded sources; the current program itself when its sources are the recorded ones,
+        or when the recording holds none) and the programs that differ from the recorded ones
+        (for :func:`switch_programs`).
+
+    Raises:
+        RecordingError: the recording's program keys are not ``current``'s, or its recorded
+            sources do not compile.
+    """
+    keys = sorted({a["program"] for a in recording.header["agents"] if a["program"] is not None})
+    if keys != sorted(current):
+        raise RecordingError(
+            f"{recording.path} runs the behaviors {', '.join(keys)}; this run has {', '.join(sorted(current))}"
+        )
+    recorded: dict[str, Program] = {}
+    switch: dict[str, Program] = {}
+    for key in keys:
+        program, sources = current[key]
+        view = recording.programs.get((key, 0))
+        kept = view.sources if view is not None else None
+        if kept is None or same_sources(kept, sources):
+            recorded[key] = program
+        else:
+            recorded[key] = compile_sources(kept, f"the recorded behavior {key!r} of {recording.path}")
+            switch[key] = program
+    return recorded, switch

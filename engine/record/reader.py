@@ -20,6 +20,7 @@ values) and the fault; ``AgentTick.tree()`` rebuilds the engine's activation tre
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import struct
 from collections.abc import Iterator
@@ -53,6 +54,8 @@ class ProgramView:
     description: dict[str, Any]
     tables: dict[str, Any]
     changed_files: tuple[str, ...] = ()
+    #: the source files of a program at the start (``engine.record.sources``), None if not recorded
+    sources: dict[str, Any] | None = None
     #: the generation's intermediate code (None in recordings made before it was recorded)
     ic: str | None = None
 
@@ -211,6 +214,7 @@ class Recording:
                     data["program"],
                     tables[data["key"]],
                     tuple(data.get("changed_files", ())),
+                    data.get("sources"),
                     data.get("ic"),
                 )
                 self.programs[(view.key, view.gen)] = view
@@ -221,15 +225,17 @@ class Recording:
                     key = (data["data"]["key"], data["data"]["gen"])
                     if key in self.programs:
                         old = self.programs[key]
-                        self.programs[key] = ProgramView(
-                            old.key, old.gen, old.seq, old.description, tables[old.key], old.changed_files, old.ic
-                        )
+                        self.programs[key] = dataclasses.replace(old, tables=tables[old.key])
             else:
                 self.static_scenes.append(data)
         counts = summary.statistics.channel_message_counts if summary.statistics else {}
         scene_channels = [c for c, ch in summary.channels.items() if ch.topic == S.WORLD_SCENE]
-        #: number of ticks recorded (seq runs 0 .. ticks - 1)
+        #: number of ticks recorded (seq runs first .. first + ticks - 1)
         self.ticks_count = sum(counts.get(c, 0) for c in scene_channels)
+        #: the seq of the first tick: 0, or where the run this continues was forked
+        self.first = int(header.get("first_seq") or 0)
+        #: one past the seq of the last tick
+        self.end = self.first + self.ticks_count
 
     # -- basics -------------------------------------------------------------------------------------
 
@@ -274,21 +280,22 @@ class Recording:
         Raises:
             RecordingError: ``seq`` is outside the recording.
         """
-        if not 0 <= seq < self.ticks_count:
-            raise RecordingError(f"tick {seq} is outside the recording (0..{self.ticks_count - 1})")
-        start = seq - seq % self.key_every
+        if not self.first <= seq < self.end:
+            raise RecordingError(f"tick {seq} is outside the recording ({self.first}..{self.end - 1})")
+        start = max(self.first, seq - seq % self.key_every)  # the first tick is a key frame too
         last = None
         for last in self._decode(start, seq + 1):  # noqa: B007 -- only the last view is wanted
             pass
         assert last is not None and last.seq == seq
         return last
 
-    def ticks(self, start: int = 0, stop: int | None = None) -> Iterator[TickView]:
-        """Ticks ``start`` .. ``stop - 1`` (default: to the end), decoded in one pass."""
-        stop = self.ticks_count if stop is None else min(stop, self.ticks_count)
+    def ticks(self, start: int | None = None, stop: int | None = None) -> Iterator[TickView]:
+        """Ticks ``start`` .. ``stop - 1`` (default: all), decoded in one pass."""
+        start = self.first if start is None else max(start, self.first)
+        stop = self.end if stop is None else min(stop, self.end)
         if start >= stop:
             return
-        key = start - start % self.key_every
+        key = max(self.first, start - start % self.key_every)
         for view in self._decode(key, stop):
             if view.seq >= start:
                 yield view
@@ -307,11 +314,12 @@ class Recording:
         """
         if agent not in self.agents:
             raise RecordingError(f"no agent {agent!r} in {self.path} (agents: {', '.join(self.agents)})")
-        stop = self.ticks_count if stop is None else min(stop, self.ticks_count)
+        start = max(start, self.first)
+        stop = self.end if stop is None else min(stop, self.end)
         out: dict[str, list[tuple[int, Value | str | None]]] = {name: [] for name in symbols}
         if start >= stop:
             return out
-        key = start - start % self.key_every
+        key = max(self.first, start - start % self.key_every)
         values: dict[str, Any] = {}
         loads = orjson.loads
         for _schema, _channel, message in self._reader.iter_messages(
@@ -350,7 +358,8 @@ class Recording:
         for name in names:
             if name not in self.agents:
                 raise RecordingError(f"no agent {name!r} in {self.path} (agents: {', '.join(self.agents)})")
-        stop = self.ticks_count if stop is None else min(stop, self.ticks_count)
+        start = max(start, self.first)
+        stop = self.end if stop is None else min(stop, self.end)
         if start >= stop:
             return
         wanted = {S.agent_topic(name): name for name in names}

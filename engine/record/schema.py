@@ -142,6 +142,14 @@ RECORDING_SCHEMA: dict[str, Any] = {
         "key_every": {"type": "integer", "minimum": 1},
         "decimals": {"type": ["integer", "null"], "description": "fractional digits kept of decimal symbols"},
         "deterministic": {"type": "boolean", "description": "the run is a pure function of seed and programs"},
+        "world_options": {"type": "object", "description": "how the world was built (the plug-in's options)"},
+        "first_seq": {"type": "integer", "minimum": 0, "description": "seq of the first tick (default 0)"},
+        "forked_from": {
+            "type": "object",
+            "description": "the recording this run was forked from, and the tick",
+            "required": ["file", "seq"],
+            "properties": {"file": {"type": "string"}, "seq": {"type": "integer", "minimum": 0}},
+        },
         "agents": {
             "type": "array",
             "items": {
@@ -213,6 +221,15 @@ PROGRAM_SCHEMA: dict[str, Any] = {
         "reason": {"type": "string", "description": "start, reload, reset"},
         "program": {"type": "object", "description": "the program JSON of docs/protocol.md"},
         "changed_files": {"type": "array", "items": {"type": "string"}},
+        "sources": {
+            "type": "object",
+            "description": "the source files (names relative to the agents file's folder): what a fork re-runs",
+            "required": ["agents", "files"],
+            "properties": {
+                "agents": {"type": "string"},
+                "files": {"type": "object", "additionalProperties": {"type": "string"}},
+            },
+        },
         "ic": {
             "type": "string",
             "description": "the generation's XABSL intermediate code, from which a reader rebuilds the program",

@@ -179,6 +179,11 @@ class Recorder:
             display precision; None: exact). Activation paths and assignment values are always exact.
         chunk_size: uncompressed bytes per MCAP chunk.
         background: encode and write in a writer process (the simulation thread only samples).
+        sources: per program key its source files (:func:`engine.record.sources.program_sources`),
+            so that a fork can re-simulate with the recorded behavior.
+        world_options: how the world was built (the world plug-in's options, e.g. ``robots``).
+        first_seq: the seq of the first tick (a fork continues its original's numbering).
+        forked_from: ``{"file", "seq"}`` of the recording this run was forked from.
 
     Raises:
         ValueError: an engine runs a program that is not in ``programs``.
@@ -201,6 +206,10 @@ class Recorder:
         decimals: int | None = DECIMALS,
         chunk_size: int = CHUNK_SIZE,
         background: bool = False,
+        sources: Mapping[str, Mapping[str, Any]] | None = None,
+        world_options: Mapping[str, Any] | None = None,
+        first_seq: int = 0,
+        forked_from: Mapping[str, Any] | None = None,
     ) -> None:
         if key_every < 1:
             raise ValueError(f"key_every must be at least 1, got {key_every}")
@@ -211,8 +220,9 @@ class Recorder:
         self.programs = dict(programs)
         self.behavior_hz = behavior_hz
         self.key_every = key_every
-        self.seq = 0
+        self.seq = first_seq
         self.generation = 0
+        self._sources = dict(sources or {})
         self._closed = False
         self._tables: dict[str, ProgramTables] = {}
         engines = list(engines) if engines is not None else engines_of(world)
@@ -259,6 +269,9 @@ class Recorder:
                     for i, a in enumerate(world.agents)
                 ],
                 "tables": {key: tables.to_json() for key, tables in self._tables.items()},
+                **({"world_options": dict(world_options)} if world_options is not None else {}),
+                **({"first_seq": first_seq} if first_seq else {}),
+                **({"forked_from": dict(forked_from)} if forked_from is not None else {}),
             },
         )
         for key in self._tables:
@@ -331,6 +344,7 @@ class Recorder:
                 "program": program_to_json(program),
                 "changed_files": list(changed_files),
                 "ic": emit_ic(program),
+                **({"sources": self._sources[key]} if reason == "start" and key in self._sources else {}),
             },
         )
 

@@ -253,6 +253,7 @@ def play_match(
     progress: Any = None,
     record: str | None = None,
     record_keys: tuple[str, str] = ("behavior", "chase"),
+    record_sources: tuple[dict[str, Any] | None, dict[str, Any] | None] = (None, None),
     **options: Any,
 ) -> MatchReport:
     """Play a whole match headless and report score, statistics and option activations.
@@ -266,6 +267,8 @@ def play_match(
         progress: called as ``progress(time_ms, status)`` every simulated second, if given.
         record: write the match to this MCAP file (``engine.record``).
         record_keys: the names of the home and away programs in the recording.
+        record_sources: the home and away programs' source files (``engine.record.sources``), kept
+            in the recording so that a fork can re-simulate it (``xabsl run ... --fork``).
         **options: further ``SoccerWorld`` arguments.
     """
     world = build_world(seed, home, away, players=players, half_duration_s=half_duration_s, record=True, **options)
@@ -292,6 +295,14 @@ def play_match(
             example="soccer",
             behavior_hz=DEFAULT_BEHAVIOR_HZ,
             physics_hz=DEFAULT_PHYSICS_HZ,
+            sources={k: v for k, v in zip(record_keys, record_sources, strict=True) if v is not None},
+            # How the world was built, for forks (options that are not plain JSON values are left
+            # out: a fork rebuilds without them, and its check against the recording says so).
+            world_options={
+                "robots": players,
+                "half_duration_s": half_duration_s,
+                **{k: v for k, v in options.items() if isinstance(v, bool | int | float | str)},
+            },
         )
         watch = on_tick
 
@@ -353,8 +364,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--duration",
         metavar="S",
         type=float,
-        default=1200.0,
-        help="playing time of the match in simulated seconds, two halves (default 1200)",
+        default=None,
+        help="playing time of the match in simulated seconds, two halves (default 1200); with --fork: "
+        "how long to go on (default: to the end of the match)",
     )
     parser.add_argument("--seed", metavar="N", type=int, default=1, help="random seed (default 1)")
     parser.add_argument("--players", metavar="N", type=int, default=5, help="robots per team, 1..7 (default 5)")
@@ -362,6 +374,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--json", action="store_true", help="print one JSON object: score, per-team statistics, option activations"
     )
     parser.add_argument("--record", metavar="FILE.mcap", help="record every tick of the match to an MCAP file")
+    parser.add_argument(
+        "--fork",
+        metavar="REC.mcap",
+        help="go on from tick --at of this recording with the behaviors on disk (re-simulated to that tick)",
+    )
+    parser.add_argument("--at", metavar="SEQ", type=int, help="the tick of --fork to go on from")
     parser.add_argument(
         "--render", metavar="OUT.dot", help="write the home team's option graph as Graphviz DOT and exit"
     )
@@ -371,7 +389,7 @@ def main(args: argparse.Namespace) -> int:
     """Play one match as the flags say; print the score (or JSON). Returns the exit status."""
     if not 1 <= args.players <= 7:
         raise UsageError(f"--players must be in 1..7, got {args.players}")
-    if args.duration <= 0:
+    if args.duration is not None and not 0 < args.duration < math.inf:
         raise UsageError(f"--duration must be positive, got {args.duration}")
     try:
         home = load_team(args.home)
@@ -389,8 +407,17 @@ def main(args: argparse.Namespace) -> int:
         print(f"wrote the option graph of {args.home} to {args.render}")
         return 0
 
-    half = args.duration / 2.0
-    record = {"record": args.record, "record_keys": _record_keys(args.home, args.away)} if args.record else {}
+    if args.fork is not None or args.at is not None:
+        return _fork_main(args, home, away)
+    duration = args.duration if args.duration is not None else 1200.0
+    half = duration / 2.0
+    record: dict[str, Any] = {}
+    if args.record:
+        record = {
+            "record": args.record,
+            "record_keys": _record_keys(args.home, args.away),
+            "record_sources": (_sources(args.home, home), _sources(args.away, away)),
+        }
     if sys.stdout.isatty() and not args.json:
         report = _play_with_progress(args.seed, home, away, args.players, half, **record)
     else:
@@ -401,8 +428,7 @@ def main(args: argparse.Namespace) -> int:
     result = report.as_dict()
     h, a = report.score
     print(
-        f"home {h} : {a} away   (seed {args.seed}, {args.duration:.0f} s of play, "
-        f"{result['real_time_factor']}x real time)"
+        f"home {h} : {a} away   (seed {args.seed}, {duration:.0f} s of play, {result['real_time_factor']}x real time)"
     )
     for key in TEAM_KEYS:
         t = result["teams"][key]
@@ -412,6 +438,184 @@ def main(args: argparse.Namespace) -> int:
         )
     for fault in report.faults:
         print(f"  fault: {fault}")
+    return 0
+
+
+def _sources(folder: str, program: Program) -> dict[str, Any]:
+    """The source files of a team behavior, for its recording."""
+    from engine.record.sources import program_sources
+
+    return program_sources(Path(folder) / AGENTS_FILE, program.files)
+
+
+@dataclass
+class ForkReport:
+    """What :func:`fork_match` did."""
+
+    at: int
+    t: int
+    switched: list[str]
+    ticks: int
+    score: tuple[int, int]
+    resimulate_seconds: float
+    record: str | None
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON data (``xabsl run --fork --json``)."""
+        return {
+            "at": self.at,
+            "t": self.t,
+            "switched": self.switched,
+            "ticks": self.ticks,
+            "score": {"home": self.score[0], "away": self.score[1]},
+            "resimulate_seconds": round(self.resimulate_seconds, 3),
+            "record": self.record,
+        }
+
+
+def fork_match(
+    recording_path: str | Path,
+    at: int,
+    home: tuple[Program, dict[str, Any] | None],
+    away: tuple[Program, dict[str, Any] | None],
+    keys: tuple[str, str] = ("behavior", "chase"),
+    duration_s: float | None = None,
+    record: str | Path | None = None,
+) -> ForkReport:
+    """Go on from tick ``at`` of a recorded match with the programs ``home`` and ``away``.
+
+    The match is re-simulated from the recorded seed to ``at`` with the recorded behaviors
+    (compiled again from the sources the recording keeps), checked against the recording at
+    ``at - 1``, the edited behaviors are switched in, and the match goes on headless for
+    ``duration_s`` simulated seconds (default: to its end). ``record`` writes the continuation:
+    its header names the original and the tick, its seqs and times continue the original's.
+
+    Args:
+        recording_path: a recording of ``xabsl run examples/soccer --record``.
+        at: the fork tick.
+        home: the home team's program on disk and its sources (``engine.record.sources``).
+        away: the away team's, likewise.
+        keys: the teams' program keys (as in the recording).
+        duration_s: simulated seconds to go on.
+        record: the continuation's recording.
+
+    Raises:
+        UsageError: not a soccer recording, a tick outside it, a recording that cannot be
+            re-simulated (not deterministic, other behaviors before ``at``, no world options).
+    """
+    import time
+
+    from engine.host import BehaviorLoop
+    from engine.record import Recorder, Recording, RecordingError
+    from engine.record.fork import fork_programs, resimulate, switch_programs
+
+    try:
+        recording = Recording(recording_path)
+    except (RecordingError, OSError) as error:
+        raise UsageError(f"--fork: {error}") from None
+    with recording:
+        header = recording.header
+        if header.get("example") != "soccer":
+            raise UsageError(f"--fork: {recording_path} is a recording of {header.get('example')!r}, not of soccer")
+        options = dict(header.get("world_options") or {})
+        if "robots" not in options or "half_duration_s" not in options:
+            raise UsageError(f"--fork: {recording_path} does not say how its world was built (no world_options)")
+        players = int(options.pop("robots"))
+        half = float(options.pop("half_duration_s"))
+        behavior_hz = int(header["behavior_hz"])
+
+        def key_of(agent: Any) -> str:
+            return keys[agent.team_index]
+
+        started = time.perf_counter()
+        try:
+            if not recording.first <= at < recording.end:
+                raise RecordingError(f"--at {at} is outside the recording ({recording.first}..{recording.end - 1})")
+            recorded, switch = fork_programs(recording, {keys[0]: home, keys[1]: away})
+            loop: BehaviorLoop = resimulate(
+                recording,
+                lambda seed: build_world(
+                    seed, recorded[keys[0]], recorded[keys[1]], players=players, half_duration_s=half, **options
+                ),
+                at,
+            )
+        except RecordingError as error:
+            raise UsageError(f"--fork: {error}") from None
+        resimulated = time.perf_counter() - started
+        world = loop.world
+        assert isinstance(world, SoccerWorld)
+        switch_programs(world, switch, key_of)
+        t = loop.now_ms
+        recorder = None
+        if record is not None:
+            from engine.record import Recorder
+
+            recorder = Recorder.for_world(
+                record,
+                world,
+                key_of,
+                example="soccer",
+                behavior_hz=behavior_hz,
+                physics_hz=int(header["physics_hz"]),
+                sources={k: s for k, (_p, s) in zip(keys, (home, away), strict=True) if s is not None},
+                world_options=header.get("world_options"),
+                first_seq=at,
+                forked_from={"file": Path(recording_path).name, "seq": at},
+            )
+    # Generous bound, as play_match's: the referee ends the match.
+    limit = duration_s if duration_s is not None else 2 * half + 600.0
+    ticks = max(0, -(-round(limit * behavior_hz * 1000) // 1000))
+    ran = 0
+    try:
+        for _ in range(ticks):
+            if duration_s is None and world.finished:
+                break
+            now = loop.now_ms
+            loop.tick()
+            ran += 1
+            if recorder is not None:
+                recorder.tick(now)
+    except BaseException:
+        if recorder is not None:
+            recorder.abort()
+        raise
+    if recorder is not None:
+        recorder.close()
+    return ForkReport(
+        at,
+        t,
+        sorted(switch),
+        ran,
+        (world.game.score[0], world.game.score[1]),
+        resimulated,
+        None if record is None else str(record),
+    )
+
+
+def _fork_main(args: argparse.Namespace, home: Program, away: Program) -> int:
+    if args.fork is None or args.at is None:
+        raise UsageError("--fork REC.mcap and --at SEQ go together")
+    report = fork_match(
+        args.fork,
+        args.at,
+        (home, _sources(args.home, home)),
+        (away, _sources(args.away, away)),
+        _record_keys(args.home, args.away),
+        args.duration,
+        args.record,
+    )
+    if args.json:
+        sys.stdout.buffer.write(orjson.dumps(report.as_dict()) + b"\n")
+        return 0
+    switched = ", ".join(report.switched) or "none (the behaviors are the recorded ones)"
+    h, a = report.score
+    print(
+        f"forked {args.fork} at tick {report.at} (t = {report.t} ms), re-simulated in {report.resimulate_seconds:.1f} s"
+    )
+    print(f"  behaviors switched: {switched}")
+    print(
+        f"  went on {report.ticks} ticks: home {h} : {a} away" + (f"; recorded to {args.record}" if args.record else "")
+    )
     return 0
 
 

@@ -4,11 +4,25 @@ import type { ServerDiagnostic } from "./xabsl/lint";
 /// The token of a server that requires one: `?token=` of the page address.
 export const token: string | null = new URLSearchParams(globalThis.location?.search ?? "").get("token");
 
-/// The websocket address on the page's origin.
+/// The page's folder on the server: `/`, or `/replay/ID/` and `/fork/ID/` for a studio served beside
+/// the main one; every address of the page is relative to it.
+export function basePath(): string {
+  const path = globalThis.location?.pathname ?? "/";
+  return path.slice(0, path.lastIndexOf("/") + 1) || "/";
+}
+
+/// The websocket address on the page's origin (under the page's folder).
 export function websocketUrl(): string {
   const loc = globalThis.location;
   const scheme = loc.protocol === "https:" ? "wss:" : "ws:";
-  return `${scheme}//${loc.host}/ws${token ? `?token=${encodeURIComponent(token)}` : ""}`;
+  return `${scheme}//${loc.host}${basePath()}ws${token ? `?token=${encodeURIComponent(token)}` : ""}`;
+}
+
+/// A JSON request under `api/` (for modules of their own; the answer's `detail` on an error).
+export async function apiJson<T>(method: string, path: string, body?: unknown): Promise<T> {
+  const { status, data } = await request<T>(method, path, body);
+  if (status >= 400) throw new ApiError((data as { detail?: string })?.detail ?? `${method} ${path}: HTTP ${status}`, status, data);
+  return data;
 }
 
 export class ApiError extends Error {

@@ -19,7 +19,8 @@ import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
 import { ForkControls } from "./panels/fork";
-import { loadReplay, replayOf } from "./replay";
+import { forkable, loadReplay, replayOf } from "./replay";
+import { Recordings } from "./recordings";
 import { TopBar } from "./panels/topbar";
 import { DynamicsPanel } from "./panels/dynamics";
 import { FactsPanel } from "./panels/facts";
@@ -52,7 +53,10 @@ function main(): void {
         const from = hello.reason === "connect" ? t - HISTORY_MS : Math.min(t, session.buffer.newest?.x ?? t - HISTORY_MS);
         void connection
           .command("status", {})
-          .then((status) => replayOf(status as Record<string, unknown>))
+          .then((status) => {
+            recordings.setReplay(forkable(status as Record<string, unknown>));
+            return replayOf(status as Record<string, unknown>);
+          })
           .catch(() => null)
           .then((replay) =>
             replay
@@ -154,6 +158,10 @@ function main(): void {
   const fork = new ForkControls(session, connection);
   timeline.toolbar.append(fork.button, fork.badge);
   activation.element.firstElementChild?.after(fork.original);
+  // Recordings (a dialog, opens a replay in a new tab) and, in a replay, "Run from here" at the
+  // tick in view: in the timeline's toolbar, beside the history they are about.
+  const recordings = new Recordings(session);
+  timeline.element.querySelector(".toolbar")?.append(recordings.button);
   optionView.breakpoints.onHitsChanged = () => {
     timeline.markHits(optionView.breakpoints.hits);
     pending.add("cursor"); // paused: no tick follows that would redraw
@@ -273,7 +281,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline, editor };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline, editor, recordings };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 

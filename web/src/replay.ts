@@ -29,6 +29,13 @@ export function replayOf(status: Record<string, unknown> | null | undefined): Re
   return { file: String(replay.file ?? ""), ticks: replay.ticks, t0: replay.t0, t1: replay.t1 };
 }
 
+/// Whether a status answer is of a replay that can be forked ("Run from here"): a recording of a
+/// deterministic run that is not itself a fork.
+export function forkable(status: Record<string, unknown> | null | undefined): boolean {
+  const header = (status?.["replay"] as { header?: Record<string, unknown> } | undefined)?.header;
+  return !!header && header["deterministic"] === true && !header["first_seq"];
+}
+
 /// The hunks `[t0, t1]` (inclusive behavior times) that together cover a recording.
 export function hunks(info: ReplayInfo, behaviorHz: number): Array<[number, number]> {
   const span = (HUNK_TICKS * 1000) / behaviorHz;

@@ -97,6 +97,8 @@ export class ForkControls {
   render(changes: Set<SessionEvent>): void {
     const session = this.session;
     if (changes.has("hello")) this.fetched.clear();
+    // A replay forks into a new tab instead (its own "Run from here", recordings.ts).
+    this.button.hidden = session.replay !== null;
     this.button.disabled = this.busy || session.cursor === null || session.replay !== null || !session.view;
     const origin = this.origin;
     this.badge.hidden = origin === null;

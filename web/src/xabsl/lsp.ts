@@ -73,7 +73,9 @@ export function websocketTransport(url: string): Transport {
 export function lspUrl(token: string | null): string {
   const loc = globalThis.location;
   const scheme = loc.protocol === "https:" ? "wss:" : "ws:";
-  return `${scheme}//${loc.host}/lsp${token ? `?token=${encodeURIComponent(token)}` : ""}`;
+  const path = loc.pathname;
+  const base = path.slice(0, path.lastIndexOf("/") + 1) || "/";
+  return `${scheme}//${loc.host}${base}lsp${token ? `?token=${encodeURIComponent(token)}` : ""}`;
 }
 
 /// The pause before connecting again after a close, doubled each failed attempt up to the maximum.
