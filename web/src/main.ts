@@ -111,7 +111,7 @@ function main(): void {
         [".", "step one tick (pauses first)"],
         ["← →  (in the timeline)", "step back / forward in time"],
         ["L  or  End", "back to live (End also from a dropdown)"],
-        ["⑂ Run from here (timeline)", "restart the world at the cursor's tick with the current behavior"],
+        ["Run from here (timeline)", "restart the world at the cursor's tick with the current behavior"],
         ["G / O", "option graph / option view"],
         ["E", "editor, at the option shown in the option view"],
         ["Esc then Tab (in the editor)", "move the focus out of the editor"],

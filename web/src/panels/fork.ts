@@ -54,7 +54,7 @@ export class ForkControls {
         title: "Restart the world at the tick under the cursor with the current behavior and run on live (the original run stays in the history for comparison)",
         onclick: () => this.runFromHere(),
       },
-      "⑂ Run from here",
+      "Run from here",
     );
     this.badge = h("span.fork-badge", { hidden: true });
     this.originalText = h("span.fork-original-path");
@@ -71,7 +71,7 @@ export class ForkControls {
     if (!tick || this.busy) return;
     this.busy = true;
     this.button.disabled = true;
-    setText(this.button, "⑂ Re-simulating…");
+    setText(this.button, "Re-simulating…");
     void this.connection
       .command("fork", { seq: tick.seq })
       .then(async (result) => {
@@ -89,7 +89,7 @@ export class ForkControls {
       })
       .finally(() => {
         this.busy = false;
-        setText(this.button, "⑂ Run from here");
+        setText(this.button, "Run from here");
         this.render(new Set());
       });
   }
@@ -102,7 +102,7 @@ export class ForkControls {
     this.button.disabled = this.busy || session.cursor === null || session.replay !== null || !session.view;
     const origin = this.origin;
     this.badge.hidden = origin === null;
-    if (origin) setText(this.badge, `⑂ fork of t = ${formatClock(origin.t)}`);
+    if (origin) setText(this.badge, `fork of t = ${formatClock(origin.t)}`);
     const tick = session.view;
     if (!origin || !tick || tick.seq < origin.start) {
       this.original.hidden = true;

@@ -20,7 +20,7 @@ const GAP = 16;
 const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726", fork: "#9c6ade" };
 const MARK_OTHER = "#ab47bc";
 /// The letter on a mark's flag by reason (others: the reason's first letter).
-const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0", fork: "⑂" };
+const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0", fork: "F" };
 
 export class TimelinePanel {
   readonly element: HTMLElement;
