@@ -9,8 +9,9 @@ then hot-reloads edited programs into the engines (``Engine.reload`` keeps the a
 times of the options and states that still exist), and the caller runs on from tick ``k``. With
 the unchanged behavior the fork continues exactly like the recording (``tests/record``).
 
-Re-simulation costs what the match cost: about 200x real time for 5 vs 5 soccer, so a fork at
-the end of a 10-minute match takes about 3 s (``benchmarks/fork_cost.py``). World snapshots
+Re-simulation, with the recorder's reads repeated (see ``_observer``), costs about 1.8 times
+what the match cost: about 85x real time for 5 vs 5 soccer, so a fork at the end of a 10-minute
+match takes about 7 s (``benchmarks/fork_cost.py``). World snapshots
 would bound that only if a restored world continued bit for bit, and a copied pymunk space does
 not: ``Space.copy()`` loses chipmunk's contact cache and rebuilds its spatial index, and of
 copies of the soccer world taken at random ticks most drift within 600 physics steps, even some
@@ -79,11 +80,13 @@ def resimulate(recording: Recording, build_world: Callable[[int], World], at: in
 def _observer(recording: Recording, world: World) -> Callable[[int], None]:
     """Per tick, the reads the recorder made of the world in the recorded run, in its order.
 
-    Reading is not free of effects in every world: the soccer bindings compute the team queries
-    on their first read in a tick and keep the last team ball seen, so a getter read only by the
-    recorder's sampler changes what it answers later. A fork reads what the recording run read
-    (every agent's sampled symbols, the dynamic scene, the status on key frames) so that it is
-    the recorded run, read for read.
+    Reading need not be free of effects in every world: a host's getter may compute on its first
+    read in a tick or remember what it answered (the soccer bindings' team queries once kept the
+    last team ball found, ``tests/soccer/test_symbols_pure.py``), so a getter read only by the
+    recorder's sampler could change what it answers later. A fork reads what the recording run
+    read (every agent's sampled symbols, the dynamic scene, the status on key frames) so that it
+    is the recorded run, read for read, whatever the world; it costs about as much again as the
+    re-simulation itself (``benchmarks/fork_cost.py``).
     """
     recorded = {a["name"] for a in recording.header["agents"] if a["program"] is not None}
     samplers = [

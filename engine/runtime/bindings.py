@@ -188,7 +188,12 @@ class Bindings:
         params: Iterable[Parameter | tuple[str, Kind]] = (),
         enum: str | None = None,
     ) -> None:
-        """Register an input symbol: a getter, or (with ``params``) a host function."""
+        """Register an input symbol: a getter, or (with ``params``) a host function.
+
+        ``read`` should answer from the world's state alone: caching within a tick is fine, but
+        an answer must not depend on whether or when it was asked before, since the studio and
+        recordings read every plain input every tick and a fork reads only what the run read.
+        """
         self.inputs[name] = InputBinding(name, kind, read, _parameters(name, params), enum)
 
     def input_attribute(

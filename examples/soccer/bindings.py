@@ -216,7 +216,10 @@ class SoccerSymbols:
         self._team_at = now
         oldest = now - MESSAGE_TIMEOUT_MS
         striker_time = NO_TIME_TO_BALL * 2
+        # Unknown means 0, not the last value found: an answer must not depend on which ticks
+        # someone asked in (a recorder reads every tick; a fork must read the same values).
         self.striker_known = self.team_ball_known = False
+        self.striker_x = self.striker_y = self.team_ball_x = self.team_ball_y = 0.0
         best_ball_age = TEAM_BALL_TIMEOUT_MS
         striker = int(Role.STRIKER)
         for message in wm.team_messages.values():
@@ -240,6 +243,7 @@ class SoccerSymbols:
         self._pass_at = now
         oldest = now - MESSAGE_TIMEOUT_MS
         self.pass_available = False
+        self.pass_x = self.pass_y = 0.0
         best_pass_x = -1.0e9
         bx, by = wm.ball_x, wm.ball_y
         for message in wm.team_messages.values():
