@@ -11,6 +11,7 @@ Without chromium or a built UI these tests skip with the reason; ``make test`` p
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
 import socket
@@ -96,6 +97,15 @@ class StudioServer:
     def restart(self) -> None:
         self.stop()
         self.start()
+
+    def command(self, op: str, timeout: float = 20, **args: Any) -> Any:
+        """``POST /api/command`` with ``{"op": op, **args}``: the reply as JSON (errors are replies too)."""
+        body = json.dumps({"op": op, **args}).encode()
+        request = urllib.request.Request(
+            self.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
+        )
+        with urllib.request.urlopen(request, timeout=timeout) as response:
+            return json.loads(response.read())
 
 
 @contextlib.contextmanager

@@ -37,15 +37,6 @@ def state_dir(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
         os.environ["XABSL_STATE_DIR"] = previous
 
 
-def command(studio: StudioServer, op: str, **args: Any) -> Any:
-    body = json.dumps({"op": op, **args}).encode()
-    request = urllib.request.Request(
-        studio.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
-    )
-    with urllib.request.urlopen(request, timeout=20) as response:
-        return json.loads(response.read())
-
-
 def get(studio: StudioServer, path: str) -> Any:
     with urllib.request.urlopen(studio.url + path, timeout=20) as response:
         return response.read()
@@ -61,26 +52,26 @@ def node(tick: dict[str, Any], robot: int, option: str) -> dict[str, Any] | None
 
 
 def clear(studio: StudioServer) -> None:
-    for b in command(studio, "list_breakpoints")["result"]["breakpoints"]:
-        command(studio, "remove_breakpoint", program=b["program"], breakpoint=b["breakpoint"])
+    for b in studio.command("list_breakpoints")["result"]["breakpoints"]:
+        studio.command("remove_breakpoint", program=b["program"], breakpoint=b["breakpoint"])
 
 
 def restart_paused(studio: StudioServer) -> None:
-    command(studio, "pause")
+    studio.command("pause")
     clear(studio)
-    assert command(studio, "reset")["ok"]
+    assert studio.command("reset")["ok"]
 
 
 def run_until_hit(studio: StudioServer, page: Any, hits_before: int) -> dict[str, Any]:
     """Resume at 4x and wait for the hit; the status (paused, seq and t of the hit tick)."""
-    command(studio, "speed", speed=4)
-    command(studio, "resume")
+    studio.command("speed", speed=4)
+    studio.command("resume")
     page.wait_for_function(
         f"() => Number(document.querySelector('.timeline-canvas').dataset.hits || 0) > {hits_before}", timeout=40000
     )
     status = json.loads(get(studio, "api/status"))
     assert status["paused"] is True, "a hit pauses the match"
-    command(studio, "speed", speed=1)
+    studio.command("speed", speed=1)
     return status
 
 
@@ -150,7 +141,7 @@ def test_each_kind_stops_the_match_at_the_right_tick(page: Any, studio: StudioSe
     for args, right_tick in cases:
         restart_paused(studio)
         before = hits_shown(page)
-        assert command(studio, "set_breakpoint", **args)["ok"], args
+        assert studio.command("set_breakpoint", **args)["ok"], args
         status = run_until_hit(studio, page, before)
         seq, t, robot = status["seq"], status["t"], hit_robot(page)
         log = ticks(studio, t - 500, t)
@@ -178,14 +169,14 @@ def test_each_kind_stops_the_match_at_the_right_tick(page: Any, studio: StudioSe
 
     # disabling one keeps it listed and stops it from hitting
     page.click(".breakpoint-list li input[type=checkbox]")
-    listed = command(studio, "list_breakpoints")["result"]["breakpoints"]
+    listed = studio.command("list_breakpoints")["result"]["breakpoints"]
     assert [b["enabled"] for b in listed] == [False]
     clear(studio)
-    command(studio, "resume")
+    studio.command("resume")
 
 
 def test_why_at_a_past_tick_shows_operand_values(page: Any, studio: StudioServer) -> None:
-    command(studio, "resume")
+    studio.command("resume")
     page.wait_for_function(f"() => {STUDIO}.session.buffer.newest.t > 10000", timeout=40000)
     page.evaluate(f"() => {STUDIO}.session.selectRobot(0)")
     open_option(page, "play_soccer")

@@ -29,15 +29,6 @@ def api_status(studio: StudioServer) -> dict[str, Any]:
     return status
 
 
-def command(studio: StudioServer, op: str, **args: Any) -> Any:
-    body = json.dumps({"op": op, **args}).encode()
-    request = urllib.request.Request(
-        studio.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
-    )
-    with urllib.request.urlopen(request, timeout=10) as response:
-        return json.loads(response.read())
-
-
 def eventually(check: Callable[[], bool], seconds: float = 10.0) -> bool:
     """Whether ``check()`` becomes true within ``seconds`` (asked every 100 ms)."""
     deadline = time.monotonic() + seconds
@@ -52,8 +43,8 @@ def eventually(check: Callable[[], bool], seconds: float = 10.0) -> bool:
 def running(studio: StudioServer) -> Iterator[None]:
     """Leave the match running at 1x whatever the test did."""
     yield
-    command(studio, "resume")
-    command(studio, "speed", speed=1)
+    studio.command("resume")
+    studio.command("speed", speed=1)
 
 
 def pause_text(page: Any) -> str:
@@ -388,7 +379,7 @@ def test_robot_labels_on_the_field_do_not_overlap(page: Any, studio: StudioServe
     # Crowd three robots of the home team on one spot: their labels ("forced", roles) meet.
     agents = page.evaluate(f"{STUDIO}.session.robots.slice(0, 3).map(a => a.id)")
     for agent in agents:
-        command(studio, "force_option", robot=agent, option="go_to_position", params={"x": -1500, "y": 0, "rot": 0})
+        studio.command("force_option", robot=agent, option="go_to_position", params={"x": -1500, "y": 0, "rot": 0})
     overlaps: list[Any] = []
     closest = float("inf")
     try:
@@ -403,7 +394,7 @@ def test_robot_labels_on_the_field_do_not_overlap(page: Any, studio: StudioServe
             page.wait_for_timeout(200)
     finally:
         for agent in agents:
-            command(studio, "release", robot=agent)
+            studio.command("release", robot=agent)
     assert closest < 500, f"the robots did not crowd (closest {closest} mm): the test proves nothing"
     assert not overlaps, f"{len(overlaps)} overlapping labels, e.g. {overlaps[0]}"
 
@@ -466,10 +457,10 @@ def test_a_twelve_state_option_is_legible_at_fit(page: Any, studio: StudioServer
         anchor = original.index("include ")
         agents_file.write_text(original[:anchor] + 'include "options/many_states.xabsl";\n' + original[anchor:])
     generation = page.evaluate(f"{STUDIO}.session.hello.generation")
-    assert command(studio, "reload")["ok"]
+    assert studio.command("reload")["ok"]
     wait_until(page, f"() => {STUDIO}.session.hello.generation > {generation}")
     agent = page.evaluate(f"{STUDIO}.session.selectedRobot")
-    command(studio, "force_option", robot=agent, option="many_states", params={})
+    studio.command("force_option", robot=agent, option="many_states", params={})
     try:
         open_option_view(page, "many_states")
         wait_until(page, "() => document.querySelectorAll('.option-panel g.node[id^=\"state_\"]').length === 12")
@@ -536,4 +527,4 @@ def test_a_twelve_state_option_is_legible_at_fit(page: Any, studio: StudioServer
         page.wait_for_timeout(500)
         assert zoom_of(page) == fit
     finally:
-        command(studio, "release", robot=agent)
+        studio.command("release", robot=agent)

@@ -8,9 +8,7 @@ tests share one server (module scope) and run in file order.
 
 from __future__ import annotations
 
-import json
 import shutil
-import urllib.request
 from collections.abc import Iterator
 from typing import Any
 
@@ -38,15 +36,6 @@ def errands(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
 def page(browser: Any, errands: StudioServer) -> Iterator[Any]:
     with studio_tab(browser, errands) as tab:
         yield tab
-
-
-def command(server: StudioServer, op: str, **args: Any) -> Any:
-    body = json.dumps({"op": op, **args}).encode()
-    request = urllib.request.Request(
-        server.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
-    )
-    with urllib.request.urlopen(request, timeout=10) as response:
-        return json.loads(response.read())
 
 
 def test_the_plan_is_visible_and_the_activation_plots_move(page: Any) -> None:
@@ -102,7 +91,7 @@ def test_a_perturbation_button_leads_to_a_replan_the_plan_panel_shows(page: Any,
     assert teleport.locator("select").nth(1).input_value() == "b"
     teleport.locator("button").click()
     page.locator(".toast", has_text="teleported the mug to b").wait_for(timeout=10000)
-    assert command(errands, "speed", speed=10)["ok"]
+    assert errands.command("speed", speed=10)["ok"]
     try:
         replan = page.locator(".plan-version[data-version='2']")
         replan.wait_for(timeout=90000)
@@ -116,7 +105,7 @@ def test_a_perturbation_button_leads_to_a_replan_the_plan_panel_shows(page: Any,
         failed.wait_for()
         assert "precondition_lost" in failed.inner_text()
     finally:
-        command(errands, "speed", speed=1)
+        errands.command("speed", speed=1)
 
 
 def test_why_for_a_fact_names_its_cause(page: Any) -> None:

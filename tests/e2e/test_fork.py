@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import urllib.request
 from typing import Any
 
 from tests.e2e.conftest import StudioServer, screenshot
@@ -11,20 +9,11 @@ from tests.e2e.conftest import StudioServer, screenshot
 STUDIO = "window.xabslStudio"
 
 
-def command(studio: StudioServer, op: str, **args: Any) -> Any:
-    body = json.dumps({"op": op, **args}).encode()
-    request = urllib.request.Request(
-        studio.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
-    )
-    with urllib.request.urlopen(request, timeout=20) as response:
-        return json.loads(response.read())
-
-
 def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page: Any, studio: StudioServer) -> None:
     # Into the playing phase (from 8.5 s of match time), then look back in time.
-    assert command(studio, "speed", speed=4)["ok"]
+    assert studio.command("speed", speed=4)["ok"]
     page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 15000", timeout=60000)
-    assert command(studio, "pause")["ok"]
+    assert studio.command("pause")["ok"]
     button = page.locator("#run-from-here")
     assert button.is_disabled(), "live: nothing to fork from"
     canvas = page.locator(".timeline-canvas")
@@ -48,7 +37,7 @@ def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page
     )
     # It runs on live (the button resumes a paused session); then look at a tick of the fork.
     page.wait_for_function(f"() => {STUDIO}.session.live.t > {fork['t'] + 300}", timeout=60000)
-    assert command(studio, "pause")["ok"]
+    assert studio.command("pause")["ok"]
     start = page.evaluate(f"() => {STUDIO}.session.buffer.bySeq({fork['start']}).x")
     assert start > cursor  # the original run stays on the timeline before the fork
     page.evaluate(f"() => {STUDIO}.session.setCursor({start + 250})")

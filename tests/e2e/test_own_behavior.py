@@ -8,9 +8,7 @@ forced option. The tests share one server (module scope) and run in file order.
 
 from __future__ import annotations
 
-import json
 import shutil
-import urllib.request
 from collections.abc import Iterator
 from typing import Any
 
@@ -51,15 +49,6 @@ def page(browser: Any, own: StudioServer) -> Iterator[Any]:
 
 def wait_until(page: Any, expression: str, timeout: float = 20000) -> Any:
     return page.wait_for_function(expression, timeout=timeout)
-
-
-def command(server: StudioServer, op: str, **args: Any) -> Any:
-    body = json.dumps({"op": op, **args}).encode()
-    request = urllib.request.Request(
-        server.url + "api/command", data=body, headers={"Content-Type": "application/json"}, method="POST"
-    )
-    with urllib.request.urlopen(request, timeout=10) as response:
-        return json.loads(response.read())
 
 
 def test_a_behavior_with_a_mistake_opens_with_the_banner_and_the_graph_and_starts_once_fixed(
@@ -120,7 +109,7 @@ def set_by_hand(page: Any, symbol: str, value: str) -> None:
 
 
 def test_a_hand_set_input_and_an_input_function_value_drive_a_forced_option(page: Any, own: StudioServer) -> None:
-    assert command(own, "force_option", robot=0, option="approach_ball", params={"stop_at": 100})["ok"]
+    assert own.command("force_option", robot=0, option="approach_ball", params={"stop_at": 100})["ok"]
     wait_until(page, f"() => ({PATH})()[0] === 'approach_ball:go'")
     # the graph shows the forced root, the agent picker says so
     page.keyboard.press("g")

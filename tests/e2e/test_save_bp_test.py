@@ -10,7 +10,6 @@ from examples.testing.spec import load_suite
 from tests.e2e.conftest import StudioServer, screenshot
 from tests.e2e.test_breakpoints import (  # noqa: F401 (state_dir: the autouse private state folder)
     STUDIO,
-    command,
     hits_shown,
     open_option,
     restart_paused,
@@ -43,4 +42,4 @@ def test_save_as_test_from_a_hit_writes_a_test_that_passes(page: Any, studio: St
     assert [(e.option, e.state) for e in case.expects] == [("play_soccer", "ready")]
     result = run_case(case)
     assert result.ok, result.report()
-    command(studio, "resume")
+    studio.command("resume")
