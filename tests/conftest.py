@@ -27,7 +27,9 @@ def compile_sources(tmp_path: Path) -> Callable[..., Compilation]:
 
 @pytest.fixture(scope="session", autouse=True)
 def private_state_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
-    """Studio state (stored breakpoints) of the tests' servers goes to a temp folder, never the user's."""
+    """Studio state (stored breakpoints) and the live recordings of the tests' servers go to temp
+    folders, never the user's (servers started without ``--record-dir`` record into the cache)."""
     import os
 
     os.environ.setdefault("XABSL_STATE_DIR", str(tmp_path_factory.mktemp("xabsl-state")))
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("xdg-cache"))
