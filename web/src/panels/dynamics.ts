@@ -5,6 +5,7 @@
 /// Click a plot to go to that moment (as on the timeline); the bars show the tick in view.
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
+import { cursorHook, timeAxes } from "./timeplot";
 import "./world.css";
 import type { Session, SessionEvent } from "../session";
 import type { Tick } from "../protocol";
@@ -203,38 +204,15 @@ export class DynamicsPanel {
       c.plot?.destroy();
       c.host.replaceChildren();
       const rect = c.host.getBoundingClientRect();
-      const style = getComputedStyle(document.documentElement);
-      const fg = style.getPropertyValue("--muted").trim() || "#999";
-      const grid = style.getPropertyValue("--grid").trim() || "rgba(128,128,128,0.2)";
       const opts: uPlot.Options = {
         width: Math.max(100, rect.width),
         height: c.height,
         legend: { show: true, live: false },
         cursor: { drag: { x: false, y: false } },
         scales: { x: { time: false }, y: range ? { range: [range.min, range.max] } : {} },
-        axes: [
-          { stroke: fg, grid: { stroke: grid }, ticks: { stroke: grid }, values: (_u, vals) => vals.map((v) => `${v.toFixed(0)}s`) },
-          { stroke: fg, grid: { stroke: grid }, ticks: { stroke: grid }, size: 48 },
-        ],
+        axes: timeAxes(0, 48),
         series: [{}, ...labels.map((label, i) => ({ label, stroke: SERIES[i % SERIES.length] as string, width: 1.4, points: { show: false } }))],
-        hooks: {
-          draw: [
-            (u: uPlot) => {
-              const cursor = this.session.cursor;
-              if (cursor === null) return;
-              const x = u.valToPos(cursor / 1000, "x", true);
-              const ctx = u.ctx;
-              ctx.save();
-              ctx.strokeStyle = "#ffd54a";
-              ctx.lineWidth = 2;
-              ctx.beginPath();
-              ctx.moveTo(x, u.bbox.top);
-              ctx.lineTo(x, u.bbox.top + u.bbox.height);
-              ctx.stroke();
-              ctx.restore();
-            },
-          ],
-        },
+        hooks: { draw: [cursorHook(this.session)] },
       };
       const plot = new uPlot(opts, data as uPlot.AlignedData, c.host);
       plot.over.addEventListener("click", (ev) => {

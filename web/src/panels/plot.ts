@@ -5,6 +5,7 @@
 /// generation, and ticks of earlier generations are read by that symbol's name in theirs.
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
+import { cursorHook, timeAxes } from "./timeplot";
 import type { Session, SessionEvent } from "../session";
 import { h } from "../ui";
 
@@ -82,9 +83,6 @@ export class PlotPanel {
     this.plot?.destroy();
     this.plot = null;
     const rect = this.host.getBoundingClientRect();
-    const style = getComputedStyle(document.documentElement);
-    const fg = style.getPropertyValue("--muted").trim() || "#999";
-    const grid = style.getPropertyValue("--grid").trim() || "rgba(128,128,128,0.2)";
     this.legend.replaceChildren(
       ...this.pins.map((p, i) =>
         h(
@@ -107,29 +105,9 @@ export class PlotPanel {
       legend: { show: false },
       cursor: { drag: { x: false, y: false } },
       scales: { x: { time: false } },
-      axes: [
-        { stroke: fg, grid: { stroke: grid }, ticks: { stroke: grid }, values: (_u, vals) => vals.map((v) => `${v.toFixed(1)}s`) },
-        { stroke: fg, grid: { stroke: grid }, ticks: { stroke: grid }, size: 56 },
-      ],
+      axes: timeAxes(1, 56),
       series: [{}, ...this.pins.map((p, i) => ({ label: this.label(p), stroke: COLORS[i % COLORS.length] as string, width: 1.5, points: { show: false } }))],
-      hooks: {
-        draw: [
-          (u: uPlot) => {
-            const cursor = this.session.cursor;
-            if (cursor === null) return;
-            const x = u.valToPos(cursor / 1000, "x", true);
-            const ctx = u.ctx;
-            ctx.save();
-            ctx.strokeStyle = "#ffd54a";
-            ctx.lineWidth = 2;
-            ctx.beginPath();
-            ctx.moveTo(x, u.bbox.top);
-            ctx.lineTo(x, u.bbox.top + u.bbox.height);
-            ctx.stroke();
-            ctx.restore();
-          },
-        ],
-      },
+      hooks: { draw: [cursorHook(this.session)] },
     };
     this.plot = new uPlot(opts, this.data(), this.host);
   }
