@@ -45,6 +45,13 @@ class Live:
     game_states: set[int] = field(default_factory=set)
 
 
+def _xabsl_run(*args: str) -> subprocess.CompletedProcess[str]:
+    """``xabsl run ARGS`` in a fresh process from the repository (what a user types)."""
+    command = [sys.executable, "-m", "engine.cli", "run", *args]
+    env = {"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"}
+    return subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=300, env=env)
+
+
 def _symbols(engine: Engine) -> tuple[dict[str, Any], dict[str, Any]]:
     program = engine.program
     inputs = {s.name: engine.input_reads[s.name]() for s in program.inputs.values() if not s.params}
@@ -320,27 +327,7 @@ def test_not_a_recording_is_refused(tmp_path: Path) -> None:
 def test_cli_records_a_headless_match_consistent_with_its_own_counts(tmp_path: Path) -> None:
     """The judge's check: a plain MCAP reader's per-option counts equal the run's printed activations."""
     out = tmp_path / "cli.mcap"
-    result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "engine.cli",
-            "run",
-            "examples/soccer",
-            "--duration",
-            "8",
-            "--players",
-            "2",
-            "--record",
-            str(out),
-            "--json",
-        ],
-        cwd=REPO,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"},
-    )
+    result = _xabsl_run("examples/soccer", "--duration", "8", "--players", "2", "--record", str(out), "--json")
     assert result.returncode == 0, result.stderr
     assert out.is_file() and not out.with_name(out.name + ".part").exists()
     report = orjson.loads(result.stdout)
@@ -446,25 +433,7 @@ def _validate_all(path: Path) -> Counter[str]:
 
 def test_cli_records_errands(tmp_path: Path) -> None:
     out = tmp_path / "errands.mcap"
-    result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "engine.cli",
-            "run",
-            "examples/errands",
-            "--duration",
-            "10",
-            "--record",
-            str(out),
-            "--json",
-        ],
-        cwd=REPO,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"},
-    )
+    result = _xabsl_run("examples/errands", "--duration", "10", "--record", str(out), "--json")
     assert result.returncode == 0, result.stderr
     with Recording(out) as recording:
         assert recording.header["example"] == "errands" and recording.agents == ["robot"]
