@@ -27,31 +27,19 @@ import time
 from pathlib import Path
 
 import pymunk
+import record_cost  # benchmarks/ is the script's folder: the same recorded match as the cost benchmark
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, run_headless
-from engine.record import Recorder, Recording
+from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop
+from engine.record import Recording
 from engine.record.fork import resimulate
 from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 
 def record(path: Path, seconds: float, seed: int, programs: tuple[object, object]) -> float:
     """Record the match; returns the plain (unrecorded) match's wall time for the same ticks."""
-    world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
-    started = time.perf_counter()
-    run_headless(world, duration_s=seconds)
-    plain = time.perf_counter() - started
-    world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
-    recorder = Recorder.for_world(
-        path,
-        world,
-        lambda agent: ("behavior", "chase")[agent.team_index],  # type: ignore[attr-defined]
-        example="soccer",
-        behavior_hz=DEFAULT_BEHAVIOR_HZ,
-        physics_hz=DEFAULT_PHYSICS_HZ,
-    )
-    run_headless(world, duration_s=seconds, on_tick=recorder.on_tick)
-    recorder.close()
-    return plain
+    wall, _cpu, _scene = record_cost.plain(seconds, seed, programs)
+    record_cost.recorded(seconds, seed, programs, path, background=False)
+    return wall
 
 
 def coast(space: pymunk.Space, steps: int, dt: float) -> list[tuple[float, float]]:
