@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import operator
 import time
-from bisect import bisect_left
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -428,10 +427,21 @@ class Ring:
             if entry.seq == seq:
                 return entry
             break
-        # Gaps (samples the pipe dropped) shift the entries behind them: search by seq.
-        held = self.snapshot()
-        index = bisect_left(held, seq, key=lambda e: e.seq)
-        return held[index] if index < len(held) and held[index].seq == seq else None
+        # Gaps (samples the pipe dropped) shift the entries behind them: a binary search by seq,
+        # in place (no copy: client encoders ask for ticks near a gap on the frame path).
+        entries = self._entries
+        low, high = 0, len(entries)
+        try:
+            while low < high:
+                middle = (low + high) // 2
+                if entries[middle].seq < seq:
+                    low = middle + 1
+                else:
+                    high = middle
+            entry = entries[low]
+        except IndexError:  # past the end, or an append dropped the oldest meanwhile
+            return None
+        return entry if entry.seq == seq else None
 
     def snapshot(self) -> list[Entry]:
         """A copy of the entries, oldest first (a C-level copy, safe against a racing append)."""
