@@ -165,20 +165,26 @@ def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
 
 
 @contextlib.contextmanager
-def studio_tab(browser: Any, server: StudioServer, live: bool = True) -> Iterator[Any]:
-    """A fresh tab on ``server`` (with ``live``: once the first frames have arrived).
-
-    Closing it fails the test when the page raised an uncaught error meanwhile.
-    """
+def watched_tab(browser: Any) -> Iterator[Any]:
+    """A fresh blank tab; closing it fails the test when the page raised an uncaught error meanwhile."""
     tab = browser.new_page()
     errors: list[str] = []
     tab.on("pageerror", lambda error: errors.append(str(error)))
-    tab.goto(server.url)
-    if live:
-        tab.wait_for_function("() => window.xabslStudio && window.xabslStudio.session.buffer.length > 5", timeout=30000)
     yield tab
     tab.close()
     assert not errors, f"uncaught errors in the page: {errors}"
+
+
+@contextlib.contextmanager
+def studio_tab(browser: Any, server: StudioServer, live: bool = True) -> Iterator[Any]:
+    """A fresh tab on ``server`` (with ``live``: once the first frames have arrived); see ``watched_tab``."""
+    with watched_tab(browser) as tab:
+        tab.goto(server.url)
+        if live:
+            tab.wait_for_function(
+                "() => window.xabslStudio && window.xabslStudio.session.buffer.length > 5", timeout=30000
+            )
+        yield tab
 
 
 @pytest.fixture

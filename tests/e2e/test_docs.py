@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from engine.cli import main
-from tests.e2e.conftest import StudioServer, screenshot
+from tests.e2e.conftest import StudioServer, screenshot, watched_tab
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -28,12 +28,8 @@ def soccer_docs(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture
 def tab(browser: Any) -> Iterator[Any]:
-    page = browser.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda error: errors.append(str(error)))
-    yield page
-    page.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+    with watched_tab(browser) as page:
+        yield page
 
 
 def search_and_open(page: Any, query: str, expected: str) -> None:

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from engine.cli import main
-from tests.e2e.conftest import screenshot
+from tests.e2e.conftest import screenshot, watched_tab
 from tests.profile.conftest import record
 
 
@@ -31,12 +31,8 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture
 def tab(browser: Any) -> Iterator[Any]:
-    page = browser.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda error: errors.append(str(error)))
-    yield page
-    page.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+    with watched_tab(browser) as page:
+        yield page
 
 
 def test_the_report_opens_offline_with_its_graphs_and_plots(tab: Any, report: Path) -> None:
