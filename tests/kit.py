@@ -1,11 +1,11 @@
-"""Paths of the conformance kit (../shared/data/conformance beside the repository)."""
+"""Paths of the conformance kit (tests/conformance: the original toolchain's golden files)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-KIT = (ROOT.parent / "shared" / "data" / "conformance").resolve()
+KIT = ROOT / "tests" / "conformance"
 assert KIT.is_dir(), f"the conformance kit is missing: {KIT}"
 
 #: behavior sets with agents.xabsl, expected.ic and traces
