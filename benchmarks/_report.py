@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import platform
 
-from engine.host import RunStats
+from xabsl_studio.engine.host import RunStats
 
 
 def print_run(

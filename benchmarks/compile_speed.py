@@ -45,10 +45,10 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from engine.emit.ic import emit_ic  # noqa: E402
-from engine.lang import Compilation, compile_file  # noqa: E402
-from engine.lang.diagnostics import Diagnostics  # noqa: E402
-from engine.lang.tokens import tokenize  # noqa: E402
+from xabsl_studio.engine.emit.ic import emit_ic  # noqa: E402
+from xabsl_studio.engine.lang import Compilation, compile_file  # noqa: E402
+from xabsl_studio.engine.lang.diagnostics import Diagnostics  # noqa: E402
+from xabsl_studio.engine.lang.tokens import tokenize  # noqa: E402
 
 #: the original Ruby compiler (xabsl.rb) on a real behavior set of about this size, seconds
 RUBY_REFERENCE_SECONDS = 0.9
@@ -616,7 +616,7 @@ def _environment() -> dict[str, str]:
 def xabsl_command() -> list[str]:
     """How a user starts ``xabsl``: the console script beside this interpreter, else ``-m``."""
     script = Path(sys.executable).with_name("xabsl")
-    return [str(script)] if script.is_file() else [sys.executable, "-m", "engine.cli"]
+    return [str(script)] if script.is_file() else [sys.executable, "-m", "xabsl_studio.engine.cli"]
 
 
 def process_seconds(command: list[str], runs: int, cwd: Path | None = None) -> tuple[float, float]:

@@ -1,7 +1,7 @@
 """How long does the HTML documentation of a large behavior set take, next to compiling it?
 
 Generates the seeded behavior set of ``benchmarks/compile_speed.py`` with 180 options (the size
-of a real robot soccer set), compiles it, writes its documentation (``engine.docs.generate``:
+of a real robot soccer set), compiles it, writes its documentation (``xabsl_studio.engine.docs.generate``:
 Graphviz for the option graphs and state machines, then the pages, then the files) and prints
 both times side by side, with the documentation's stages. The goal is under 10 s for the docs.
 
@@ -27,7 +27,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from benchmarks.compile_speed import DEFAULT_SEED, generate_behavior_set, measure, source_size  # noqa: E402
-from engine.docs import generate  # noqa: E402
+from xabsl_studio.engine.docs import generate  # noqa: E402
 
 GOAL_SECONDS = 10.0
 DEFAULT_OPTIONS = 180

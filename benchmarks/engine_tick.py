@@ -6,8 +6,8 @@ symbols and expressions): 180 options in 15 layers of 12, every state calling an
 next layer (and now and then a basic behavior), so a tick runs a chain of about 15 options as a
 real set's activation path does; decision trees 1 to 4 deep, one or two assignments per state.
 It compiles the set, writes its intermediate code,
-reads that back (``engine.ir.ic_reader``) and runs it under the conformance host
-(``engine.trace.conformance``, the kit's bindings: plain inputs are items of a value table,
+reads that back (``xabsl_studio.engine.ir.ic_reader``) and runs it under the conformance host
+(``xabsl_studio.engine.trace.conformance``, the kit's bindings: plain inputs are items of a value table,
 subscripted by the generated code (``Bindings.input_item``),
 parameterized ones are the kit's functions, basic behaviors count their calls), changing the
 plain inputs every tick from a seeded table so the decisions really change.
@@ -42,13 +42,13 @@ if str(ROOT) not in sys.path:
 
 from compile_speed import _WORDS, _SetWriter  # noqa: E402  (benchmarks/ is the script's folder)
 
-from engine.emit.ic import emit_ic  # noqa: E402
-from engine.ir.ic_reader import read_ic  # noqa: E402
-from engine.ir.model import Program  # noqa: E402
-from engine.lang import compile_file  # noqa: E402
-from engine.runtime import Engine  # noqa: E402
-from engine.trace.conformance import conformance_bindings  # noqa: E402
-from engine.types import Kind, Value  # noqa: E402
+from xabsl_studio.engine.emit.ic import emit_ic  # noqa: E402
+from xabsl_studio.engine.ir.ic_reader import read_ic  # noqa: E402
+from xabsl_studio.engine.ir.model import Program  # noqa: E402
+from xabsl_studio.engine.lang import compile_file  # noqa: E402
+from xabsl_studio.engine.runtime import Engine  # noqa: E402
+from xabsl_studio.engine.trace.conformance import conformance_bindings  # noqa: E402
+from xabsl_studio.engine.types import Kind, Value  # noqa: E402
 
 #: the original C++ engine on a real 180-option set, same machine, microseconds per tick
 CPP_REFERENCE_US = 1.28

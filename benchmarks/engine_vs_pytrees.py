@@ -25,9 +25,9 @@ import time
 
 import py_trees
 
-from engine.ir import model as ir
-from engine.runtime import BasicBehavior, Bindings, Engine
-from engine.types import Kind
+from xabsl_studio.engine.ir import model as ir
+from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Engine
+from xabsl_studio.engine.types import Kind
 
 LEVELS = 5
 D = Kind.DECIMAL

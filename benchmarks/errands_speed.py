@@ -20,8 +20,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from engine.host import run_headless
-from examples.errands.world import build_world
+from xabsl_studio.engine.host import run_headless
+from xabsl_studio.examples.errands.world import build_world
 
 
 def one_run(seconds: float) -> tuple[float, float, bool]:

@@ -1,7 +1,7 @@
 """What does a fork cost, and why is it re-simulation rather than restoring a copied pymunk space?
 
 Question (issue 12, "Fork: run from here"): a fork restarts a recorded world at tick ``k`` with
-the current behavior. ``engine.record.fork.resimulate`` gets there exactly by re-running ticks
+the current behavior. ``xabsl_studio.engine.record.fork.resimulate`` gets there exactly by re-running ticks
 ``0 .. k - 1`` from the recorded seed; world snapshots would bound that cost if a copied world
 continued exactly like the original.
 
@@ -29,10 +29,10 @@ from pathlib import Path
 import pymunk
 import record_cost  # benchmarks/ is the script's folder: the same recorded match as the cost benchmark
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop
-from engine.record import Recording
-from engine.record.fork import resimulate
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop
+from xabsl_studio.engine.record import Recording
+from xabsl_studio.engine.record.fork import resimulate
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 
 def record(path: Path, seconds: float, seed: int, programs: tuple[object, object]) -> float:

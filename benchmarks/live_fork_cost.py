@@ -2,7 +2,7 @@
 
 Question (issue 12 item 4): a fork rebuilds the world from its seed and replays the session log
 up to the tick, so its cost is the headless tick cost times the ticks since the last reset. Runs
-``server.worker.Simulation`` with the server's ring (``server.frames``) in one process on the
+``xabsl_studio.server.worker.Simulation`` with the server's ring (``xabsl_studio.server.frames``) in one process on the
 soccer example, 5 vs 5: ``--ticks`` live ticks (sampled and recorded as the studio does, a force
 and an override on the way), then a fork at the newest tick. Printed: the live ticks' wall time,
 the fork's ticks and milliseconds, and ms per re-simulated tick.
@@ -16,11 +16,11 @@ import argparse
 from pathlib import Path
 from time import perf_counter
 
-from examples.soccer.studio import SoccerExample
-from server.frames import FrameRecorder, Generation, Ring
-from server.messages import ForceOption, FromWorker, NewGeneration, OverrideInput, Release, Sample
-from server.session import Session, fork_request
-from server.worker import Simulation, WorkerConfig
+from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.server.frames import FrameRecorder, Generation, Ring
+from xabsl_studio.server.messages import ForceOption, FromWorker, NewGeneration, OverrideInput, Release, Sample
+from xabsl_studio.server.session import Session, fork_request
+from xabsl_studio.server.worker import Simulation, WorkerConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 

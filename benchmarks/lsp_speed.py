@@ -29,9 +29,9 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from benchmarks.compile_speed import generate_behavior_set  # noqa: E402
-from engine.lang import compile_file  # noqa: E402
-from lsp.project import Project  # noqa: E402
 from tests.lsp.client import LspClient, uri  # noqa: E402
+from xabsl_studio.engine.lang import compile_file  # noqa: E402
+from xabsl_studio.lsp.project import Project  # noqa: E402
 
 DIAGNOSTICS_GOAL = 0.100
 COMPLETION_GOAL = 0.050

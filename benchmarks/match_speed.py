@@ -32,8 +32,8 @@ from pathlib import Path
 
 from _report import print_run  # benchmarks/ is the script's folder
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, run_headless
-from examples.soccer.run import build_world
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorLoop, run_headless
+from xabsl_studio.examples.soccer.run import build_world
 
 
 def main() -> None:

@@ -1,6 +1,6 @@
 """How fast does the soccer world run without behaviors? 10 simulated minutes of 5 vs 5, headless.
 
-The controllers are the scripted placeholder (``examples.soccer.scripted``), so the "engine"
+The controllers are the scripted placeholder (``xabsl_studio.examples.soccer.scripted``), so the "engine"
 share here is only that placeholder; what this measures is the world's own cost (physics,
 perception, actuation). The product goal is a whole match *with XABSL behaviors* at >= 100x real
 time on a 2-core machine, so the world must leave most of that budget to the engine.
@@ -15,9 +15,9 @@ import time
 
 from _report import print_run  # benchmarks/ is the script's folder
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
-from examples.soccer.scripted import plug_scripted_team
-from examples.soccer.world import build_world
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
+from xabsl_studio.examples.soccer.scripted import plug_scripted_team
+from xabsl_studio.examples.soccer.world import build_world
 
 
 def main() -> None:

@@ -5,7 +5,7 @@ the pre-game) with ``xabsl run examples/soccer --record``, or reuses the recordi
 seed and duration from the cache folder (``--cache``, default ``~/.cache/xabsl-studio/
 profile_speed``; recording takes a few minutes), then times ``xabsl profile RECORDING --json``
 as a user runs it (a new process: start-up, reading, counting, the JSON) and, in this process,
-the stages: reading the paths (``Recording.paths``), counting (``engine.profile.profile``) and the
+the stages: reading the paths (``Recording.paths``), counting (``xabsl_studio.engine.profile.profile``) and the
 HTML report (``--html``, with Graphviz). Prints the figures; best of ``--runs``.
 
 Run::
@@ -30,9 +30,9 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from engine.profile import profile  # noqa: E402
-from engine.profile.html import html_report  # noqa: E402
-from engine.record import Recording  # noqa: E402
+from xabsl_studio.engine.profile import profile  # noqa: E402
+from xabsl_studio.engine.profile.html import html_report  # noqa: E402
+from xabsl_studio.engine.record import Recording  # noqa: E402
 
 GOAL_SECONDS = 5.0
 CACHE = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "xabsl-studio" / "profile_speed"
@@ -46,7 +46,7 @@ def recording_for(cache: Path, duration: int, seed: int) -> Path:
     cache.mkdir(parents=True, exist_ok=True)
     print(f"recording {duration} s of 5 vs 5 into {path} (once) ...", flush=True)
     started = time.perf_counter()
-    command = [sys.executable, "-m", "engine.cli", "run", "examples/soccer", "--duration", str(duration)]
+    command = [sys.executable, "-m", "xabsl_studio.engine.cli", "run", "examples/soccer", "--duration", str(duration)]
     command += ["--seed", str(seed), "--record", str(path)]
     subprocess.run(command, cwd=ROOT, check=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
     print(f"recorded in {time.perf_counter() - started:.0f} s")
@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{path}: {ticks} ticks ({ticks / 40 / 60:.1f} min at 40 Hz), {agents} agents, "
         f"{path.stat().st_size / 1e6:.1f} MB; best of {args.runs} runs; load {os.getloadavg()[0]:.1f}"
     )
-    command = [sys.executable, "-m", "engine.cli", "profile", str(path), "--json"]
+    command = [sys.executable, "-m", "xabsl_studio.engine.cli", "profile", str(path), "--json"]
     best_cli = best_paths = best_count = best_html = float("inf")
     with tempfile.TemporaryDirectory(prefix="xabsl-profile-bench-") as folder:
         for _ in range(args.runs):

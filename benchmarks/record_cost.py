@@ -6,7 +6,7 @@ studio and for recordings) should cost at most 0.2 ms per tick for 10 agents.
 
 Runs, alternating so that drift of a shared machine hits both sides alike (``--repeat`` pairs):
 ``--seconds`` simulated seconds of the soccer example (example team vs chase team, seed
-``--seed``) without recording, then the same match recorded with ``engine.record.Recorder``
+``--seed``) without recording, then the same match recorded with ``xabsl_studio.engine.record.Recorder``
 (exactly what ``xabsl run examples/soccer --record FILE.mcap`` does), inline and with the writer
 process. Printed: wall and CPU time of each, the overhead in percent; then where the time goes,
 per tick of 10 agents in CPU time and as a ratio of the plain tick: sampling the engines for a
@@ -32,11 +32,11 @@ from unittest.mock import patch
 
 import orjson
 
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
-from engine.record import AgentSampler, Recorder, RecorderStats, Recording, engines_of
-from engine.record.encoder import RecordingEncoder
-from engine.record.mcapfile import McapWriter
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
+from xabsl_studio.engine.record import AgentSampler, Recorder, RecorderStats, Recording, engines_of
+from xabsl_studio.engine.record.encoder import RecordingEncoder
+from xabsl_studio.engine.record.mcapfile import McapWriter
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 TEN_MINUTES_TICKS = 600 * DEFAULT_BEHAVIOR_HZ
 MB = 1024 * 1024
@@ -90,9 +90,9 @@ def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -
     Each tick: the project's one sampler for all agents as the recorder calls it
     (``AgentSampler.sample``), as the studio's simulation process calls it (``FrameSampler``:
     path as JSON bytes, extras, input and output display values, exactly what
-    ``server.worker.Simulation.sample`` does per robot), and the world's ``dynamic_scene()``.
+    ``xabsl_studio.server.worker.Simulation.sample`` does per robot), and the world's ``dynamic_scene()``.
     """
-    from server.frames import FrameSampler, ProgramCodec  # the studio's side (imports the server)
+    from xabsl_studio.server.frames import FrameSampler, ProgramCodec  # the studio's side (imports the server)
 
     world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
     engines = [e for e in engines_of(world) if e is not None]
@@ -149,7 +149,7 @@ def encoder_costs(seconds: float, seed: int, programs: tuple[object, object], fo
         def abort(self) -> None:
             pass
 
-    with patch("engine.record.writer.RecordingEncoder", Capture):
+    with patch("xabsl_studio.engine.record.writer.RecordingEncoder", Capture):
         recorder = Recorder.for_world(
             folder / "capture.mcap",
             world,
@@ -188,7 +188,7 @@ def encoder_costs(seconds: float, seed: int, programs: tuple[object, object], fo
             writer.finish()
             return time.process_time() - started
 
-    with patch("engine.record.encoder.McapWriter", Keep):
+    with patch("xabsl_studio.engine.record.encoder.McapWriter", Keep):
         encode(True)  # collect the messages once
     costs = {
         "encoder": min(encode(True) for _ in range(3)),
@@ -245,7 +245,7 @@ def main() -> None:
             runs[label].append((wall, cpu))
             if scene_plain != scene_recorded:
                 raise SystemExit("recording changed the match: the final scenes differ")
-        with patch("engine.record.writer.RecordingEncoder", Discard):
+        with patch("xabsl_studio.engine.record.writer.RecordingEncoder", Discard):
             wall, cpu, _, _ = recorded(args.seconds, args.seed, programs, folder / "discarded.mcap", False)
         runs["captured only (no encoder)"].append((wall, cpu))
     assert stats is not None

@@ -1,7 +1,7 @@
 """How long ``xabsl serve --replay`` takes to seek a tick of a 10-minute 10-agent match.
 
 Records a 5 v 5 soccer match headless (``xabsl run examples/soccer --duration 600 --players 5
---record``; skipped with ``--file``), opens it as a :class:`server.replay.ReplaySession` and seeks
+--record``; skipped with ``--file``), opens it as a :class:`xabsl_studio.server.replay.ReplaySession` and seeks
 random ticks the way the ``seek`` command does: read the tick from the file, turn it into the
 sample the simulation would have sent, record the frame (delta + full frame) into the ring. Also
 times ``explain`` at a random tick and a 10 s ``history`` hunk. Goal: seeking under 100 ms.
@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from server.replay import ReplaySession  # noqa: E402
+from xabsl_studio.server.replay import ReplaySession  # noqa: E402
 
 
 def main() -> int:
@@ -39,7 +39,7 @@ def main() -> int:
     path = Path(args.file) if args.file else folder / "match.mcap"
     if not args.file:
         started = time.perf_counter()
-        command = [sys.executable, "-m", "engine.cli", "run", "examples/soccer", "--players", "5"]
+        command = [sys.executable, "-m", "xabsl_studio.engine.cli", "run", "examples/soccer", "--players", "5"]
         command += ["--duration", f"{args.seconds:g}", "--seed", str(args.seed), "--record", str(path)]
         env = dict(os.environ, PYTHONPATH=str(ROOT))
         subprocess.run(command, cwd=ROOT, env=env, check=True, capture_output=True)

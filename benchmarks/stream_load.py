@@ -168,7 +168,7 @@ def main() -> int:
     command = [
         sys.executable,
         "-m",
-        "engine.cli",
+        "xabsl_studio.engine.cli",
         "serve",
         str(REPO / "examples" / "soccer"),
         "--port",

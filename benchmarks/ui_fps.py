@@ -21,11 +21,11 @@ from pathlib import Path
 
 import uvicorn
 
-from server.app import WEB_DIST, create_app
-from server.bench_world import BenchExample
-from server.protocol import MAX_MESSAGE_BYTES
-from server.security import SecurityPolicy
-from server.session import Session
+from xabsl_studio.server.app import WEB_DIST, create_app
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.protocol import MAX_MESSAGE_BYTES
+from xabsl_studio.server.security import SecurityPolicy
+from xabsl_studio.server.session import Session
 
 OPTIONS = 100
 AGENTS = 10

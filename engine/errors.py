@@ -7,24 +7,24 @@ builtin as a second base. The concrete classes of a stage live next to the code 
 them and derive from the stage's class here::
 
     XabslError
-    ├── CompileError          engine.lang: a behavior that does not parse or check
-    ├── ReadError             engine.ir: intermediate code that cannot be read (ICError)
-    ├── EmitError             engine.emit: an output that cannot be produced (GraphvizMissing)
-    ├── EngineError           engine.runtime: the engine refuses a program or a request
+    ├── CompileError          xabsl_studio.engine.lang: a behavior that does not parse or check
+    ├── ReadError             xabsl_studio.engine.ir: intermediate code that cannot be read (ICError)
+    ├── EmitError             xabsl_studio.engine.emit: an output that cannot be produced (GraphvizMissing)
+    ├── EngineError           xabsl_studio.engine.runtime: the engine refuses a program or a request
     │   ├── LinkError         the program names host symbols/behaviors that are not registered
     │   ├── LoadError         the option graph fails a load-time check (CodegenError)
     │   ├── DoubleExecutionError  an option ran twice in one tick under policy B2 (a fault)
     │   └── DebugError        a debug request names something unknown (CommandError)
     │       └── ValueConversionError  a value of the wrong type, not finite, out of range
-    ├── TraceError            engine.trace: a conformance trace (TraceInputError, TraceFaultError)
-    ├── DynamicsError         engine.dynamics: a Dual Dynamics model (ModelError, ExprError)
-    ├── PlanningError         engine.planning: PDDL and fact rules (UnsupportedPDDLError, FactRuleError)
+    ├── TraceError            xabsl_studio.engine.trace: a conformance trace (TraceInputError, TraceFaultError)
+    ├── DynamicsError         xabsl_studio.engine.dynamics: a Dual Dynamics model (ModelError, ExprError)
+    ├── PlanningError         xabsl_studio.engine.planning: PDDL and fact rules (UnsupportedPDDLError, FactRuleError)
     ├── HostError             a host or world: an example folder, a team (ExampleError, TeamError)
     ├── CommandLineError      the ``xabsl`` command line (UsageError)
     └── ServerError           the studio server (ProtocolError, FileError, GraphError, ChannelClosed)
 
 Run-time faults of a running agent are not exceptions that propagate: the engine records them as a
-:class:`engine.runtime.fault.Fault` (§2.9).
+:class:`xabsl_studio.engine.runtime.fault.Fault` (§2.9).
 """
 
 from __future__ import annotations

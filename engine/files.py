@@ -18,7 +18,7 @@ import os
 import stat
 import tempfile
 
-from engine.errors import XabslError
+from xabsl_studio.engine.errors import XabslError
 
 #: Default bound for one input file read with :func:`read_regular`.
 MAX_INPUT_BYTES = 64 * 1024 * 1024

@@ -2,7 +2,7 @@
 
 A *world* (the soccer match, the errands robot, a test double) owns physics, rules and the
 perception of its agents. An *agent* is one robot or character whose behavior is an XABSL engine
-(``engine.runtime``), plugged in as its :class:`AgentController`. This module names the hooks
+(``xabsl_studio.engine.runtime``), plugged in as its :class:`AgentController`. This module names the hooks
 between the two and fixes their order; it imports nothing above the engine (no pymunk, no web,
 no example world), so every world and the server can share one loop.
 
@@ -19,7 +19,7 @@ decision of the same tick, so agent order cannot leak into the behavior; agents 
 in ``world.agents`` order so that a run is reproducible bit for bit.
 
 Time: the loop owns the behavior clock. ``now_ms`` is an integer (the engine's millisecond
-clock, ``engine.types.Ms``) computed from the tick count, never from the wall clock, so a run is a
+clock, ``xabsl_studio.engine.types.Ms``) computed from the tick count, never from the wall clock, so a run is a
 pure function of the world's seed and the controllers.
 
 Worlds as plug-ins: an :class:`Example` is what the studio (``xabsl serve``) needs to run one
@@ -27,7 +27,7 @@ world with XABSL engines: the behavior sources to compile, a world per seed, whi
 robot runs and the controller that runs it. A folder declares its world with a module
 ``studio.py`` exposing ``example(path, **options) -> Example`` (or an installed distribution
 registers such a factory under the entry-point group :data:`WORLDS_GROUP`); the loader is
-``server.examples.load_example``. docs/architecture.md describes the contract.
+``xabsl_studio.server.examples.load_example``. docs/architecture.md describes the contract.
 """
 
 from __future__ import annotations
@@ -39,12 +39,12 @@ from pathlib import Path
 from time import perf_counter
 from typing import TYPE_CHECKING, Any, Protocol, TypeAlias, runtime_checkable
 
-from engine.errors import HostError
-from engine.types import Ms
+from xabsl_studio.engine.errors import HostError
+from xabsl_studio.engine.types import Ms
 
 if TYPE_CHECKING:  # the loop itself needs neither the IR nor the runtime
-    from engine.ir.model import Program
-    from engine.runtime import Engine
+    from xabsl_studio.engine.ir.model import Program
+    from xabsl_studio.engine.runtime import Engine
 
 #: A scene or status: JSON-able plain data (dicts, lists, str, int, float, bool, None) that
 #: ``orjson.dumps`` accepts without options. Worlds document their own keys; the studio's field
@@ -229,8 +229,8 @@ def behavior_source(agents_file: Path, key: str | None = None) -> BehaviorSource
     Raises:
         ExampleError: ``agents_file`` is not a file.
     """
-    from engine.lang.diagnostics import Diagnostics
-    from engine.lang.loader import load
+    from xabsl_studio.engine.lang.diagnostics import Diagnostics
+    from xabsl_studio.engine.lang.loader import load
 
     agents_file = agents_file.resolve()
     if not agents_file.is_file():
@@ -308,7 +308,7 @@ class Example(Protocol):
         """Return ``agent``'s controller for ``program`` and the engine inside it.
 
         Raises:
-            engine.runtime.EngineError: the program does not link with this world's bindings.
+            xabsl_studio.engine.runtime.EngineError: the program does not link with this world's bindings.
         """
         ...
 

@@ -1,6 +1,6 @@
 """Small shared vocabulary: source spans, value kinds and type aliases used across the engine.
 
-Kept apart from both ``engine.lang`` and ``engine.ir`` so that the IR can carry spans without
+Kept apart from both ``xabsl_studio.engine.lang`` and ``xabsl_studio.engine.ir`` so that the IR can carry spans without
 depending on the parser, and the parser can produce IR without a cycle.
 """
 

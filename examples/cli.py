@@ -1,6 +1,6 @@
 """``xabsl run EXAMPLE``: run an example world headless; each example brings its own flags.
 
-Registered under the ``xabsl.commands`` entry-point group (``run = "examples.cli:register"`` in
+Registered under the ``xabsl.commands`` entry-point group (``run = "xabsl_studio.examples.cli:register"`` in
 ``pyproject.toml``), so the engine's command line finds it without importing the examples.
 
 Dispatch: ``EXAMPLE`` is an example folder (``examples/soccer``) or its name (``soccer``). The
@@ -9,7 +9,7 @@ define two hooks:
 
 * ``add_arguments(parser)``: add the example's own flags to an ``argparse`` parser;
 * ``main(args) -> int``: run with the parsed flags and return the exit status (0 ok, 1 the
-  behavior has errors, 2 usage; raise ``engine.cli.UsageError`` for a usage problem).
+  behavior has errors, 2 usage; raise ``xabsl_studio.engine.cli.UsageError`` for a usage problem).
 
 ``xabsl run`` itself only knows the example name: everything after it is parsed by a parser
 built from the example's ``add_arguments``, so ``xabsl run examples/soccer --help`` shows the
@@ -24,7 +24,7 @@ import importlib.util
 from pathlib import Path
 from types import ModuleType
 
-from engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError
 
 EXAMPLES_DIR = Path(__file__).resolve().parent
 
@@ -64,9 +64,9 @@ def load_example(example: str) -> tuple[str, ModuleType]:
     if not (EXAMPLES_DIR / name).is_dir():
         known = ", ".join(available_examples())
         raise UsageError(f"unknown example {name!r} (available: {known})")
-    if importlib.util.find_spec(f"examples.{name}.run") is None:
+    if importlib.util.find_spec(f"xabsl_studio.examples.{name}.run") is None:
         raise UsageError(f"example {name!r} has no run.py")
-    module = importlib.import_module(f"examples.{name}.run")
+    module = importlib.import_module(f"xabsl_studio.examples.{name}.run")
     if not (hasattr(module, "add_arguments") and hasattr(module, "main")):
         raise UsageError(f"examples/{name}/run.py defines no add_arguments(parser) and main(args)")
     return name, module

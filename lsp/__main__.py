@@ -2,6 +2,6 @@
 
 import sys
 
-from lsp.cli import main
+from xabsl_studio.lsp.cli import main
 
 sys.exit(main())

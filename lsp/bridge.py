@@ -1,7 +1,7 @@
 """The language server on a websocket another server already accepted (the studio's ``/lsp``).
 
 pygls' own websocket transport runs its own server; the studio has one (FastAPI), so this
-module connects a fresh :class:`~lsp.server.XabslLanguageServer` to an accepted connection: one
+module connects a fresh :class:`~xabsl_studio.lsp.server.XabslLanguageServer` to an accepted connection: one
 JSON-RPC message per text frame each way. Messages are handled one at a time in a worker
 thread, so a recheck never stalls the studio's event loop (its frames keep streaming); answers
 go back through a queue in order.
@@ -19,7 +19,7 @@ from collections.abc import Awaitable, Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from lsp.server import create_server
+from xabsl_studio.lsp.server import create_server
 
 logger = logging.getLogger(__name__)
 

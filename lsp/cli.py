@@ -1,6 +1,6 @@
 """``xabsl lsp``: run the XABSL language server on stdio (editors) or a websocket (browsers).
 
-Registered through the ``xabsl.commands`` entry point (``lsp = "lsp.cli:register"``), so the
+Registered through the ``xabsl.commands`` entry point (``lsp = "xabsl_studio.lsp.cli:register"``), so the
 engine's command line never imports pygls. ``python -m lsp`` runs the same command.
 """
 
@@ -44,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Serve the language server until the client exits; the exit status."""
-    from lsp.server import serve_stdio, serve_websocket
+    from xabsl_studio.lsp.server import serve_stdio, serve_websocket
 
     if args.ws:
         serve_websocket(args.host, args.port, args.agents)

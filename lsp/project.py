@@ -4,8 +4,8 @@ A :class:`Project` owns the include closure of one agents file. Editor buffers o
 on disk. :meth:`Project.analyze` brings the model up to date and returns an :class:`Analysis`:
 the compiler's diagnostics per file and an index of every name occurrence (declarations and
 resolved references) built from the compiler's own data — the AST's name spans, the symbol
-table of :mod:`engine.lang.symbols` and the resolutions the checker of :mod:`engine.lang.check`
-makes (a subclass records them as it resolves), never by re-parsing text.
+table of :mod:`xabsl_studio.engine.lang.symbols` and the resolutions the checker of
+:mod:`xabsl_studio.engine.lang.check` makes (a subclass records them as it resolves), never by re-parsing text.
 
 Incremental, in three layers:
 
@@ -16,11 +16,11 @@ Incremental, in three layers:
   changed: the "interface" of the program (namespaces, the agents, every option's name and
   parameters, which files are broken). Typing inside one option's states rechecks one option.
 
-The pipeline is the one of :func:`engine.lang.compile_file` (the same passes, in the same order,
+The pipeline is the one of :func:`xabsl_studio.engine.lang.compile_file` (the same passes, in the same order,
 with the same rule that options of files with syntax errors are not checked), so the diagnostics
 are the compiler's; ``tests/lsp`` compares them.
 
-This module does not import pygls: :mod:`lsp.server` adapts it to the protocol.
+This module does not import pygls: :mod:`xabsl_studio.lsp.server` adapts it to the protocol.
 """
 
 from __future__ import annotations
@@ -32,15 +32,15 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
-from engine import ir
-from engine.lang import assemble_program, ast, deep_recursion
-from engine.lang.check import OptionChecker
-from engine.lang.diagnostics import Diagnostic, Diagnostics
-from engine.lang.loader import display_path
-from engine.lang.parser import parse_file
-from engine.lang.symbols import Declarations, OptionHeader, SymbolTable
-from engine.lang.tokens import Token, decode_source, tokenize
-from engine.types import Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import assemble_program, ast, deep_recursion
+from xabsl_studio.engine.lang.check import OptionChecker
+from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics
+from xabsl_studio.engine.lang.loader import display_path
+from xabsl_studio.engine.lang.parser import parse_file
+from xabsl_studio.engine.lang.symbols import Declarations, OptionHeader, SymbolTable
+from xabsl_studio.engine.lang.tokens import Token, decode_source, tokenize
+from xabsl_studio.engine.types import Span
 
 #: What a name occurrence stands for: ("option", name), ("behavior", name), ("input", name),
 #: ("output", name), ("constant", name), ("enum", name), ("element", qualified element),
@@ -413,7 +413,7 @@ class Project:
         return target
 
     def _load(self, diagnostics: Diagnostics) -> tuple[ast.SourceFile | None, list[SourceState]]:
-        """The include closure as :func:`engine.lang.loader.load` reads it, from the cache."""
+        """The include closure as :func:`xabsl_studio.engine.lang.loader.load` reads it, from the cache."""
         files: list[SourceState] = []
         seen: set[str] = set()
 

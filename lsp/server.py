@@ -1,6 +1,6 @@
-"""The XABSL language server: the Language Server Protocol (pygls 2, lsprotocol) over :mod:`lsp.project`.
+"""The XABSL language server: the Language Server Protocol (pygls 2, lsprotocol) over :mod:`xabsl_studio.lsp.project`.
 
-Every answer comes from the compiler's data held by a :class:`~lsp.project.Project`: its
+Every answer comes from the compiler's data held by a :class:`~xabsl_studio.lsp.project.Project`: its
 diagnostics (with "did you mean" hints offered as quick fixes), its symbol table (completion,
 hover), its tokens (completion context, semantic tokens) and the name index built from the AST
 and the checker's resolutions (definition, references, rename, symbols).
@@ -21,12 +21,12 @@ from lsprotocol import types as lsp
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
-from engine import ir
-from engine.lang import ast, deep_recursion
-from engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
-from engine.lang.tokens import KEYWORDS, Token, TokenType, decode_source, tokenize
-from engine.types import Kind, Span
-from lsp.project import Analysis, Key, Occurrence, Project, SourceState
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import ast, deep_recursion
+from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
+from xabsl_studio.engine.lang.tokens import KEYWORDS, Token, TokenType, decode_source, tokenize
+from xabsl_studio.engine.types import Kind, Span
+from xabsl_studio.lsp.project import Analysis, Key, Occurrence, Project, SourceState
 
 AGENTS_FILE = "agents.xabsl"
 VALUE_KEYWORDS = ("true", "false", "state_time", "option_time", "action_done", "conflict")

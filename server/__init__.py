@@ -3,7 +3,7 @@
 One module per concern:
 
 * ``protocol``  message types, the schema version, close codes, limits (what the UI codes against)
-* ``examples``  the world plug-in loader: from ``xabsl serve PATH`` to an ``engine.host.Example``
+* ``examples``  the world plug-in loader: from ``xabsl serve PATH`` to an ``xabsl_studio.engine.host.Example``
 * ``bench_world`` the bench world, for behaviors without a world of their own
 * ``worker``    the simulation process: world, engines, commands, one sample per tick
 * ``channel``   the non-blocking pipe between the server and the simulation process

@@ -1,7 +1,7 @@
 """FastAPI wiring: the websocket, the REST API under /api, the web UI at /, the session's lifetime.
 
-:func:`create_app` joins a :class:`~server.session.Session` (started and stopped with the app's
-lifespan), a :class:`~server.clients.Hub` for the websocket clients, the behavior files, the
+:func:`create_app` joins a :class:`~xabsl_studio.server.session.Session` (started and stopped with the app's
+lifespan), a :class:`~xabsl_studio.server.clients.Hub` for the websocket clients, the behavior files, the
 graph cache and the security middleware. Handlers here stay thin: they validate, hand the work
 to the module that owns it, and turn that module's errors into 4xx answers
 (``{"detail": message}``). Anything slow runs off the event loop: compiling in a worker thread,
@@ -32,19 +32,20 @@ from pydantic import BaseModel, Field, JsonValue
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import Match
 
-from engine.emit.dot import GraphvizMissing
-from engine.ir.model import Program
-from server import frames
-from server.clients import Client, Hub
-from server.docs import router as docs_router
-from server.files import BehaviorFiles, FileError
-from server.forks import router as fork_router
-from server.frames import Generation
-from server.generations import GenerationGone
-from server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
-from server.library import RecordingLibrary
-from server.library import router as library_router
-from server.messages import (
+import xabsl_studio
+from xabsl_studio.engine.emit.dot import GraphvizMissing
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.server import frames
+from xabsl_studio.server.clients import Client, Hub
+from xabsl_studio.server.docs import router as docs_router
+from xabsl_studio.server.files import BehaviorFiles, FileError
+from xabsl_studio.server.forks import router as fork_router
+from xabsl_studio.server.frames import Generation
+from xabsl_studio.server.generations import GenerationGone
+from xabsl_studio.server.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
+from xabsl_studio.server.library import RecordingLibrary
+from xabsl_studio.server.library import router as library_router
+from xabsl_studio.server.messages import (
     BEHAVIOR_PARAMS_INDEX,
     DEPTH_INDEX,
     ID_INDEX,
@@ -64,17 +65,18 @@ from server.messages import (
     openapi_schemas,
     parse_command,
 )
-from server.openapi import ErrorBody, error_responses
-from server.profile import router as profile_router
-from server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
-from server.replay import ReplaySession
-from server.security import SecurityMiddleware, SecurityPolicy
-from server.session import CommandError, Session
-from server.studios import Studios, StudiosMiddleware
+from xabsl_studio.server.openapi import ErrorBody, error_responses
+from xabsl_studio.server.profile import router as profile_router
+from xabsl_studio.server.protocol import HISTORY_CHUNK, MAX_CLIENTS, VERSION
+from xabsl_studio.server.replay import ReplaySession
+from xabsl_studio.server.security import SecurityMiddleware, SecurityPolicy
+from xabsl_studio.server.session import CommandError, Session
+from xabsl_studio.server.studios import Studios, StudiosMiddleware
 
 log = logging.getLogger("xabsl.server")
 
-WEB_DIST = Path(__file__).resolve().parent.parent / "web" / "dist"
+#: the built studio UI: web/dist in a checkout (xabsl_studio/web links to it), package data in a wheel
+WEB_DIST = Path(xabsl_studio.__file__).parent / "web"
 
 _NO_UI = """<!doctype html>
 <html><head><meta charset="utf-8"><title>xabsl studio</title></head>
@@ -90,7 +92,7 @@ then reload this page.</p>
 """
 
 
-#: What a behavior file path looks like (documented, not enforced here: ``server.files`` checks
+#: What a behavior file path looks like (documented, not enforced here: ``xabsl_studio.server.files`` checks
 #: paths and answers 400/403/404 with the reason, which a pattern mismatch could not give).
 FILE_PATH_PATTERN = r"^([^/\\\x00.][^/\\\x00]*/)*[^/\\\x00.][^/\\\x00]*\.xabsl$"
 _FILE_PATH: dict[str, JsonValue] = {"pattern": FILE_PATH_PATTERN}
@@ -270,7 +272,7 @@ class Studio:
 
 
 def _generation_info(session: Session, gen: Generation) -> dict[str, Any]:
-    """A :class:`~server.messages.GenerationInfo` (the description only for past generations)."""
+    """A :class:`~xabsl_studio.server.messages.GenerationInfo` (the description only for past generations)."""
     first = next((e for e in session.ring.snapshot() if e.gen is gen), None)
     info: dict[str, Any] = {
         "number": gen.number,
@@ -300,7 +302,7 @@ router = APIRouter()
 
 @router.websocket("/ws")
 async def websocket(ws: WebSocket) -> None:
-    """The live session (docs/protocol.md): one :class:`~server.clients.Client` per connection."""
+    """The live session (docs/protocol.md): one :class:`~xabsl_studio.server.clients.Client` per connection."""
     studio: Studio = ws.app.state.studio
     assert studio.hub is not None, "the app's lifespan did not run"
     await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
@@ -309,7 +311,7 @@ async def websocket(ws: WebSocket) -> None:
 @router.websocket("/lsp")
 async def language_server(ws: WebSocket) -> None:
     """The XABSL language server for the editor (docs/editors.md): LSP, one message per text frame."""
-    from lsp.bridge import serve_connection  # pygls is imported only when an editor connects
+    from xabsl_studio.lsp.bridge import serve_connection  # pygls is imported only when an editor connects
 
     studio: Studio = ws.app.state.studio
     await ws.accept()
@@ -366,7 +368,7 @@ async def command(studio: StudioDep, request: Request) -> Response:
     """A websocket command over REST (``{"op": "pause"}``); answers the reply.
 
     The body is read and validated by the same parser as the websocket's messages
-    (``server.messages.parse_command``): one rule for both edges. 400: the command is malformed;
+    (``xabsl_studio.server.messages.parse_command``): one rule for both edges. 400: the command is malformed;
     409: it is well formed but does not fit the session (an unknown robot or option...).
     """
     body = await request.body()
@@ -521,9 +523,9 @@ async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
     With ``hit``, the scene is the hit's tick and the assertions are the breakpoint's (409 when the
     breakpoint was removed or the tick left the history).
     """
-    from engine.files import write_atomically
-    from examples.testing.save import DraftError, draft_file_name, draft_test
-    from server.examples import world_names
+    from xabsl_studio.engine.files import write_atomically
+    from xabsl_studio.examples.testing.save import DraftError, draft_file_name, draft_test
+    from xabsl_studio.server.examples import world_names
 
     session = studio.session
     plugin = session.example
@@ -759,7 +761,7 @@ def create_app(
 
 
 def _document_messages(app: FastAPI) -> None:
-    """Add the command and reply schemas of ``server.messages`` to the app's OpenAPI components."""
+    """Add the command and reply schemas of ``xabsl_studio.server.messages`` to the app's OpenAPI components."""
     base = app.openapi
 
     def openapi() -> dict[str, Any]:
@@ -813,7 +815,7 @@ class _Names:
         self.outputs = {s["id"]: s["name"] for s in program["outputs"]}
 
     def node(self, node: list[Any]) -> dict[str, Any]:
-        """A path node (``server.messages.OptionNode`` or ``BehaviorNode``) with names."""
+        """A path node (``xabsl_studio.server.messages.OptionNode`` or ``BehaviorNode``) with names."""
         depth = node[DEPTH_INDEX]
         if node[0] == OPTION_NODE:
             option = self.options[node[ID_INDEX]]

@@ -4,7 +4,7 @@ Robots (points with a heading) and a ball on a 6 m x 4 m field, no physics engin
 robots by their commanded walk and the ball by its velocity with friction. It exists so that a
 team can run its own behavior (a behavior folder, or an agents file anywhere on disk) and test
 single options by hand, and so that the server tests run fast without pymunk. It is a world
-plug-in like any other (:func:`example`, the default of ``server.examples.load_example``).
+plug-in like any other (:func:`example`, the default of ``xabsl_studio.server.examples.load_example``).
 
 Every name of the program is bound (:class:`BenchController`), so *any* behavior set links:
 
@@ -19,7 +19,7 @@ Every name of the program is bound (:class:`BenchController`), so *any* behavior
 * basic behaviors ``walk(speed, direction)``, ``turn(rate)`` and ``kick(strength)`` move the
   robot, others run without effect;
 * a bindings module (``--bindings FILE.py``, docs/own-behaviors.md) replaces any of these with
-  Python of the team's own through ``engine.runtime.Bindings``.
+  Python of the team's own through ``xabsl_studio.engine.runtime.Bindings``.
 
 ``game.state`` is ``ready`` for the first half second, then ``playing`` (the demo's root option
 waits while the game does not run, so the activation path changes visibly at the start).
@@ -39,8 +39,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from engine.errors import EngineError, ValueConversionError
-from engine.host import (
+from xabsl_studio.engine.errors import EngineError, ValueConversionError
+from xabsl_studio.engine.host import (
     DEFAULT_BEHAVIOR_HZ,
     DEFAULT_PHYSICS_HZ,
     Agent,
@@ -53,10 +53,10 @@ from engine.host import (
     behavior_source,
     common_root,
 )
-from engine.ir.model import Program, short_name
-from engine.runtime import BasicBehavior, Bindings, Engine
-from engine.runtime.values import EnumValues, coerce
-from engine.types import Kind, Value
+from xabsl_studio.engine.ir.model import Program, short_name
+from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Engine
+from xabsl_studio.engine.runtime.values import EnumValues, coerce
+from xabsl_studio.engine.types import Kind, Value
 
 FIELD_X, FIELD_Y = 3000.0, 2000.0  # half lengths, mm
 VIEW_ANGLE, VIEW_DISTANCE = 30.0, 4000.0  # deg either side, mm
@@ -153,7 +153,7 @@ WORLD_INPUTS = ("ball.seen", "ball.distance", "ball.angle", "ball.time_since_see
 
 
 class BenchWorld:
-    """The bench world, an ``engine.host.World`` and ``CommandableWorld`` (see the module docstring)."""
+    """The bench world, an ``xabsl_studio.engine.host.World`` and ``CommandableWorld`` (see the module docstring)."""
 
     def __init__(self, seed: int, n_agents: int = 2) -> None:
         self.seed = seed
@@ -394,7 +394,7 @@ class BenchController:
     input trace), input functions (a value set by hand per symbol, initially 0 / false / the
     first element; every call is recorded with its arguments), outputs (engine storage) and basic
     behaviors (``walk``, ``turn``, ``kick`` move the robot, others only run). A bindings module
-    (``--bindings``) then replaces any of these through the same ``engine.runtime.Bindings`` API.
+    (``--bindings``) then replaces any of these through the same ``xabsl_studio.engine.runtime.Bindings`` API.
     """
 
     def __init__(
@@ -662,7 +662,7 @@ class InputTrace:
 class BindingsModule:
     """A user's bindings module (``--bindings FILE.py``): its ``bind(bindings, robot)`` function.
 
-    ``bind`` gets the robot's :class:`engine.runtime.Bindings` with the bench's own bindings in
+    ``bind`` gets the robot's :class:`xabsl_studio.engine.runtime.Bindings` with the bench's own bindings in
     it and the :class:`BenchAgent`; what it registers (``input``, ``input`` with ``params``,
     ``behavior``, ``enum``, ``output``) replaces the bench's binding of that name.
     """
@@ -720,7 +720,7 @@ class BenchExample:
             module that does not load, an input trace that does not read.
     """
 
-    preload: tuple[str, ...] = ("server.bench_world",)
+    preload: tuple[str, ...] = ("xabsl_studio.server.bench_world",)
     behavior_hz = DEFAULT_BEHAVIOR_HZ
     physics_hz = DEFAULT_PHYSICS_HZ
 

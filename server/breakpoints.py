@@ -1,7 +1,7 @@
 """The studio's breakpoints: kept per behavior set in the server process, stored per agents file.
 
-The simulation process checks breakpoints (``engine.runtime.breakpoints``, fed by
-:class:`~server.messages.SetBreakpoints`); this module owns what outlives it: the breakpoints of
+The simulation process checks breakpoints (``xabsl_studio.engine.runtime.breakpoints``, fed by
+:class:`~xabsl_studio.server.messages.SetBreakpoints`); this module owns what outlives it: the breakpoints of
 every behavior set, checked against its running program when set, and their file. One JSON file
 per behavior (``<state folder>/breakpoints/<digest of the agents file path>.json``, written
 atomically) holds ``{"agents_file", "breakpoints": [...]}``; the state folder is
@@ -19,9 +19,9 @@ from pathlib import Path
 
 import orjson
 
-from engine.files import write_atomically
-from engine.ir.model import Program
-from engine.runtime.breakpoints import Breakpoint, BreakpointError, check_breakpoint
+from xabsl_studio.engine.files import write_atomically
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint, BreakpointError, check_breakpoint
 
 __all__ = ["BreakpointStore", "state_folder", "validate"]
 

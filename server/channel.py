@@ -1,8 +1,8 @@
 """The pipe between the studio server and its simulation process: framed messages, never blocking.
 
 One ``AF_UNIX`` stream socket pair carries pickled messages (``<length><pickle>``) both ways: the
-dataclasses of ``server.messages`` (:data:`~server.messages.ToWorker` one way,
-:data:`~server.messages.FromWorker` the other). Both
+dataclasses of ``xabsl_studio.server.messages`` (:data:`~xabsl_studio.server.messages.ToWorker` one way,
+:data:`~xabsl_studio.server.messages.FromWorker` the other). Both
 ends keep their socket non-blocking:
 
 * writes go straight to the kernel; what the kernel does not take waits in a user-space buffer
@@ -23,7 +23,7 @@ import socket
 import struct
 from typing import Generic, TypeVar
 
-from engine.errors import ServerError
+from xabsl_studio.engine.errors import ServerError
 
 _HEADER = struct.Struct("<I")
 _READ_SIZE = 1 << 20

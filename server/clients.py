@@ -31,8 +31,8 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from server.frames import Entry, FrameEncoder, Generation
-from server.messages import (
+from xabsl_studio.server.frames import Entry, FrameEncoder, Generation
+from xabsl_studio.server.messages import (
     BreakpointEvent,
     Command,
     CrashEvent,
@@ -49,8 +49,8 @@ from server.messages import (
     guess_id,
     parse_message,
 )
-from server.protocol import DEFAULT_RATE, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL, CloseCode
-from server.session import Session
+from xabsl_studio.server.protocol import DEFAULT_RATE, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL, CloseCode
+from xabsl_studio.server.session import Session
 
 log = logging.getLogger("xabsl.server")
 
@@ -306,7 +306,7 @@ class Hub:
     # -- messages ------------------------------------------------------------------------------------
 
     def hello(self, gen: Generation, reason: HelloReason) -> bytes:
-        """A :class:`~server.messages.Hello`, spliced from the generation's pre-encoded parts."""
+        """A :class:`~xabsl_studio.server.messages.Hello`, spliced from the generation's pre-encoded parts."""
         session = self.session
         latest = session.ring.latest
         info = SessionInfo(

@@ -1,9 +1,9 @@
-"""The running behaviors' HTML documentation at ``/docs`` (``engine.docs``, generated on demand).
+"""The running behaviors' HTML documentation at ``/docs`` (``xabsl_studio.engine.docs``, generated on demand).
 
 ``GET /docs`` lists the session's behaviors (or redirects to the only one);
 ``GET /docs/{program}/{path}`` serves a file of the documentation of the program running under
 that key. Each program is documented once into a cache folder named by its digest
-(:func:`engine.docs.program_digest`), so a hot reload that changes the behavior makes the next
+(:func:`xabsl_studio.engine.docs.program_digest`), so a hot reload that changes the behavior makes the next
 request document the new one, while an unchanged program is served from disk. A folder is
 generated beside its final place and renamed into it, so a request never sees half a folder.
 """
@@ -21,10 +21,10 @@ from pathlib import Path
 from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
 
-from engine.docs import GraphLayoutError, generate, program_digest
-from engine.emit.dot import GraphvizMissing
-from engine.ir.model import Program
-from server.session import Session
+from xabsl_studio.engine.docs import GraphLayoutError, generate, program_digest
+from xabsl_studio.engine.emit.dot import GraphvizMissing
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.server.session import Session
 
 #: Documentation folders kept per cache; older ones are removed after a new one is generated.
 KEEP = 8

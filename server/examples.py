@@ -1,10 +1,10 @@
 """The world plug-in loader: from the path a user names (``xabsl serve PATH``) to an Example.
 
 The server knows no world. It asks :func:`load_example`, which finds the factory that says how to
-run ``PATH`` (the contract is :class:`engine.host.Example`), in this order:
+run ``PATH`` (the contract is :class:`xabsl_studio.engine.host.Example`), in this order:
 
 1. ``--world NAME``: the factory registered as ``NAME`` under the entry-point group
-   ``xabsl.worlds`` (``engine.host.WORLDS_GROUP``), or a ``module:attribute`` reference;
+   ``xabsl.worlds`` (``xabsl_studio.engine.host.WORLDS_GROUP``), or a ``module:attribute`` reference;
 2. a folder holding ``studio.py``: that module's ``example`` (imported by its package name when
    the folder is an importable package, else from its file, as a package of its own so that it
    may import its siblings relatively);
@@ -29,7 +29,8 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from engine.host import (
+import xabsl_studio
+from xabsl_studio.engine.host import (
     STUDIO_FACTORY,
     STUDIO_MODULE,
     WORLDS_GROUP,
@@ -41,19 +42,19 @@ from engine.host import (
     ExampleFactory,
     World,
 )
-from engine.ir.model import Program
-from engine.runtime import Engine
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import Engine
 
 __all__ = ["BENCH_WORLD", "ExampleError", "WorldPlugin", "load_example", "world_names"]
 
 #: The factory for behaviors that bring no world of their own.
-BENCH_WORLD = "server.bench_world:example"
+BENCH_WORLD = "xabsl_studio.server.bench_world:example"
 #: Worlds known without an installed entry point.
 BUILTIN_WORLDS = {"bench": BENCH_WORLD}
 
 
 class WorldPlugin:
-    """An :class:`~engine.host.Example` as loaded by :func:`load_example`, picklable by reference.
+    """An :class:`~xabsl_studio.engine.host.Example` as loaded by :func:`load_example`, picklable by reference.
 
     Every member of the contract is the plug-in's own; pickling keeps only ``(path, world,
     options)`` and unpickling loads the plug-in again (in the simulation process).
@@ -202,12 +203,21 @@ def _studio_factory(folder: Path) -> tuple[ExampleFactory, str | None]:
 
 
 def _package_of(folder: Path) -> str | None:
-    """The dotted package name of ``folder`` if it and its parents are packages, else None."""
+    """The dotted package name of ``folder`` if it and its parents are packages, else None.
+
+    A folder of this repository's checkout (``examples/NAME``) is named as the import package
+    maps it (``xabsl_studio.examples.NAME``), never by its folder name: importing it twice under
+    two names would make two copies of every class.
+    """
     parts: list[str] = []
     current = folder
     while (current / "__init__.py").is_file() and current.name.isidentifier():
         parts.insert(0, current.name)
         current = current.parent
+    if parts and parts[0] != xabsl_studio.__name__:
+        linked = Path(xabsl_studio.__file__ or "").parent / parts[0]
+        if linked.is_dir() and linked.resolve() == (current / parts[0]).resolve():
+            parts.insert(0, xabsl_studio.__name__)
     return ".".join(parts) if parts else None
 
 

@@ -3,7 +3,7 @@
 One shape for every way the studio answers "why": the live engine now (``Debugger.explain``), a
 past tick of the ring (``explain_decision`` over the values the server recorded) and a tick of a
 replayed recording (``explain_decision`` over the recording's values and the program rebuilt from
-its intermediate code). The decisions themselves are evaluated by ``engine.runtime.debug``; this
+its intermediate code). The decisions themselves are evaluated by ``xabsl_studio.engine.runtime.debug``; this
 module only lays the answer out: ids, names, the leaf's span, each condition with its value,
 branch and comparisons, and the decision tree with the path taken.
 """
@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from engine.ir.model import If, Option, Transition, leaf_path
-from engine.runtime.debug import Explanation, Values, decision_tree, render
+from xabsl_studio.engine.ir.model import If, Option, Transition, leaf_path
+from xabsl_studio.engine.runtime.debug import Explanation, Values, decision_tree, render
 
 __all__ = ["explanation_result", "if_text", "mark_values", "tree_result"]
 

@@ -20,7 +20,7 @@ which a save answers when the saved file does not compile).
 
 A file's ``version`` is a hash of its bytes: ``If-Match`` compares it under a lock, so two editors
 saving the same file cannot overwrite each other silently (the second gets 409). Writes go
-through ``engine.files.write_atomically`` (temp file, fsync, rename).
+through ``xabsl_studio.engine.files.write_atomically`` (temp file, fsync, rename).
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from engine.errors import ServerError
-from engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
+from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
 
 SUFFIX = ".xabsl"
 #: The largest behavior file listed or opened (a real option file is a few kilobytes).

@@ -1,7 +1,7 @@
 """``GET /api/fork/original``: the original run beside a fork, at the fork's ticks (docs/studio.md "Fork").
 
 After a ``fork`` the ring still holds the original run's ticks at older seqs: for a tick of the
-fork this finds the original's tick with the same world time (``server.session.original_tick``)
+fork this finds the original's tick with the same world time (``xabsl_studio.server.session.original_tick``)
 and answers every robot's activation path by name (the two runs may have different program
 versions, so ids would not compare), for the studio to show next to the fork's own path.
 """
@@ -13,10 +13,10 @@ from typing import Any
 import orjson
 from fastapi import APIRouter, HTTPException, Query, Request
 
-from server.frames import Entry
-from server.messages import BEHAVIOR_NODE, ID_INDEX, OPTION_NODE
-from server.openapi import error_responses
-from server.session import Session, original_tick
+from xabsl_studio.server.frames import Entry
+from xabsl_studio.server.messages import BEHAVIOR_NODE, ID_INDEX, OPTION_NODE
+from xabsl_studio.server.openapi import error_responses
+from xabsl_studio.server.session import Session, original_tick
 
 router = APIRouter()
 

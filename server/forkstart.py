@@ -5,12 +5,12 @@ Two halves, one per process:
 * :func:`fork_session` (server process) checks that a recording can be forked at a tick (a
   deterministic run, not itself a fork, the tick inside it, its example installed here), loads the
   example's world plug-in with the recorded world options and returns a
-  :class:`~server.session.Session` whose worker starts from :class:`ForkStart` instead of a fresh
+  :class:`~xabsl_studio.server.session.Session` whose worker starts from :class:`ForkStart` instead of a fresh
   world. Its behaviors are the ones on disk now (the session compiles them as always).
 * :func:`resimulated` (simulation process, from ``Simulation.__init__``) builds the world from the
   recorded seed with the *recorded* behaviors (compiled again from the sources the recording
-  keeps, ``engine.record.sources``), re-simulates ticks ``0 .. at - 1`` and checks tick ``at - 1``
-  against the recording (``engine.record.fork.resimulate``), then switches in the behaviors on
+  keeps, ``xabsl_studio.engine.record.sources``), re-simulates ticks ``0 .. at - 1`` and checks tick ``at - 1``
+  against the recording (``xabsl_studio.engine.record.fork.resimulate``), then switches in the behaviors on
   disk that differ from the recorded ones. The session's seqs continue the recording's: its first
   sample is tick ``at - 1`` as recorded, the first tick it runs is ``at``.
 """
@@ -23,14 +23,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from engine.errors import ServerError
-from engine.host import BehaviorLoop, Example, World
-from engine.ir.model import Program
-from engine.runtime import Engine
+from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.engine.host import BehaviorLoop, Example, World
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import Engine
 
 if TYPE_CHECKING:
-    from engine.record import Recording
-    from server.session import Session
+    from xabsl_studio.engine.record import Recording
+    from xabsl_studio.server.session import Session
 
 __all__ = ["ForkError", "ForkStart", "fork_session", "resimulated"]
 
@@ -48,7 +48,7 @@ class ForkStart:
 
 
 def _example_folder(name: str) -> Path:
-    import examples
+    from xabsl_studio import examples
 
     folder = Path(examples.__file__).resolve().parent / name
     if not name.isidentifier() or not (folder / "studio.py").is_file():
@@ -66,8 +66,8 @@ def fork_session(recording: Recording, at: int, home: tuple[Path, str | None] | 
         ForkError: not deterministic, itself a fork, ``at`` outside it, its example or world
             options missing here.
     """
-    from server.examples import ExampleError, load_example
-    from server.session import Session
+    from xabsl_studio.server.examples import ExampleError, load_example
+    from xabsl_studio.server.session import Session
 
     header = recording.header
     if not header.get("deterministic"):
@@ -128,12 +128,12 @@ def resimulated(
     """The recorded world re-simulated to ``fork.at`` and switched to ``programs`` (see the module docstring).
 
     Raises:
-        engine.record.RecordingError: the recording cannot be re-simulated (other behaviors or
+        xabsl_studio.engine.record.RecordingError: the recording cannot be re-simulated (other behaviors or
             another world before the fork tick, sources that do not compile).
     """
-    from engine.record import Recording, RecordingError
-    from engine.record.fork import fork_programs, resimulate
-    from engine.record.sources import program_sources
+    from xabsl_studio.engine.record import Recording, RecordingError
+    from xabsl_studio.engine.record.fork import fork_programs, resimulate
+    from xabsl_studio.engine.record.sources import program_sources
 
     agents_files = {source.key: source.agents_file for source in example.sources}
     current: dict[str, tuple[Program, Any]] = {}

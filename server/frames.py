@@ -2,8 +2,8 @@
 
 Three stages, split between the two processes (docs/server.md):
 
-1. **Sampling** (simulation process, ``server.worker``, every tick): :class:`FrameSampler` reads
-   an engine through the project's one sampler (``engine.record.sampler.AgentSampler``, the
+1. **Sampling** (simulation process, ``xabsl_studio.server.worker``, every tick): :class:`FrameSampler` reads
+   an engine through the project's one sampler (``xabsl_studio.engine.record.sampler.AgentSampler``, the
    recorder's too): the compact ``path`` of docs/protocol.md (integer ids) and the input and
    output symbols, turned into display values (decimals rounded, enums as element indices); the
    tick's sample goes to the server process. There
@@ -20,7 +20,7 @@ Three stages, split between the two processes (docs/server.md):
    K and robot filter share one encoding (a cache per K), which is what makes twenty clients
    cheap: with the same rate they receive the same ticks.
 
-Ids are those of the program JSON (``engine.emit.json``); see docs/protocol.md for the layout.
+Ids are those of the program JSON (``xabsl_studio.engine.emit.json``); see docs/protocol.md for the layout.
 """
 
 from __future__ import annotations
@@ -34,11 +34,11 @@ from typing import Any
 
 import orjson
 
-from engine.ir.model import Program
-from engine.record.sampler import AgentSampler, ProgramTables
-from engine.runtime import Engine
-from engine.types import Kind, Value
-from server.messages import (
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.server.messages import (
     BEHAVIOR_NODE,
     BEHAVIOR_PARAMS_INDEX,
     ID_INDEX,
@@ -50,7 +50,7 @@ from server.messages import (
     Sample,
     WireValue,
 )
-from server.protocol import FULL_EVERY
+from xabsl_studio.server.protocol import FULL_EVERY
 
 #: A key frame (full values stored) every this many ticks, so history can start anywhere cheaply.
 KEY_EVERY = 40
@@ -127,7 +127,7 @@ class ProgramCodec:
 class FrameSampler:
     """One robot's part of a frame after a tick: display path, input and output values, extras.
 
-    The engine is read by the one sampler of the project, :class:`engine.record.sampler.AgentSampler`
+    The engine is read by the one sampler of the project, :class:`xabsl_studio.engine.record.sampler.AgentSampler`
     (the recorder's too); this class only turns its raw values into the display values of frames
     (docs/protocol.md "Values": decimals rounded, booleans, enum element indices).
     """
@@ -264,7 +264,7 @@ class Generation:
     #: world's clock, the timeline goes on (set by :class:`FrameRecorder` at its first tick)
     offset: int = 0
     #: per behavior key: the source texts (display name -> text) its running program came from,
-    #: texts unchanged since the previous generation shared with it (``server.session``)
+    #: texts unchanged since the previous generation shared with it (``xabsl_studio.server.session``)
     sources: dict[str, dict[str, str]] = field(default_factory=dict)
     #: per behavior key: the files whose text differs from the previous generation's
     changed: dict[str, list[str]] = field(default_factory=dict)
@@ -455,7 +455,7 @@ class Ring:
 class FrameRecorder:
     """Turns the simulation's samples into :class:`Entry` objects and appends them to the ring.
 
-    ``record(gen, sample)`` takes a :class:`~server.messages.Sample` of generation ``gen``.
+    ``record(gen, sample)`` takes a :class:`~xabsl_studio.server.messages.Sample` of generation ``gen``.
     """
 
     def __init__(self, ring: Ring) -> None:

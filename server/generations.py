@@ -1,6 +1,6 @@
 """The generations a live session keeps by number: the behavior sources each ran, what changed, diffs.
 
-A generation (``server.frames.Generation``) starts at every start, hot reload and reset of the
+A generation (``xabsl_studio.server.frames.Generation``) starts at every start, hot reload and reset of the
 simulation. The ring buffer's ticks keep theirs, so the timeline can read a tick of any
 generation still in the ring; this module keeps, beside that, the source texts of each
 generation's running behaviors (``Compilation.sources``) so that a reload mark in the timeline
@@ -18,7 +18,7 @@ import difflib
 from collections.abc import Mapping
 from typing import Any
 
-from server.frames import Generation, Ring
+from xabsl_studio.server.frames import Generation, Ring
 
 #: The most generations kept (a reload every second for two minutes stays well inside).
 MAX_GENERATIONS = 200

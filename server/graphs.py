@@ -1,4 +1,4 @@
-"""Option-graph and state-machine pictures: DOT from ``engine.emit.dot``, SVG from Graphviz, cached.
+"""Option-graph and state-machine pictures: DOT from ``xabsl_studio.engine.emit.dot``, SVG from Graphviz, cached.
 
 Laying out a graph costs tens of milliseconds of ``dot``; the picture only changes when the DOT
 text changes, so SVGs are cached by a hash of the DOT source (which is also the ETag). The cache
@@ -11,9 +11,9 @@ import hashlib
 import threading
 from collections import OrderedDict
 
-from engine.emit.dot import option_graph, render_svg, state_machine
-from engine.errors import ServerError
-from engine.ir.model import Program
+from xabsl_studio.engine.emit.dot import option_graph, render_svg, state_machine
+from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.engine.ir.model import Program
 
 
 class GraphError(ServerError, LookupError):

@@ -7,7 +7,7 @@ of a regular file directly in the folder, or the name of a file given on the com
 nothing else is opened, whatever the name says.
 
 The routes (``router``): ``GET /api/recordings`` lists them and the studios open beside this one,
-``POST /api/recordings/open`` opens one as a replay (``server.studios``; the same file twice is
+``POST /api/recordings/open`` opens one as a replay (``xabsl_studio.server.studios``; the same file twice is
 the same replay), ``DELETE /api/recordings/open/{id}`` closes a replay or a fork, and
 ``POST /api/fork`` ("Run from here", in a replay of a deterministic recording) starts a live
 session from a tick of it.
@@ -24,8 +24,8 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException, Request
 from pydantic import BaseModel, Field
 
-from server.openapi import error_responses
-from server.studios import StudioFull, Studios
+from xabsl_studio.server.openapi import error_responses
+from xabsl_studio.server.studios import StudioFull, Studios
 
 __all__ = ["RecordingLibrary", "router"]
 
@@ -93,7 +93,7 @@ class RecordingLibrary:
 
 
 def _facts(path: Path) -> dict[str, Any]:
-    from engine.record import Recording, RecordingError
+    from xabsl_studio.engine.record import Recording, RecordingError
 
     try:
         with Recording(path) as recording:
@@ -153,8 +153,8 @@ async def list_recordings(studio: StudioDep) -> dict[str, Any]:
 @router.post("/api/recordings/open", tags=["recordings"], responses=error_responses(400, 404, 409, 422))
 async def open_recording(studio: StudioDep, body: OpenBody) -> dict[str, Any]:
     """Open a recording as a replay beside this studio; its address (``/replay/ID/``)."""
-    from engine.host import ExampleError
-    from server.replay import ReplaySession
+    from xabsl_studio.engine.host import ExampleError
+    from xabsl_studio.server.replay import ReplaySession
 
     library: RecordingLibrary = studio.library
     try:
@@ -195,8 +195,8 @@ async def fork_recording(studio: StudioDep, body: ForkBody) -> dict[str, Any]:
     a replay, or too many forks run; 422: the recording cannot be forked (not deterministic, no
     such example on this machine, a tick outside it).
     """
-    from server.forkstart import ForkError, fork_session
-    from server.replay import ReplaySession
+    from xabsl_studio.server.forkstart import ForkError, fork_session
+    from xabsl_studio.server.replay import ReplaySession
 
     session = studio.session
     if not isinstance(session, ReplaySession):

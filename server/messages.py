@@ -11,16 +11,16 @@ Starlette's. Three groups of frozen dataclasses:
   :class:`ProtocolError` whose text goes into an error ``reply``;
 * **server -> client** (:data:`ServerMessage`): ``reply`` and the events are dataclasses encoded
   by :func:`encode`; ``hello``, ``frame`` and ``history`` are spliced from pre-encoded bytes for
-  speed (``server.clients``, ``server.frames``), and their dataclasses here are the schema those
-  bytes follow (tests validate real messages against it);
+  speed (``xabsl_studio.server.clients``, ``xabsl_studio.server.frames``), and their dataclasses here are
+  the schema those bytes follow (tests validate real messages against it);
 * **server <-> simulation process** (:data:`ToWorker`, :data:`FromWorker`): plain slotted
-  dataclasses pickled over ``server.channel``; the per-tick :class:`Sample` is built without any
+  dataclasses pickled over ``xabsl_studio.server.channel``; the per-tick :class:`Sample` is built without any
   validation (it is the hot path).
 
 The TypeScript types of the web UI (``web/src/messages.gen.ts``) are generated from the JSON
-Schema of the first two groups (``python -m server.tsgen``); a test fails when they drift.
+Schema of the first two groups (``python -m xabsl_studio.server.tsgen``); a test fails when they drift.
 
-The activation-path node layout is the engine's (``engine.runtime.activation.compact_path``);
+The activation-path node layout is the engine's (``xabsl_studio.engine.runtime.activation.compact_path``);
 :data:`OptionNode` and :data:`BehaviorNode` describe it and the ``*_INDEX`` constants name its
 positions, so no other server module indexes a node by a bare number.
 """
@@ -34,13 +34,13 @@ import orjson
 from pydantic import BeforeValidator, ConfigDict, Discriminator, Field, TypeAdapter, ValidationError, with_config
 from pydantic_core import ErrorDetails
 
-from engine.errors import ServerError
-from engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
-from server.protocol import DEFAULT_RATE, MAX_RATE, MAX_SPEED, MAX_STEP_TICKS, MIN_RATE, MIN_SPEED, VERSION
+from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
+from xabsl_studio.server.protocol import DEFAULT_RATE, MAX_RATE, MAX_SPEED, MAX_STEP_TICKS, MIN_RATE, MIN_SPEED, VERSION
 
 if TYPE_CHECKING:
-    from engine.ir.model import Program
-    from engine.runtime.breakpoints import Breakpoint
+    from xabsl_studio.engine.ir.model import Program
+    from xabsl_studio.engine.runtime.breakpoints import Breakpoint
 
 __all__ = [
     "BEHAVIOR_NODE",
@@ -356,7 +356,7 @@ class Fork:
     seq: Annotated[int, Field(ge=0, le=2**62), _INTEGRAL]
 
 
-#: A breakpoint kind (``engine.runtime.breakpoints``).
+#: A breakpoint kind (``xabsl_studio.engine.runtime.breakpoints``).
 BreakpointKindName = Literal["enter_option", "leave_option", "enter_state", "leave_state", "leaf", "condition"]
 #: A breakpoint's id within its behavior set.
 BreakpointId = Annotated[int, Field(ge=1, le=2**31), _INTEGRAL]
@@ -685,7 +685,7 @@ class RobotInfo:
 @with_config(_SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Structure:
-    """The ids of a generation: one program JSON per behavior set (``engine.emit.json``), the robots."""
+    """The ids of a generation: one program JSON per behavior set (``xabsl_studio.engine.emit.json``), the robots."""
 
     programs: dict[str, dict[str, Any]]
     robots: list[RobotInfo]
@@ -1055,7 +1055,7 @@ def encode_hello(
 
 
 def encode_history_chunk(command_id: CommandId | None, index: int, last: bool, frames: list[bytes]) -> bytes:
-    """A :class:`HistoryChunk` around frames encoded already (``server.frames.history``)."""
+    """A :class:`HistoryChunk` around frames encoded already (``xabsl_studio.server.frames.history``)."""
     return b'{"type":"history","id":%s,"chunk":%d,"last":%s,"frames":[%s]}' % (
         orjson.dumps(command_id),
         index,

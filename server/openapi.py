@@ -1,6 +1,6 @@
 """The OpenAPI vocabulary of the studio's refusals: the error body and the documented error statuses.
 
-Every router (``server.app``, ``server.profile``, ...) documents the statuses it answers with
+Every router (``xabsl_studio.server.app``, ``xabsl_studio.server.profile``, ...) documents the statuses it answers with
 :func:`error_responses`, so the OpenAPI document stays true (schemathesis checks it against the
 live app in tests/server/test_schema.py).
 """

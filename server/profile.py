@@ -1,4 +1,4 @@
-"""``GET /api/profile``: the profile (engine.profile) of the live session's ring buffer.
+"""``GET /api/profile``: the profile (xabsl_studio.engine.profile) of the live session's ring buffer.
 
 Counted here, in the server process, from the ticks the ring already keeps (every tick of the
 last ``RING_SECONDS``, each entry's encoded delta holds every robot's path): the browser only
@@ -20,11 +20,11 @@ import orjson
 from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response
 
-from engine.profile import build_report
-from engine.profile.analysis import count_paths
-from server.frames import Entry
-from server.openapi import error_responses
-from server.session import Session
+from xabsl_studio.engine.profile import build_report
+from xabsl_studio.engine.profile.analysis import count_paths
+from xabsl_studio.server.frames import Entry
+from xabsl_studio.server.openapi import error_responses
+from xabsl_studio.server.session import Session
 
 router = APIRouter()
 _LOCK = threading.Lock()

@@ -1,6 +1,6 @@
 """The studio's websocket protocol, version 1: its version, limits and close codes (docs/protocol.md).
 
-The messages themselves are typed in ``server.messages``; changing a message's shape means
+The messages themselves are typed in ``xabsl_studio.server.messages``; changing a message's shape means
 bumping :data:`VERSION` (the web UI checks it in every ``hello``).
 """
 
@@ -14,7 +14,7 @@ VERSION = 1
 #: Largest client message in bytes (uvicorn's ``ws_max_size`` and our own check, close 1009).
 MAX_MESSAGE_BYTES = 64 * 1024
 #: Largest message on the editor's language-server websocket (``/lsp``): an opened or changed file
-#: travels whole, JSON-escaped, and files may be 16 MiB (``server.files.MAX_FILE_BYTES``). It is
+#: travels whole, JSON-escaped, and files may be 16 MiB (``xabsl_studio.server.files.MAX_FILE_BYTES``). It is
 #: uvicorn's ``ws_max_size``; ``/ws`` keeps its own lower limit.
 MAX_LSP_MESSAGE_BYTES = 40 * 1024 * 1024
 #: Largest REST request body in bytes (413 above).

@@ -1,7 +1,7 @@
 """The live studio session recorded to a folder, in the server process, from the samples it receives.
 
-:class:`LiveRecorder` turns the simulation's :class:`~server.messages.Sample` messages (which the
-server process receives anyway for its frames) into :class:`~engine.record.RecordingEncoder`
+:class:`LiveRecorder` turns the simulation's :class:`~xabsl_studio.server.messages.Sample` messages (which the
+server process receives anyway for its frames) into :class:`~xabsl_studio.engine.record.RecordingEncoder`
 operations, so recording costs the simulation process nothing. Files roll: a new one every
 ``roll_ticks`` ticks (10 minutes at 40 Hz by default), named ``EXAMPLE-YYYYmmdd-HHMMSS-NNN.mcap``;
 after each roll the oldest files of the folder are deleted while the folder holds more than
@@ -32,15 +32,15 @@ from typing import Any
 
 import orjson
 
-from engine.emit.ic import emit_ic
-from engine.ir.model import Program
-from engine.record import RecordingEncoder
-from engine.record import schema as S
-from engine.record.encoder import NO_CHANGE
-from engine.record.sampler import ProgramTables
-from engine.types import Kind
-from server.frames import Generation
-from server.messages import Sample
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record import RecordingEncoder
+from xabsl_studio.engine.record import schema as S
+from xabsl_studio.engine.record.encoder import NO_CHANGE
+from xabsl_studio.engine.record.sampler import ProgramTables
+from xabsl_studio.engine.types import Kind
+from xabsl_studio.server.frames import Generation
+from xabsl_studio.server.messages import Sample
 
 __all__ = ["DEFAULT_CAP_BYTES", "DEFAULT_ROLL_TICKS", "LiveRecorder", "default_folder", "tables_of"]
 
@@ -230,7 +230,7 @@ class LiveRecorder:
         }
 
     def event(self, kind: str, agent: str | None = None, **data: Any) -> None:
-        """A session event (``engine.record.schema.EVENT_KINDS``) before the next tick."""
+        """A session event (``xabsl_studio.engine.record.schema.EVENT_KINDS``) before the next tick."""
         if kind not in S.EVENT_KINDS or self._failed:
             return
         try:

@@ -1,20 +1,20 @@
 """A recording served as a studio session: ``xabsl serve --replay FILE.mcap``.
 
 :class:`ReplaySession` offers the app and the websocket hub what a live
-:class:`~server.session.Session` offers (a ring of frames, generations, ``history``, ``status``,
-the playback commands), with the recording (``engine.record.Recording``) in place of a simulation
+:class:`~xabsl_studio.server.session.Session` offers (a ring of frames, generations, ``history``, ``status``,
+the playback commands), with the recording (``xabsl_studio.engine.record.Recording``) in place of a simulation
 process. Every tick of the file is reachable: ``seek`` puts any tick in the ring (the MCAP chunk
 index makes that a read of at most ``key_every`` ticks), ``pause``/``resume``/``step``/``speed``
 play the file at its own rate, and ``history`` decodes any range of ticks from the file, so the
 timeline covers the whole recording, not the live ring's 120 s.
 
-A recorded tick becomes the same :class:`~server.messages.Sample` the simulation would have sent
+A recorded tick becomes the same :class:`~xabsl_studio.server.messages.Sample` the simulation would have sent
 (paths, display values aligned with the generation's symbol ids, fault, scene, status), and the
-usual :class:`~server.frames.FrameRecorder` turns it into frames, so every panel reads a replay
+usual :class:`~xabsl_studio.server.frames.FrameRecorder` turns it into frames, so every panel reads a replay
 exactly as it reads a live session.
 
 ``explain`` works at any tick: :func:`explain` rebuilds the recorded generation from its
-intermediate code and lets the engine's debugger (``engine.runtime.debug.explain_decision``, the
+intermediate code and lets the engine's debugger (``xabsl_studio.engine.runtime.debug.explain_decision``, the
 evaluator the live studio uses) walk its decision tree to the recorded leaf, evaluating every
 condition and both operands of every comparison from the recorded values (:class:`TickValues`:
 inputs of the tick; outputs as the decision saw them, the previous tick's updated by the
@@ -40,17 +40,17 @@ from typing import Any
 
 import orjson
 
-from engine.host import Agent, AgentController, BehaviorSource, ExampleError, World
-from engine.ir.model import Expression, Program
-from engine.record import Recording, RecordingError, TickView
-from engine.record.reader import AgentTick, ProgramView
-from engine.runtime import AssignmentNode, Engine, OptionNode
-from engine.runtime.debug import Unknown, explain_decision, render, show_value
-from engine.types import Kind, Value
-from server import frames
-from server.explain import explanation_result, tree_result
-from server.frames import Entry, FrameRecorder, Generation, Ring
-from server.messages import (
+from xabsl_studio.engine.host import Agent, AgentController, BehaviorSource, ExampleError, World
+from xabsl_studio.engine.ir.model import Expression, Program
+from xabsl_studio.engine.record import Recording, RecordingError, TickView
+from xabsl_studio.engine.record.reader import AgentTick, ProgramView
+from xabsl_studio.engine.runtime import AssignmentNode, Engine, OptionNode
+from xabsl_studio.engine.runtime.debug import Unknown, explain_decision, render, show_value
+from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.server import frames
+from xabsl_studio.server.explain import explanation_result, tree_result
+from xabsl_studio.server.frames import Entry, FrameRecorder, Generation, Ring
+from xabsl_studio.server.messages import (
     BreakpointCommand,
     Explain,
     Fork,
@@ -62,8 +62,8 @@ from server.messages import (
     Step,
     WorkerCommand,
 )
-from server.session import CommandError, Session
-from server.worker import check_speed
+from xabsl_studio.server.session import CommandError, Session
+from xabsl_studio.server.worker import check_speed
 
 __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
 
@@ -75,7 +75,7 @@ RING_TICKS = 256
 
 @dataclass(frozen=True, slots=True)
 class ReplayExample:
-    """The :class:`~engine.host.Example` of a replay: a name and a folder, no world to build."""
+    """The :class:`~xabsl_studio.engine.host.Example` of a replay: a name and a folder, no world to build."""
 
     name: str
     root: Path
@@ -244,8 +244,8 @@ class ReplaySource:
         return codec
 
     def sample(self, view: TickView, number: int, paused: bool, speed: float) -> Any:
-        """The :class:`~server.messages.Sample` the simulation would have sent for ``view``."""
-        from server.messages import Sample
+        """The :class:`~xabsl_studio.server.messages.Sample` the simulation would have sent for ``view``."""
+        from xabsl_studio.server.messages import Sample
 
         paths: list[bytes] = []
         extras: list[bytes] = []
@@ -591,7 +591,7 @@ def latest_status(entry: Entry | None) -> dict[str, Any]:
 
 
 class TickValues:
-    """What one option's decision read in a recorded tick (``engine.runtime.debug.Values``).
+    """What one option's decision read in a recorded tick (``xabsl_studio.engine.runtime.debug.Values``).
 
     Enum values are element indices in their enumeration (the reader gives element names;
     unknown names are -1); plain inputs are the tick's,

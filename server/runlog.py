@@ -4,7 +4,7 @@ A run of the studio is a pure function of the world's seed, the programs its eng
 with, and the commands that changed it, each at a known point between two ticks: the loop is
 tick-based, so pausing, stepping and the speed only change *when* ticks run, never what they
 compute. :class:`RunLog` keeps exactly that for one run (from a ``reset``, the start, or a
-fork), so that ``server.worker`` can rebuild the world from the seed and re-simulate it to any
+fork), so that ``xabsl_studio.server.worker`` can rebuild the world from the seed and re-simulate it to any
 tick of the live history with the same commands and behavior versions (no world snapshots: a
 copied pymunk space does not continue bit-exactly).
 
@@ -27,7 +27,7 @@ import bisect
 from dataclasses import dataclass
 from typing import Any
 
-from engine.ir.model import Program
+from xabsl_studio.engine.ir.model import Program
 
 __all__ = ["LOGGED_OPS", "MAX_EVENTS", "LoggedCommand", "RunLog", "Switch"]
 
@@ -68,7 +68,7 @@ class LoggedCommand:
 
     at: int
     ticks: int
-    command: Any  # a worker command of ``server.messages``, or a Switch
+    command: Any  # a worker command of ``xabsl_studio.server.messages``, or a Switch
     owner: str | None
 
 

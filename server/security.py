@@ -29,8 +29,8 @@ from urllib.parse import parse_qs, urlsplit
 import orjson
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from engine.errors import ServerError
-from server.protocol import MAX_BODY_BYTES
+from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.server.protocol import MAX_BODY_BYTES
 
 TOKEN_HEADER = "x-xabsl-token"
 MUTATING = frozenset({"POST", "PUT", "PATCH", "DELETE"})

@@ -1,17 +1,17 @@
 """The live session as the server process sees it: a simulation process, its frames, its commands.
 
-The world and the engines live in a separate process (``server.worker``, started with the
+The world and the engines live in a separate process (``xabsl_studio.server.worker``, started with the
 forkserver or spawn method, never a fork of the running server) so that websocket clients cannot
 slow the simulation through the GIL (docs/server.md). This module is that process's other end:
 
 * **frames**: the worker sends one sample per tick over a non-blocking socket
-  (``server.channel``); the asyncio loop reads it with ``add_reader`` (no extra thread), turns it
-  into a ring :class:`~server.frames.Entry` (masks, delta and key frames) and calls ``notify``
-  (the :class:`~server.clients.Hub`). Generation messages (start, reload, reset) come before the
+  (``xabsl_studio.server.channel``); the asyncio loop reads it with ``add_reader`` (no extra thread), turns it
+  into a ring :class:`~xabsl_studio.server.frames.Entry` (masks, delta and key frames) and calls ``notify``
+  (the :class:`~xabsl_studio.server.clients.Hub`). Generation messages (start, reload, reset) come before the
   first sample of their generation and become :attr:`Session.generation`;
 * **commands**: :meth:`Session.request` sends a validated command (a dataclass of
-  ``server.messages``) in a :class:`~server.messages.WorkerRequest` and resolves when the worker
-  answers (the samples a command produced, e.g. by ``step``, arrive before the answer);
+  ``xabsl_studio.server.messages``) in a :class:`~xabsl_studio.server.messages.WorkerRequest` and resolves
+  when the worker answers (the samples a command produced, e.g. by ``step``, arrive before the answer);
 * **compiling** stays here (:meth:`Session.compile`, run in a worker thread by the app); a clean
   program is pickled to the simulation, which hot-swaps it between two ticks (:meth:`Session.apply`);
 * **crashes**: when the simulation process ends unasked (an exception in the world, a kill), the
@@ -38,19 +38,19 @@ from typing import Any
 
 import orjson
 
-from engine.emit.json import program_to_json
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorSource, Example
-from engine.ir.model import Program
-from engine.lang import Compilation, compile_file
-from engine.lang.condition import check_condition
-from engine.runtime.breakpoints import Breakpoint, BreakpointError
-from server import frames, worker
-from server.breakpoints import BreakpointStore, validate
-from server.channel import Channel, ChannelClosed
-from server.forkstart import ForkStart
-from server.frames import Entry, FrameRecorder, Generation, Ring
-from server.generations import Generations
-from server.messages import (
+from xabsl_studio.engine.emit.json import program_to_json
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, BehaviorSource, Example
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.lang import Compilation, compile_file
+from xabsl_studio.engine.lang.condition import check_condition
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint, BreakpointError
+from xabsl_studio.server import frames, worker
+from xabsl_studio.server.breakpoints import BreakpointStore, validate
+from xabsl_studio.server.channel import Channel, ChannelClosed
+from xabsl_studio.server.forkstart import ForkStart
+from xabsl_studio.server.frames import Entry, FrameRecorder, Generation, Ring
+from xabsl_studio.server.generations import Generations
+from xabsl_studio.server.messages import (
     Apply,
     BreakpointCommand,
     CheckCondition,
@@ -81,8 +81,8 @@ from server.messages import (
     WorkerReply,
     WorkerRequest,
 )
-from server.recording import LiveRecorder
-from server.worker import CommandError, WorkerConfig, check_speed
+from xabsl_studio.server.recording import LiveRecorder
+from xabsl_studio.server.worker import CommandError, WorkerConfig, check_speed
 
 __all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session", "fork_request", "original_tick"]
 
@@ -136,7 +136,7 @@ def _context(example: Example) -> Any:
     """The start method: forkserver where there is one (cheap starts, preloaded modules), else spawn."""
     if "forkserver" in multiprocessing.get_all_start_methods():
         context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(["server.worker", *getattr(example, "preload", ())])
+        context.set_forkserver_preload(["xabsl_studio.server.worker", *getattr(example, "preload", ())])
         return context
     return multiprocessing.get_context("spawn")
 
@@ -148,9 +148,9 @@ class Session:
         example: the adapter of the example folder.
         seed: the world's seed.
         speed: real time x speed (0.1..20).
-        behavior_hz, physics_hz: the loop's rates (``engine.host``).
+        behavior_hz, physics_hz: the loop's rates (``xabsl_studio.engine.host``).
         ring_seconds: how much history the ring buffer keeps.
-        state_dir: where breakpoints are stored (default: ``server.breakpoints.state_folder()``).
+        state_dir: where breakpoints are stored (default: ``xabsl_studio.server.breakpoints.state_folder()``).
     """
 
     def __init__(
@@ -191,9 +191,9 @@ class Session:
         self._stopping = False
         self._worker_status: dict[str, Any] = {}
         self._restart_lock: asyncio.Lock | None = None
-        #: records the session to a folder from the samples (``server.recording``); None: off
+        #: records the session to a folder from the samples (``xabsl_studio.server.recording``); None: off
         self.live_recorder: LiveRecorder | None = None
-        #: start the first simulation at a tick of a recording (``server.forkstart``); None: fresh
+        #: start the first simulation at a tick of a recording (``xabsl_studio.server.forkstart``); None: fresh
         self.fork_start: ForkStart | None = None
         self._incoming: dict[str, Program] = {}
         self._incoming_sources: dict[str, dict[str, str]] = {}

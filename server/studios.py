@@ -1,9 +1,9 @@
 """Further studios served beside the main one: recordings opened as replays, forks run from a replay.
 
 The studio that ``xabsl serve`` starts can open more sessions in the same server: a recording of
-its record folder as a read-only :class:`~server.replay.ReplaySession`, or a live
-:class:`~server.session.Session` forked from a replay's tick ("Run from here"). Each is a whole
-studio app of its own (``server.app.create_app``: the same routes, websocket, security policy and
+its record folder as a read-only :class:`~xabsl_studio.server.replay.ReplaySession`, or a live
+:class:`~xabsl_studio.server.session.Session` forked from a replay's tick ("Run from here"). Each is a whole
+studio app of its own (``xabsl_studio.server.app.create_app``: the same routes, websocket, security policy and
 web build) mounted under a path prefix, ``/replay/ID/`` or ``/fork/ID/``: the page uses relative
 addresses, so the same web UI works there in a new browser tab, beside the original.
 
@@ -11,7 +11,7 @@ addresses, so the same web UI works there in a new browser tab, beside the origi
 bounds how many are open (the oldest without clients makes room; when every one has clients, a
 new one is refused) and closes them all when the main app stops. :class:`StudiosMiddleware`
 passes a request for ``/replay/ID/...`` to that studio's app with the prefix taken off the path,
-so the studio's own :class:`~server.security.SecurityMiddleware` checks it as it checks ``/api``
+so the studio's own :class:`~xabsl_studio.server.security.SecurityMiddleware` checks it as it checks ``/api``
 (token, Origin, Host) behind the main app's.
 """
 
@@ -28,12 +28,12 @@ from typing import TYPE_CHECKING, Any, Literal
 import orjson
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from server.security import SecurityPolicy
+from xabsl_studio.server.security import SecurityPolicy
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
 
-    from server.session import Session
+    from xabsl_studio.server.session import Session
 
 __all__ = ["MAX_FORKS", "MAX_REPLAYS", "StudioFull", "Studios", "StudiosMiddleware", "SubStudio"]
 
@@ -131,7 +131,7 @@ class Studios:
         Raises:
             StudioFull: as many of ``kind`` are open as allowed, and each has clients.
         """
-        from server.app import create_app
+        from xabsl_studio.server.app import create_app
 
         try:
             await self._make_room(kind)

@@ -13,7 +13,7 @@ from __future__ import annotations
 from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIOProtocol
 from websockets.protocol import State
 
-from server.protocol import CloseCode
+from xabsl_studio.server.protocol import CloseCode
 
 
 class WebSocketProtocol(WebSocketsSansIOProtocol):

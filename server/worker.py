@@ -1,26 +1,26 @@
 """The simulation process: one world and its XABSL engines, stepped at real time x speed (§2.2 one tick).
 
-The studio server (``server.session``) starts :func:`main` in a process of its own (forkserver or
+The studio server (``xabsl_studio.server.session``) starts :func:`main` in a process of its own (forkserver or
 spawn, never a fork of the server) so that websocket clients can never slow the simulation
 through the GIL. This process owns everything that touches the world and the engines:
 
-* :class:`Simulation`: the world, the :class:`~engine.host.BehaviorLoop`, the engines, the
+* :class:`Simulation`: the world, the :class:`~xabsl_studio.engine.host.BehaviorLoop`, the engines, the
   hot swap of programs compiled by the server, the commands (``_op_*``) and who forced what;
-* per tick, one compact :class:`~server.messages.Sample`: seq, generation, clocks, and per robot
+* per tick, one compact :class:`~xabsl_studio.server.messages.Sample`: seq, generation, clocks, and per robot
   the activation path (JSON bytes), the extras (fault, force, overrides), the input and output
   values as tuples; the dynamic scene and the world status (JSON bytes). Everything per client
   (masks, deltas, full frames, the ring buffer, history) happens in the server process;
-* a :class:`~server.messages.NewGeneration` (:meth:`Simulation.generation`) whenever the ids
+* a :class:`~xabsl_studio.server.messages.NewGeneration` (:meth:`Simulation.generation`) whenever the ids
   change (start, reload, reset): structure bytes, static scene bytes, the symbol id tables, sent
   before its first sample.
 
 The loop (:func:`run`) ticks when a tick is due and otherwise waits on the channel for
-:class:`~server.messages.WorkerRequest` messages: a command the server validated already (a
-dataclass of ``server.messages``), answered with a :class:`~server.messages.WorkerReply` after the
-samples the command produced. Samples are droppable (``server.channel``): a server that falls
-behind never blocks a tick. An exception escaping the world ends the process after a
-:class:`~server.messages.Crash` message; the server reports it and starts a fresh process on
-``reset``.
+:class:`~xabsl_studio.server.messages.WorkerRequest` messages: a command the server validated already (a
+dataclass of ``xabsl_studio.server.messages``), answered with a
+:class:`~xabsl_studio.server.messages.WorkerReply` after the samples the command produced. Samples
+are droppable (``xabsl_studio.server.channel``): a server that falls behind never blocks a tick. An
+exception escaping the world ends the process after a :class:`~xabsl_studio.server.messages.Crash`
+message; the server reports it and starts a fresh process on ``reset``.
 
 Timing: ticks are due every ``1 / (behavior_hz x speed)`` wall seconds; more than a quarter of a
 second behind (a slow machine at 20x), the backlog is dropped instead of burst through.
@@ -42,8 +42,8 @@ from typing import Any
 
 import orjson
 
-from engine.codegen.layout import default_value
-from engine.host import (
+from xabsl_studio.engine.codegen.layout import default_value
+from xabsl_studio.engine.host import (
     DEFAULT_BEHAVIOR_HZ,
     DEFAULT_PHYSICS_HZ,
     BehaviorLoop,
@@ -52,16 +52,16 @@ from engine.host import (
     World,
     WorldCommandError,
 )
-from engine.ir.model import Program
-from engine.runtime import DebugError, Debugger, Engine, EngineError
-from engine.runtime.breakpoints import Breakpoint, BreakpointHit, BreakpointSet
-from engine.runtime.debug import Unknown, explain_decision, render, show_value
-from engine.types import Kind, Value
-from server.channel import Channel, ChannelClosed
-from server.explain import explanation_result, mark_values, tree_result
-from server.forkstart import ForkStart
-from server.frames import FrameSampler, ProgramCodec
-from server.messages import (
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import DebugError, Debugger, Engine, EngineError
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint, BreakpointHit, BreakpointSet
+from xabsl_studio.engine.runtime.debug import Unknown, explain_decision, render, show_value
+from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.server.channel import Channel, ChannelClosed
+from xabsl_studio.server.explain import explanation_result, mark_values, tree_result
+from xabsl_studio.server.forkstart import ForkStart
+from xabsl_studio.server.frames import FrameSampler, ProgramCodec
+from xabsl_studio.server.messages import (
     Apply,
     Crash,
     Explain,
@@ -95,8 +95,8 @@ from server.messages import (
     WorkerRequest,
     WorldCommand,
 )
-from server.protocol import MAX_SPEED, MIN_SPEED
-from server.runlog import LOGGED_OPS, Programs, RunLog, Switch
+from xabsl_studio.server.protocol import MAX_SPEED, MIN_SPEED
+from xabsl_studio.server.runlog import LOGGED_OPS, Programs, RunLog, Switch
 
 #: Simulated seconds a ``fork`` re-simulates at most (from the last reset: about 0.2 ms a tick for
 #: 10 robots, so 30 minutes take some 15 s in which the simulation answers nothing).
@@ -133,7 +133,7 @@ class WorkerConfig:
     breakpoints: dict[str, tuple[Breakpoint, ...]] = field(default_factory=dict)
     #: samples the server's ring holds: run logs older than that are dropped (``fork``)
     history_ticks: int = 4800
-    #: start at a tick of a recording instead of a fresh world ("run from here", ``server.forkstart``)
+    #: start at a tick of a recording instead of a fresh world ("run from here", ``xabsl_studio.server.forkstart``)
     fork: ForkStart | None = None
 
 
@@ -249,8 +249,8 @@ class Simulation:
         self.logs = [log for log in self.logs if log.end is None or log.end > oldest]
 
     def _fork_world(self, fork: ForkStart) -> None:
-        """The recorded world at the fork tick, with the behaviors on disk (``server.forkstart``)."""
-        from server.forkstart import resimulated
+        """The recorded world at the fork tick, with the behaviors on disk (``xabsl_studio.server.forkstart``)."""
+        from xabsl_studio.server.forkstart import resimulated
 
         start = resimulated(self.example, self.programs, fork, self.physics_hz, self.behavior_hz)
         self.world, self.loop, self.engines, self.keys = start.world, start.loop, start.engines, start.keys
@@ -401,7 +401,7 @@ class Simulation:
     def execute(self, command: WorkerCommand | WorkerRequest, owner: str | None = None) -> Any:
         """Carry out one command (docs/protocol.md); generations and samples it makes go to :attr:`emit`.
 
-        ``command`` is a command dataclass of ``server.messages`` (validated at the server's edge,
+        ``command`` is a command dataclass of ``xabsl_studio.server.messages`` (validated at the server's edge,
         so its arguments have their types and static ranges) or a :class:`WorkerRequest`.
 
         Raises:
@@ -562,7 +562,7 @@ class Simulation:
         return self.status()
 
     def _op_world_command(self, command: WorldCommand, owner: str | None) -> Any:
-        """A command of the world itself (``engine.host.CommandableWorld``); without ``name``: the list."""
+        """A command of the world itself (``xabsl_studio.engine.host.CommandableWorld``); without ``name``: the list."""
         world = self.world
         if not isinstance(world, CommandableWorld):
             raise CommandError("this world has no commands")
@@ -1038,5 +1038,5 @@ def _drain(channel: WorkerChannel, timeout: float = 2.0) -> None:
 
 
 if __name__ == "__main__":  # pragma: no cover - started through multiprocessing
-    print("server.worker runs inside `xabsl serve`", file=sys.stderr)
+    print("xabsl_studio.server.worker runs inside `xabsl serve`", file=sys.stderr)
     sys.exit(os.EX_USAGE)

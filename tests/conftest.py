@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.lang import Compilation, compile_file
+from xabsl_studio.engine.lang import Compilation, compile_file
 
 
 @pytest.fixture

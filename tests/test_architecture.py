@@ -19,10 +19,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-CHECKED = ("engine", "server", "examples")
-
-
-PROJECT = ("engine", "server", "examples")
+#: the import package: its entries link to the repository's folders (xabsl_studio/__init__.py)
+PACKAGE = "xabsl_studio"
+CHECKED = ("engine", "server", "examples", "lsp")
 
 #: Underscore attributes that are public API of the standard library (namedtuple's methods).
 PUBLIC_UNDERSCORE = frozenset({"_replace", "_asdict", "_fields", "_make", "_field_defaults"})
@@ -45,7 +44,11 @@ def module_name(path: Path, root: Path = ROOT) -> str:
 
 def python_files(*packages: str) -> Iterator[Path]:
     for package in packages:
-        yield from sorted((ROOT / package).rglob("*.py"))
+        yield from sorted((ROOT / PACKAGE / package).rglob("*.py"))
+
+
+def ours(module: str) -> bool:
+    return module.split(".")[0] == PACKAGE
 
 
 def private(name: str) -> bool:
@@ -88,21 +91,21 @@ def underscore_violations(path: Path, root: Path = ROOT) -> list[str]:
     imported_modules: set[str] = set()  # project modules bound to a name in this module
     foreign_modules: set[str] = set()  # other modules bound to a name (their privates are theirs)
     found: list[str] = []
-    where = path.relative_to(root)
+    where = path.resolve().relative_to(root.resolve())  # the repository's path, not the link's
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
             source = resolve(module, is_package, node)
-            ours = source.split(".")[0] in PROJECT
+            project = ours(source)
             for alias in node.names:
-                if ours and private(alias.name) and source != module:
+                if project and private(alias.name) and source != module:
                     found.append(f"{where}:{node.lineno}: imports {alias.name} from {source}")
-                (imported_modules if ours else foreign_modules).add(alias.asname or alias.name)
+                (imported_modules if project else foreign_modules).add(alias.asname or alias.name)
         elif isinstance(node, ast.Import):
             for alias in node.names:
-                ours = alias.name.split(".")[0] in PROJECT
-                if ours and any(private(part) for part in alias.name.split(".")):
+                project = ours(alias.name)
+                if project and any(private(part) for part in alias.name.split(".")):
                     found.append(f"{where}:{node.lineno}: imports private module {alias.name}")
-                (imported_modules if ours else foreign_modules).add(alias.asname or alias.name.split(".")[0])
+                (imported_modules if project else foreign_modules).add(alias.asname or alias.name.split(".")[0])
     for node in ast.walk(tree):
         if not isinstance(node, ast.Attribute) or not private(node.attr) or node.attr in PUBLIC_UNDERSCORE:
             continue
@@ -210,11 +213,11 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
 @pytest.mark.parametrize(
     "source",
     [
-        "from engine.runtime.engine import _helper\n",
-        "import engine.runtime.engine as e\ne._tick\n",
+        "from xabsl_studio.engine.runtime.engine import _helper\n",
+        "import xabsl_studio.engine.runtime.engine as e\ne._tick\n",
         "def f(engine):\n    return engine._tick\n",
-        "from engine.runtime import engine\nengine._tick\n",
-        "from engine import _private\n",
+        "from xabsl_studio.engine.runtime import engine\nengine._tick\n",
+        "from xabsl_studio.engine import _private\n",
     ],
 )
 def test_underscore_rule_catches(source: str, tmp_path: Path) -> None:
@@ -236,3 +239,32 @@ def test_underscore_rule_allows(source: str, tmp_path: Path) -> None:
 def test_cycle_finder() -> None:
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert cycles({"a": {"b"}, "b": set()}) == []
+
+
+# -- one import name of our own ------------------------------------------------------------------------
+
+#: the repository's folders, imported only as ``xabsl_studio.<folder>`` (xabsl_studio/__init__.py)
+FOLDERS = frozenset({"engine", "server", "examples", "lsp"})
+
+
+def bare_imports(path: Path, root: Path = ROOT) -> list[str]:
+    """Imports of a repository folder by its bare name (``import engine``, ``from server.app ...``)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    found: list[str] = []
+    for node in ast.walk(tree):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+        if isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            names = [node.module]
+        found += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names if n.split(".")[0] in FOLDERS]
+    return found
+
+
+def test_every_module_imports_the_project_through_its_one_package_name() -> None:
+    files = [p for folder in (*FOLDERS, "tests", "benchmarks") for p in sorted((ROOT / folder).rglob("*.py"))]
+    found = [v for path in files for v in bare_imports(path)]
+    assert not found, "imports by a generic top-level name (use xabsl_studio.<folder>):\n" + "\n".join(found)
+
+
+@pytest.mark.parametrize("source", ["import engine\n", "from server.app import create_app\n", "import lsp.cli as c\n"])
+def test_bare_import_rule_catches(source: str, tmp_path: Path) -> None:
+    assert bare_imports(write(tmp_path, "m.py", source), tmp_path)

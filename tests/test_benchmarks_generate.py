@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
-from engine.lang import compile_file
+from xabsl_studio.engine.lang import compile_file
 
 BENCHMARK = Path(__file__).resolve().parents[1] / "benchmarks" / "compile_speed.py"
 
@@ -68,7 +68,7 @@ def test_team_shaped_set_compiles_without_errors(tmp_path: Path) -> None:
 
 
 def _chain(tree: object) -> int:
-    from engine import ir
+    from xabsl_studio.engine import ir
 
     length = 0
     while isinstance(tree, ir.If):

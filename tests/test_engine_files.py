@@ -1,4 +1,4 @@
-"""engine.files: output files written through symlinks, never over devices or FIFOs; bounded reads."""
+"""xabsl_studio.engine.files: output files written through symlinks, never over devices or FIFOs; bounded reads."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
-from engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
 from tests.kit import KIT
+from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
 
 AGENTS = KIT / "demo-approach" / "agents.xabsl"
 

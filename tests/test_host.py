@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.host import (
+from xabsl_studio.engine.host import (
     DEFAULT_BEHAVIOR_HZ,
     DEFAULT_PHYSICS_HZ,
     Agent,

@@ -30,25 +30,28 @@ import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
 
-from engine.errors import CommandLineError
+from xabsl_studio.engine.errors import CommandLineError
 
 #: Engine-level subcommands in the order ``--help`` lists them: name -> (module, one-line help).
 #: The help must be the one the module's ``register`` gives (a test compares them).
 ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
     "compile": (
-        "engine.cli.compile",
+        "xabsl_studio.engine.cli.compile",
         "check a behavior; write intermediate code (--ic) and a JSON description (--json)",
     ),
     "docs": (
-        "engine.cli.docs",
+        "xabsl_studio.engine.cli.docs",
         "write HTML documentation of a behavior set (option graph, options, symbols, search)",
     ),
-    "trace": ("engine.cli.trace", "run a behavior under the conformance host: input trace in, activation trace out"),
+    "trace": (
+        "xabsl_studio.engine.cli.trace",
+        "run a behavior under the conformance host: input trace in, activation trace out",
+    ),
     "profile": (
-        "engine.cli.profile",
+        "xabsl_studio.engine.cli.profile",
         "profile a recording: time per option and state, transitions, oscillations, coverage",
     ),
-    "plan": ("engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
+    "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
 }
 #: The entry-point group of the subcommands of other layers.
 COMMAND_GROUP = "xabsl.commands"
@@ -183,7 +186,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``xabsl`` command line; returns the exit status.
 
-    Called without ``argv`` (as the console script and ``python -m engine.cli`` do), a
+    Called without ``argv`` (as the console script and ``python -m xabsl_studio.engine.cli`` do), a
     subcommand that sets ``exit_at_once`` ends the process right after it: its results are
     written and flushed, and tearing down the compiled program's objects one by one would only
     cost time (a tenth of a second on a 200-file set).

@@ -1,7 +1,7 @@
-"""``python -m engine.cli``: the same as the ``xabsl`` console script."""
+"""``python -m xabsl_studio.engine.cli``: the same as the ``xabsl`` console script."""
 
 import sys
 
-from engine.cli import main
+from xabsl_studio.engine.cli import main
 
 sys.exit(main())

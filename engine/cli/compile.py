@@ -13,7 +13,7 @@ import os
 import sys
 import time
 
-from engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError
 
 #: Diagnostic codes of the whole-program lint that ``--no-lint`` silences.
 LINT_CODES = frozenset({"unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"})
@@ -48,8 +48,8 @@ def run(args: argparse.Namespace) -> int:
     gc.disable()
     # Imported here, not at the top: `xabsl --help` and the other subcommands need none of it;
     # the emitters and orjson (which imports uuid, platform, datetime) only when asked for.
-    from engine.files import write_atomically
-    from engine.lang import compile_file, deep_recursion
+    from xabsl_studio.engine.files import write_atomically
+    from xabsl_studio.engine.lang import compile_file, deep_recursion
 
     if not os.path.isfile(args.agents_file):
         raise UsageError(f"no such file: {args.agents_file}")
@@ -64,13 +64,13 @@ def run(args: argparse.Namespace) -> int:
     if not failed and compilation.program is not None:
         try:
             if args.ic:
-                from engine.emit.ic import emit_ic
+                from xabsl_studio.engine.emit.ic import emit_ic
 
                 with deep_recursion():
                     text = emit_ic(compilation.program)
                 write_atomically(args.ic, text.encode("utf-8"))
             if args.json:
-                from engine.emit.json import dumps, program_to_json
+                from xabsl_studio.engine.emit.json import dumps, program_to_json
 
                 document = program_to_json(compilation.program, compilation.source_text)
                 write_atomically(args.json, dumps(document))

@@ -1,7 +1,7 @@
 """``xabsl docs``: HTML documentation of a behavior set (option graphs, state machines, symbols).
 
 Compiles AGENTS_FILE (diagnostics as ``xabsl compile`` prints them) and, when it has no errors,
-writes the documentation of :mod:`engine.docs` into DIR. Exit status: 0 written, 1 errors in the
+writes the documentation of :mod:`xabsl_studio.engine.docs` into DIR. Exit status: 0 written, 1 errors in the
 behavior, 2 usage or I/O problems (also a missing Graphviz ``dot``).
 """
 
@@ -11,9 +11,9 @@ import argparse
 import os
 import time
 
-from engine.cli import UsageError
-from engine.emit.dot import GraphvizMissing
-from engine.lang import compile_file
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.emit.dot import GraphvizMissing
+from xabsl_studio.engine.lang import compile_file
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -35,7 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 def run(args: argparse.Namespace) -> int:
     """Compile, then write the documentation; print one summary line."""
-    from engine.docs import GraphLayoutError, generate
+    from xabsl_studio.engine.docs import GraphLayoutError, generate
 
     if not os.path.isfile(args.agents_file):
         raise UsageError(f"no such file: {args.agents_file}")

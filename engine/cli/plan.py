@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -33,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 
 def _read(path: str) -> str:
-    from engine.planning.strips import read_pddl
+    from xabsl_studio.engine.planning.strips import read_pddl
 
     try:
         return read_pddl(path)
@@ -74,9 +74,9 @@ def run(args: argparse.Namespace) -> int:
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 
-    from engine.errors import PlanningError
-    from engine.planning.graphplan import format_stats, graphplan
-    from engine.planning.strips import ground
+    from xabsl_studio.engine.errors import PlanningError
+    from xabsl_studio.engine.planning.graphplan import format_stats, graphplan
+    from xabsl_studio.engine.planning.strips import ground
 
     domain_text, problem_text = _read(args.domain), _read(args.problem)
     try:

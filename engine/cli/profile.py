@@ -14,7 +14,7 @@ import math
 import os
 import sys
 
-from engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -47,9 +47,9 @@ def run(args: argparse.Namespace) -> int:
     """Profile the recording; print tables or JSON; write the HTML report."""
     import orjson
 
-    from engine.files import write_atomically
-    from engine.profile import ProfileError, profile
-    from engine.record import Recording, RecordingError
+    from xabsl_studio.engine.files import write_atomically
+    from xabsl_studio.engine.profile import ProfileError, profile
+    from xabsl_studio.engine.record import Recording, RecordingError
 
     if not os.path.isfile(args.recording):
         raise UsageError(f"no such file: {args.recording}")
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     except (ProfileError, RecordingError) as error:
         raise UsageError(str(error)) from error
     if args.html:
-        from engine.profile.html import html_report
+        from xabsl_studio.engine.profile.html import html_report
 
         try:
             write_atomically(args.html, html_report(report, descriptions).encode("utf-8"))
@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(orjson.dumps(report, option=orjson.OPT_INDENT_2).decode("utf-8") + "\n")
     else:
-        from engine.profile.terminal import print_report
+        from xabsl_studio.engine.profile.terminal import print_report
 
         print_report(report, details=bool(args.agent))
         if args.html:

@@ -4,7 +4,7 @@
 
 AGENTS_FILE ending in ``.ic`` or ``.dat`` is read as intermediate code (§3); anything else is
 compiled from source. The input and output formats and the host conventions are those of the
-conformance kit (see :mod:`engine.trace.conformance`). For intermediate code,
+conformance kit (see :mod:`xabsl_studio.engine.trace.conformance`). For intermediate code,
 ``--declarations agents.xabsl`` takes the external declarations (enum element order, input
 parameter order) from the sources, which the IC cannot carry.
 
@@ -26,11 +26,11 @@ import sys
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
-from engine.cli import UsageError
-from engine.errors import CommandLineError
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.errors import CommandLineError
 
 if TYPE_CHECKING:  # the IR is imported when a trace runs, not for `xabsl --help`
-    from engine.ir.model import Program
+    from xabsl_studio.engine.ir.model import Program
 
 _IC_SUFFIXES = (".ic", ".dat")
 
@@ -63,7 +63,7 @@ class _BehaviorError(CommandLineError):
 
 
 def _compile(path: str) -> Program:
-    from engine.lang import compile_file  # the source compiler is optional for IC input
+    from xabsl_studio.engine.lang import compile_file  # the source compiler is optional for IC input
 
     compilation = compile_file(path)
     if compilation.program is None:
@@ -75,7 +75,7 @@ def _compile(path: str) -> Program:
 
 
 def _load(args: argparse.Namespace) -> Program:
-    from engine.ir.ic_reader import ICError, read_ic_file
+    from xabsl_studio.engine.ir.ic_reader import ICError, read_ic_file
 
     path = args.agents_file
     if not os.path.isfile(path):
@@ -136,7 +136,7 @@ def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
         UsageError: naming the file, the line and the tick.
     """
     try:
-        from engine.files import read_regular
+        from xabsl_studio.engine.files import read_regular
 
         data = read_regular(path, MAX_INPUT_BYTES)
     except OSError as error:
@@ -164,9 +164,9 @@ def _input_lines(path: str) -> Iterator[tuple[int, int, Any]]:
 
 def run(args: argparse.Namespace) -> int:
     """Run one tick per input line and write the trace; the exit status as in the module docstring."""
-    from engine.errors import EngineError
-    from engine.files import write_atomically
-    from engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
+    from xabsl_studio.engine.errors import EngineError
+    from xabsl_studio.engine.files import write_atomically
+    from xabsl_studio.engine.trace.conformance import TraceFaultError, TraceInputError, TraceRunner
 
     if not os.path.exists(args.inputs):
         raise UsageError(f"no such file: {args.inputs}")

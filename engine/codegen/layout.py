@@ -1,8 +1,8 @@
 """Where the engine keeps every value a behavior touches: the contract between linker and codegen.
 
-The runtime's linker (:mod:`engine.runtime.linker`) decides, from the program and the host's
+The runtime's linker (:mod:`xabsl_studio.engine.runtime.linker`) decides, from the program and the host's
 bindings, which storage slot or host callable backs each option parameter, symbol and basic
-behavior; the code generator (:mod:`engine.codegen.python`) only turns those decisions into
+behavior; the code generator (:mod:`xabsl_studio.engine.codegen.python`) only turns those decisions into
 global names and list indices. Flat lists (one for all option parameters, one for all basic
 behavior parameters, one for all stored symbols) let the engine snapshot a tick with a few
 C-level tuple copies (§2.12 activation tree, recorded cheaply).
@@ -16,8 +16,8 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from engine.ir.model import Assignment, Program
-from engine.types import Kind
+from xabsl_studio.engine.ir.model import Assignment, Program
+from xabsl_studio.engine.types import Kind
 
 #: A parameter as the engine sees it: qualified name and kind.
 ParamSpec = tuple[str, Kind]
@@ -62,7 +62,7 @@ class Start(enum.Enum):
 class StorageList:
     """One flat list of the engine's storage (see :data:`STORAGE`)."""
 
-    #: the name of the list in the Python API and in :class:`engine.runtime.activation.Snapshot`
+    #: the name of the list in the Python API and in :class:`xabsl_studio.engine.runtime.activation.Snapshot`
     field: str
     #: the global the generated code reads it through (short: it is written thousands of times)
     name: str

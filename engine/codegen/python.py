@@ -31,10 +31,10 @@ every bytecode of the prologue counts):
   instance and its bound ``execute``) instead of calling back into the engine.
 
 Expressions are inlined as Python expressions (§2.8): short-circuit ``and``/``or``, exact float
-comparisons, ``/`` with the 1e-7 rule inlined, ``%`` through :mod:`engine.codegen.support`.
+comparisons, ``/`` with the 1e-7 rule inlined, ``%`` through :mod:`xabsl_studio.engine.codegen.support`.
 Symbols and parameters are reached through module globals bound by the engine (see
-:class:`engine.codegen.layout.Layout`): the flat lists of :data:`engine.codegen.layout.STORAGE`
-(``LT``, ``S``, ``PP``...) indexed by constants, and host callables.
+:class:`xabsl_studio.engine.codegen.layout.Layout`): the flat lists of
+:data:`xabsl_studio.engine.codegen.layout.STORAGE` (``LT``, ``S``, ``PP``...) indexed by constants, and host callables.
 Every generated line remembers the option, state and IR span it came from (``origins``), which
 is how faults and the debugger point back at XABSL source.
 """
@@ -46,9 +46,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import CodeType
 
-from engine.codegen.layout import Layout, OptionSlot, default_value, engine_order
-from engine.errors import LoadError
-from engine.ir.model import (
+from xabsl_studio.engine.codegen.layout import Layout, OptionSlot, default_value, engine_order
+from xabsl_studio.engine.errors import LoadError
+from xabsl_studio.engine.ir.model import (
     ActionDone,
     Argument,
     Assignment,
@@ -76,7 +76,7 @@ from engine.ir.model import (
     Unary,
     walk,
 )
-from engine.types import Kind, Span
+from xabsl_studio.engine.types import Kind, Span
 
 __all__ = ["CodegenError", "GeneratedOption", "GeneratedProgram", "Origin", "expression_source", "generate"]
 

@@ -1,4 +1,4 @@
-"""The documentation's pictures: the DOT of :mod:`engine.emit.dot` with links added, laid out in batches.
+"""The documentation's pictures: the DOT of :mod:`xabsl_studio.engine.emit.dot` with links added, laid out in batches.
 
 Links are extra attribute statements appended to the emitter's DOT (``"o:walk" [href=...]``
 re-declares a node with more attributes), so the pictures are exactly the studio's plus links:
@@ -18,9 +18,9 @@ import subprocess
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
-from engine import ir
-from engine.emit.dot import option_graph, quote, reachable_options, render_svg, state_machine
-from engine.errors import EmitError
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.emit.dot import option_graph, quote, reachable_options, render_svg, state_machine
+from xabsl_studio.engine.errors import EmitError
 
 #: Where an SVG document starts in ``dot``'s output (labels are escaped, so never inside one).
 _SVG_START = "<?xml "

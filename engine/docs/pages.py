@@ -25,10 +25,10 @@ from collections.abc import Iterable, Sequence
 from html import escape
 from urllib.parse import quote as url_quote
 
-from engine import ir
-from engine.docs.xref import CrossReferences, Place, own_actions, own_decision
-from engine.emit.json import render_expression
-from engine.types import Kind, Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.docs.xref import CrossReferences, Place, own_actions, own_decision
+from xabsl_studio.engine.emit.json import render_expression
+from xabsl_studio.engine.types import Kind, Span
 
 
 def _e(text: str) -> str:

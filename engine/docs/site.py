@@ -1,7 +1,7 @@
 """The documentation writer: lays out every picture, renders every page, writes the folder.
 
 :func:`build` returns the files as ``{relative path: bytes}`` (pure: no file is touched);
-:func:`write` puts them into a folder, each file atomically (:mod:`engine.files`), leaving other
+:func:`write` puts them into a folder, each file atomically (:mod:`xabsl_studio.engine.files`), leaving other
 files there alone. :func:`generate` does both and says how long each stage took.
 """
 
@@ -16,12 +16,12 @@ from pathlib import Path
 
 import orjson
 
-from engine import ir
-from engine.docs import assets, graphs
-from engine.docs.pages import Renderer, Site, fragment
-from engine.docs.xref import cross_references, own_decision
-from engine.emit.dot import reachable_options
-from engine.files import write_atomically
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.docs import assets, graphs
+from xabsl_studio.engine.docs.pages import Renderer, Site, fragment
+from xabsl_studio.engine.docs.xref import cross_references, own_decision
+from xabsl_studio.engine.emit.dot import reachable_options
+from xabsl_studio.engine.files import write_atomically
 
 #: Changes whenever the pages change for the same program, so cached documentation is redone.
 DOCS_VERSION = 1

@@ -6,7 +6,7 @@ each constant and enumeration.
 A *place* is ``(option, state)``; ``state`` is None for the option's common decision tree and
 common action, which run in every state and are documented once. Everything comes from the IR:
 the option's own common tree and common action, and each state's decision and actions with
-the inlined common part peeled off (the IR inlines it, :mod:`engine.ir.model`).
+the inlined common part peeled off (the IR inlines it, :mod:`xabsl_studio.engine.ir.model`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
-from engine import ir
+from xabsl_studio.engine import ir
 
 #: ``(option name, state name or None for the common part)``
 Place = tuple[str, str | None]

@@ -34,7 +34,7 @@ import reprlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-from engine.errors import DynamicsError
+from xabsl_studio.engine.errors import DynamicsError
 
 #: The deepest expression tree accepted (a real drive or target is under 10 levels deep). The
 #: generated Python nests one parenthesis per level, and CPython's parser stops at 200.

@@ -4,7 +4,7 @@ This module owns the declarative description of a DD behavior system and its com
 (:class:`DDModel`): sensors, parameters, helpers, slow (higher-level) variables, actuators,
 elementary and higher-level behaviors with their activation drives and target dynamics, switch
 variables and the operator-coupling (OCT) table per operator schema. The running system lives in
-:mod:`engine.dynamics.system`.
+:mod:`xabsl_studio.engine.dynamics.system`.
 
 A model file (``examples/errands/model/errands_dd.json`` is the reference)::
 
@@ -30,7 +30,7 @@ A model file (``examples/errands/model/errands_dd.json`` is the reference)::
                                      {"behavior": "approach_*", "z": 0, "c": 10}]}}
     }
 
-Expressions use :mod:`engine.dynamics.expr`. Activations are read as ``α_<behavior>`` (ASCII
+Expressions use :mod:`xabsl_studio.engine.dynamics.expr`. Activations are read as ``α_<behavior>`` (ASCII
 spelling ``alpha_<behavior>``). Numeric fields accept a number or a constant expression over
 parameters; numbers must be finite doubles. Every error is a :class:`ModelError` naming the
 file, the key path and, for expressions, the column; a file that is not UTF-8, not JSON, nested
@@ -38,7 +38,7 @@ more than :data:`MAX_JSON_DEPTH` deep, not a regular file or over :data:`MAX_MOD
 too, naming the line and column where it can.
 
 Drives are compiled to the vectorised form of §4.1, T = S(k·(B@s + W@α − θ)): each drive is split
-by :func:`engine.dynamics.expr.linear_terms` into a bias, linear activation terms (a row of W:
+by :func:`xabsl_studio.engine.dynamics.expr.linear_terms` into a bias, linear activation terms (a row of W:
 self-excitation on the diagonal, inhibition off it) and *features* (any other subterm, such as
 ``max(α_gather_book, ...)`` or ``ν_a``), which form the drive input vector s with weights B.
 
@@ -72,9 +72,9 @@ from typing import Any
 
 import numpy as np
 
-from engine.dynamics import expr as ex
-from engine.errors import DynamicsError
-from engine.files import read_regular
+from xabsl_studio.engine.dynamics import expr as ex
+from xabsl_studio.engine.errors import DynamicsError
+from xabsl_studio.engine.files import read_regular
 
 FORMAT = "xabsl-dd-model/1"
 

@@ -1,6 +1,6 @@
 """The running Dual Dynamics behavior system: one synchronous Euler(-Maruyama) tick (doc §1.3–§1.5, §4.1).
 
-This module owns the state of a DD system built from a :class:`~engine.dynamics.model.DDModel`
+This module owns the state of a DD system built from a :class:`~xabsl_studio.engine.dynamics.model.DDModel`
 (activations α, slow variables, actuators, switch variables s_OP), the tick that advances it, and
 the per-tick record the debugger shows (§4.3 items 1, 2 and 5). Tick order follows §4.1 steps 4–6:
 
@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from engine.dynamics.model import DDModel, ModelError
+from xabsl_studio.engine.dynamics.model import DDModel, ModelError
 
 
 class TickLists(NamedTuple):
@@ -151,7 +151,7 @@ class DDSystem:
     """A DD behavior system in motion: call :meth:`step` once per control tick.
 
     Args:
-        model: a compiled model (:func:`engine.dynamics.model.load_model`).
+        model: a compiled model (:func:`xabsl_studio.engine.dynamics.model.load_model`).
         seed: seed of the run's noise generator.
         dt: default tick; the model is re-checked for stability at this dt.
         noise: multiplies every σ (0 turns noise off, as in §4.4 claims 7 and 23).

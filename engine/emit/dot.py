@@ -20,8 +20,8 @@ from __future__ import annotations
 import shutil
 import subprocess
 
-from engine import ir
-from engine.errors import EmitError
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.errors import EmitError
 
 _GRAPH_STYLE = (
     'graph [rankdir=LR, fontname="Helvetica", fontsize=11, bgcolor="transparent", nodesep=0.25, ranksep=0.45];\n'
@@ -64,7 +64,7 @@ def option_graph(program: ir.Program, root: str | None = None) -> str:
     lines = ["digraph option_graph {", "  " + _GRAPH_STYLE]
     behaviors: dict[str, ir.BasicBehavior] = {}
     edges: list[str] = []
-    # A partial program (a behavior with errors, engine.lang.Compilation.partial) lacks the options
+    # A partial program (a behavior with errors, xabsl_studio.engine.lang.Compilation.partial) lacks the options
     # of files that do not parse: they are drawn dashed, so the graph still shows who calls them.
     missing: list[str] = [root] if root and root not in program.options else []
     for name in names:

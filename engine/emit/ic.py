@@ -15,8 +15,8 @@ import math
 from collections.abc import Callable, Iterable
 from typing import TypeVar, assert_never
 
-from engine import ir
-from engine.types import Kind
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.types import Kind
 
 ENDL = "\r\n"
 _T = TypeVar("_T")

@@ -16,8 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from engine import ir
-from engine.types import Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.types import Span
 
 SCHEMA_VERSION = 1
 

@@ -1,3 +1,3 @@
-"""The checked program as plain typed data; see :mod:`engine.ir.model`."""
+"""The checked program as plain typed data; see :mod:`xabsl_studio.engine.ir.model`."""
 
-from engine.ir.model import *  # noqa: F403
+from xabsl_studio.engine.ir.model import *  # noqa: F403

@@ -1,4 +1,4 @@
-"""Read XABSL intermediate code (§3) into an :class:`engine.ir.model.Program`.
+"""Read XABSL intermediate code (§3) into an :class:`xabsl_studio.engine.ir.model.Program`.
 
 The intermediate code (IC) is what the original compiler hands to the C++ engine: a flat stream of
 whitespace-separated tokens (§3.1; CRLF or LF, ``//`` comments to the end of the line) laid out as
@@ -35,8 +35,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from engine.errors import ReadError
-from engine.ir.model import (
+from xabsl_studio.engine.errors import ReadError
+from xabsl_studio.engine.ir.model import (
     Action,
     ActionDone,
     Agent,
@@ -71,7 +71,7 @@ from engine.ir.model import (
     Transition,
     Unary,
 )
-from engine.types import Kind
+from xabsl_studio.engine.types import Kind
 
 __all__ = ["ICError", "read_ic", "read_ic_file"]
 

@@ -1,7 +1,7 @@
 """The intermediate representation (IR): a checked XABSL 2 program as plain, typed, frozen data.
 
-The IR is the hub of the product (architecture: "one IR"). The checker (``engine.lang.check``)
-builds it from source, ``engine.ir.ic_reader`` builds it from intermediate code; the IC, JSON and
+The IR is the hub of the product (architecture: "one IR"). The checker (``xabsl_studio.engine.lang.check``)
+builds it from source, ``xabsl_studio.engine.ir.ic_reader`` builds it from intermediate code; the IC, JSON and
 DOT emitters, the Python code generator, the reference interpreter and the studio read it.
 Nothing downstream re-parses source text.
 
@@ -24,7 +24,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
-from engine.types import Kind, Span
+from xabsl_studio.engine.types import Kind, Span
 
 # --------------------------------------------------------------------------------------------
 # Expressions (§1.3 ``exp``; §3.2 ``dexp``/``bexp``/``eexp``)

@@ -6,7 +6,7 @@ The one entry point is :func:`compile_file`::
     for diagnostic in compilation.diagnostics:
         print(diagnostic.format())
     if compilation.ok:
-        program = compilation.program   # engine.ir.Program
+        program = compilation.program   # xabsl_studio.engine.ir.Program
 
 Stages, one module each: :mod:`.tokens`, :mod:`.parser` (with :mod:`.ast`), :mod:`.loader`
 (the include closure), :mod:`.symbols` (the global symbol table), :mod:`.check` (names, types,
@@ -22,13 +22,13 @@ from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-from engine import ir
-from engine.lang import lint
-from engine.lang.check import OptionChecker, title_fields
-from engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
-from engine.lang.loader import load
-from engine.lang.symbols import Declarations, SymbolTable
-from engine.types import Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import lint
+from xabsl_studio.engine.lang.check import OptionChecker, title_fields
+from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
+from xabsl_studio.engine.lang.loader import load
+from xabsl_studio.engine.lang.symbols import Declarations, SymbolTable
+from xabsl_studio.engine.types import Span
 
 __all__ = ["Compilation", "Diagnostic", "Severity", "assemble_program", "compile_file"]
 
@@ -135,7 +135,7 @@ def assemble_program(
 ) -> ir.Program:
     """The last stage of a compile: the program of the checked ``options``, its agents and lints.
 
-    Checks the agents (unique names, existing root options), builds the :class:`~engine.ir.Program`
+    Checks the agents (unique names, existing root options), builds the :class:`~xabsl_studio.engine.ir.Program`
     and runs the option-graph and usage lints (cycles, reachability, unused declarations) into
     ``diagnostics``. Shared by :func:`compile_file` and the language server, which checks options
     one by one and keeps them between keystrokes.

@@ -1,6 +1,6 @@
 """The abstract syntax tree of one XABSL 2 source file (§1.3), before any name is resolved.
 
-Nodes mirror the grammar productions; every node carries the :class:`~engine.types.Span` of
+Nodes mirror the grammar productions; every node carries the :class:`~xabsl_studio.engine.types.Span` of
 its source text and, where the grammar allows one, the doc comment in front of it. Names are
 kept as written (``@dist``, ``walk``); the checker qualifies and resolves them.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
-from engine.types import Span
+from xabsl_studio.engine.types import Span
 
 # ------------------------------------------------------------------------------ expressions
 

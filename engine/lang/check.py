@@ -1,6 +1,6 @@
 """The checker: resolves names, checks types and builds the IR of every option (§1.4, §2.4).
 
-Runs after the declaration passes of :mod:`engine.lang.symbols`. For each option it lowers
+Runs after the declaration passes of :mod:`xabsl_studio.engine.lang.symbols`. For each option it lowers
 expressions to typed IR expressions (folding unary minus on literals, flattening ``&&``/``||``
 chains, §3.3), resolves enum literals only in enum context, resolves calls to options, basic
 behaviors and parameterized input symbols, and builds each state's decision tree with the
@@ -16,11 +16,11 @@ import difflib
 import re
 from collections.abc import Callable, Iterable
 
-from engine import ir
-from engine.lang import ast
-from engine.lang.diagnostics import Diagnostics
-from engine.lang.symbols import OptionHeader, SymbolTable
-from engine.types import Kind, Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import ast
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.lang.symbols import OptionHeader, SymbolTable
+from xabsl_studio.engine.types import Kind, Span
 
 _BUILTINS: dict[str, Callable[[Span | None], ir.Expression]] = {
     "state_time": ir.StateTime,

@@ -2,8 +2,8 @@
 
 What a breakpoint's condition is (``ball.distance < 300 && robot.role == role.striker``): one
 expression, parsed by the XABSL parser and checked by the same checker as an option's
-conditions (:class:`engine.lang.check.OptionChecker`), against the symbols, constants and
-enumerations of a checked :class:`engine.ir.Program`. It belongs to no option, so option
+conditions (:class:`xabsl_studio.engine.lang.check.OptionChecker`), against the symbols, constants and
+enumerations of a checked :class:`xabsl_studio.engine.ir.Program`. It belongs to no option, so option
 parameters, ``state_time``, ``option_time``, ``action_done`` and ``conflict`` have no meaning in it
 and are refused. Diagnostics name the file ``<condition>`` with line and column *in the
 expression's text* (1-based), like a source file's.
@@ -18,13 +18,13 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from engine import ir
-from engine.lang import ast
-from engine.lang.check import OptionChecker
-from engine.lang.diagnostics import Diagnostic, Diagnostics
-from engine.lang.parser import parse_file
-from engine.lang.symbols import OptionHeader, SymbolTable
-from engine.types import Kind, Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import ast
+from xabsl_studio.engine.lang.check import OptionChecker
+from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics
+from xabsl_studio.engine.lang.parser import parse_file
+from xabsl_studio.engine.lang.symbols import OptionHeader, SymbolTable
+from xabsl_studio.engine.types import Kind, Span
 
 __all__ = ["CONDITION_FILE", "CheckedCondition", "check_condition"]
 

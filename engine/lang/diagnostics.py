@@ -13,7 +13,7 @@ import enum
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from engine.types import Span
+from xabsl_studio.engine.types import Span
 
 
 class Severity(enum.Enum):

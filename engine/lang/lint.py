@@ -9,8 +9,8 @@
 
 from __future__ import annotations
 
-from engine import ir
-from engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
 
 
 def option_calls(option: ir.Option) -> list[ir.OptionCall]:

@@ -15,10 +15,10 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from engine.lang import ast
-from engine.lang.diagnostics import Diagnostics
-from engine.lang.parser import parse_file
-from engine.lang.tokens import decode_source
+from xabsl_studio.engine.lang import ast
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.lang.parser import parse_file
+from xabsl_studio.engine.lang.tokens import decode_source
 
 
 @dataclass

@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import functools
 
-from engine.errors import CompileError
-from engine.lang import ast
-from engine.lang.diagnostics import Diagnostics
-from engine.lang.tokens import Token, TokenType, doc_text, tokenize
-from engine.types import Span
+from xabsl_studio.engine.errors import CompileError
+from xabsl_studio.engine.lang import ast
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.lang.tokens import Token, TokenType, doc_text, tokenize
+from xabsl_studio.engine.types import Span
 
 #: Binary operators by precedence level, lowest first (§1.3 table; unary binds tightest).
 BINARY_LEVELS: tuple[tuple[str, ...], ...] = (

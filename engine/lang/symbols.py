@@ -9,7 +9,7 @@ Passes over all files of the include closure, in the original's order:
 1. enumerations (so any file may use an enum declared in a file it does not include);
 2. symbols, constants, basic behaviors, option headers with their parameters.
 
-The trees (decisions, actions) are built afterwards by :mod:`engine.lang.check`.
+The trees (decisions, actions) are built afterwards by :mod:`xabsl_studio.engine.lang.check`.
 """
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
-from engine import ir
-from engine.lang import ast
-from engine.lang.diagnostics import Diagnostics
-from engine.types import Kind, Span
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import ast
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.types import Kind, Span
 
 #: Symbol classes an identifier in an expression may name, in the original's search order.
 EXPRESSION_CLASSES = ("constant", "option-parameter", "input", "output")

@@ -21,8 +21,8 @@ import enum
 import re
 from typing import NamedTuple
 
-from engine.lang.diagnostics import Diagnostics
-from engine.types import Span
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.types import Span
 
 
 class TokenType(enum.Enum):

@@ -34,8 +34,8 @@ import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from engine.errors import PlanningError
-from engine.planning.strips import Fact
+from xabsl_studio.engine.errors import PlanningError
+from xabsl_studio.engine.planning.strips import Fact
 
 #: Float slack for "held for d seconds" on a tick grid (0.3 s = 15 ticks of 20 ms, give or take).
 _EPS = 1e-9

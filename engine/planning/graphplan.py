@@ -29,7 +29,7 @@ import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 
-from engine.planning.strips import Fact, GroundAction, Task
+from xabsl_studio.engine.planning.strips import Fact, GroundAction, Task
 
 
 @dataclass(frozen=True, slots=True)
@@ -308,7 +308,7 @@ def graphplan(task: Task, max_levels: int | None = None) -> GraphplanResult:
     two successive failed stages leave the number of nogoods memoised at level L unchanged.
 
     Args:
-        task: a grounded STRIPS task (:func:`engine.planning.strips.load_task`).
+        task: a grounded STRIPS task (:func:`xabsl_studio.engine.planning.strips.load_task`).
         max_levels: optional safety cap on graph levels; level-off alone guarantees termination.
 
     Returns:

@@ -26,8 +26,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from engine.planning.graphplan import GraphplanResult, LayeredPlan, graphplan
-from engine.planning.strips import Fact, GroundAction, Task
+from xabsl_studio.engine.planning.graphplan import GraphplanResult, LayeredPlan, graphplan
+from xabsl_studio.engine.planning.strips import Fact, GroundAction, Task
 
 
 @dataclass(frozen=True, slots=True)

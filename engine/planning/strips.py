@@ -2,8 +2,8 @@
 
 This module owns the step from a PDDL domain and problem (parsed by the MIT ``pddl`` package) to a
 propositional STRIPS :class:`Task`: ground facts, ground actions with precondition, add and delete
-sets, an initial state and a goal. GRAPHPLAN (:mod:`engine.planning.graphplan`), the plan monitor
-(:mod:`engine.planning.monitor`) and the replanner all work on this data and never see PDDL again.
+sets, an initial state and a goal. GRAPHPLAN (:mod:`xabsl_studio.engine.planning.graphplan`), the plan monitor
+(:mod:`xabsl_studio.engine.planning.monitor`) and the replanner all work on this data and never see PDDL again.
 
 Conventions (chosen so that plans read like the paper's and like §2.4 of the doc):
 
@@ -34,7 +34,7 @@ from pddl.parser.domain import DomainParser
 from pddl.parser.problem import ProblemParser
 from pddl.requirements import Requirements
 
-from engine.errors import PlanningError
+from xabsl_studio.engine.errors import PlanningError
 
 #: A ground fact, e.g. ``"at-robot a"``.
 Fact = str
@@ -154,10 +154,10 @@ def read_pddl(path: str | Path) -> str:
     """The text of a PDDL file: a regular file of at most :data:`MAX_PDDL_BYTES`, UTF-8.
 
     Raises:
-        OSError: missing, unreadable, not a regular file (``engine.files.NotRegularFile``) or too large.
+        OSError: missing, unreadable, not a regular file (``xabsl_studio.engine.files.NotRegularFile``) or too large.
         UnicodeDecodeError: not UTF-8.
     """
-    from engine.files import read_regular
+    from xabsl_studio.engine.files import read_regular
 
     return read_regular(path, MAX_PDDL_BYTES).decode("utf-8")
 

@@ -1,14 +1,14 @@
 """The profiler: how long options and states were active, transitions, oscillations, coverage.
 
-Reads a recording (:mod:`engine.record`) and counts it, as the original toolchain's Xabsl
+Reads a recording (:mod:`xabsl_studio.engine.record`) and counts it, as the original toolchain's Xabsl
 Profiler read logs of the option activation path:
 
-* :mod:`engine.profile.analysis`  one pass over the recorded paths: intervals, leaves, transitions
-* :mod:`engine.profile.report`    :func:`profile`: the report document (docs/profile.md)
-* :mod:`engine.profile.terminal`  the report as rich tables
-* :mod:`engine.profile.html`      the report as one self-contained HTML file with SVG plots
+* :mod:`xabsl_studio.engine.profile.analysis`  one pass over the recorded paths: intervals, leaves, transitions
+* :mod:`xabsl_studio.engine.profile.report`    :func:`profile`: the report document (docs/profile.md)
+* :mod:`xabsl_studio.engine.profile.terminal`  the report as rich tables
+* :mod:`xabsl_studio.engine.profile.html`      the report as one self-contained HTML file with SVG plots
 """
 
-from engine.profile.report import FORMAT, ProfileError, build_report, profile
+from xabsl_studio.engine.profile.report import FORMAT, ProfileError, build_report, profile
 
 __all__ = ["FORMAT", "ProfileError", "build_report", "profile"]

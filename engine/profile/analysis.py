@@ -1,6 +1,6 @@
 """Counting a recording: per agent and option/state the active intervals, leaves, transitions.
 
-One pass over :meth:`engine.record.Recording.paths` (the compact per-tick activation paths, no
+One pass over :meth:`xabsl_studio.engine.record.Recording.paths` (the compact per-tick activation paths, no
 trees). Per agent and program generation a :class:`_Counter` keeps, for each option in the
 path, when its current activation and its current state began; an interval is closed when the
 option leaves the path, restarts (its ``option_time`` went back) or changes state. Every tick's
@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from engine.record import Recording
+from xabsl_studio.engine.record import Recording
 
 __all__ = ["AgentCounts", "Oscillation", "count_paths", "count_recording"]
 

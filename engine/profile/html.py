@@ -4,7 +4,7 @@ Per team (program key): coverage figures, the option graph coloured by coverage 
 options grey and dashed, the others green by their share of time), each option's state machine
 with transition counts (never-taken transitions dashed), the option and state table; per agent
 the per-option activity over time (one row per option, a bar per activation); the oscillation
-list. Graphs are laid out by Graphviz ``dot`` (as ``engine.docs`` does); without it the report
+list. Graphs are laid out by Graphviz ``dot`` (as ``xabsl_studio.engine.docs`` does); without it the report
 says so and keeps everything else.
 """
 
@@ -14,7 +14,7 @@ import html
 import re
 from typing import Any
 
-from engine.emit.dot import GraphvizMissing, quote
+from xabsl_studio.engine.emit.dot import GraphvizMissing, quote
 
 __all__ = ["html_report"]
 
@@ -215,7 +215,7 @@ def _options_html(section: dict[str, Any], description: dict[str, Any]) -> str:
 
 def html_report(report: dict[str, Any], descriptions: dict[str, dict[str, Any]]) -> str:
     """The report page (``descriptions``: program key -> the program description coverage counts against)."""
-    from engine.docs.graphs import GraphLayoutError, render_all
+    from xabsl_studio.engine.docs.graphs import GraphLayoutError, render_all
 
     dots: list[str] = []
     slots: list[tuple[str, str | None]] = []  # (program key, option name or None for the graph)

@@ -1,6 +1,6 @@
-"""The profile report: counts of :mod:`engine.profile.analysis` as the JSON document of docs/profile.md.
+"""The profile report: counts of :mod:`xabsl_studio.engine.profile.analysis` as the JSON document of docs/profile.md.
 
-:func:`profile` opens nothing itself: it takes an opened :class:`~engine.record.Recording`,
+:func:`profile` opens nothing itself: it takes an opened :class:`~xabsl_studio.engine.record.Recording`,
 counts it and returns a plain dict (JSON-ready) with per agent and per team (the agents that ran
 one program key) the options and states (share, activations, mean and longest duration),
 each option's transitions and decision leaves, the oscillations with their ticks and times, and
@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from engine.profile.analysis import AgentCounts, count_recording
-from engine.record import Recording, RecordingError
+from xabsl_studio.engine.profile.analysis import AgentCounts, count_recording
+from xabsl_studio.engine.record import Recording, RecordingError
 
 __all__ = ["FORMAT", "ProfileError", "build_report", "profile"]
 
@@ -180,7 +180,7 @@ def build_report(
     oscillation_ms: float,
     meta: dict[str, Any],
 ) -> dict[str, Any]:
-    """The report document of ``counts`` (:func:`~engine.profile.analysis.count_paths`).
+    """The report document of ``counts`` (:func:`~xabsl_studio.engine.profile.analysis.count_paths`).
 
     ``latest``: per program key the description coverage counts against; ``meta``: ``recording``,
     ``example``, ``seed`` and ``ticks`` (the report's header fields).

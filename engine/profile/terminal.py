@@ -54,7 +54,7 @@ def _coverage_line(section: dict[str, Any]) -> str:
 
 
 def print_report(report: dict[str, Any], console: Console | None = None, details: bool = True) -> None:
-    """Print ``report`` (:func:`engine.profile.profile`): per team and agent tables, coverage, oscillations."""
+    """Print ``report`` (:func:`xabsl_studio.engine.profile.profile`): per team and agent tables, coverage."""
     console = console or Console()
     console.print(
         f"[bold]{report['recording']}[/]: {report['ticks']} ticks ({report['duration_ms'] / 1000:.1f} s), "

@@ -1,21 +1,21 @@
 """Recordings: every tick of a run kept in an MCAP file, readable by Foxglove and any MCAP reader.
 
-* :mod:`engine.record.schema`   topic names, JSON Schemas, timestamps (the format's one source)
-* :mod:`engine.record.sampler`  the per-tick read of one engine (the one sampler: the studio's too)
-* :mod:`engine.record.mcapfile` the MCAP file itself, written from the spec (fast, indexed)
-* :mod:`engine.record.foxglove` the world as ``foxglove.SceneUpdate`` messages (2D field view)
-* :mod:`engine.record.encoder`  :class:`RecordingEncoder`: samples -> MCAP messages (no engine needed)
-* :mod:`engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder
-* :mod:`engine.record.reader`   :class:`Recording`: iterate ticks, seek, rebuild activation trees
-* :mod:`engine.record.fork`     re-simulate a recorded deterministic run to any tick, switch behavior
+* :mod:`xabsl_studio.engine.record.schema`   topic names, JSON Schemas, timestamps (the format's one source)
+* :mod:`xabsl_studio.engine.record.sampler`  the per-tick read of one engine (the one sampler: the studio's too)
+* :mod:`xabsl_studio.engine.record.mcapfile` the MCAP file itself, written from the spec (fast, indexed)
+* :mod:`xabsl_studio.engine.record.foxglove` the world as ``foxglove.SceneUpdate`` messages (2D field view)
+* :mod:`xabsl_studio.engine.record.encoder`  :class:`RecordingEncoder`: samples -> MCAP messages (no engine needed)
+* :mod:`xabsl_studio.engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder
+* :mod:`xabsl_studio.engine.record.reader`   :class:`Recording`: iterate ticks, seek, rebuild activation trees
+* :mod:`xabsl_studio.engine.record.fork`     re-simulate a recorded deterministic run to any tick, switch behavior
 
 Independent of the server: the studio records through the same :class:`Recorder`.
 """
 
-from engine.record.encoder import RecordingEncoder
-from engine.record.reader import AgentTick, Recording, RecordingError, TickView
-from engine.record.sampler import AgentSample, AgentSampler, ProgramTables
-from engine.record.writer import Recorder, RecorderStats, RecordingFailed, engines_of
+from xabsl_studio.engine.record.encoder import RecordingEncoder
+from xabsl_studio.engine.record.reader import AgentTick, Recording, RecordingError, TickView
+from xabsl_studio.engine.record.sampler import AgentSample, AgentSampler, ProgramTables
+from xabsl_studio.engine.record.writer import Recorder, RecorderStats, RecordingFailed, engines_of
 
 __all__ = [
     "AgentSample",

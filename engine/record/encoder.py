@@ -1,14 +1,14 @@
 """The writing half of a recording: encoder operations -> MCAP messages, with no engine or world.
 
 :class:`RecordingEncoder` owns the MCAP file. It is fed *operations*, plain picklable tuples
-that the capture side (:class:`engine.record.writer.Recorder`, in the simulation's thread) builds
+that the capture side (:class:`xabsl_studio.engine.record.writer.Recorder`, in the simulation's thread) builds
 from the engines and the world, so it can run in the same thread or in a writer process of its
 own (``Recorder(..., background=True)``), and later in the studio's server process, which
 already receives the simulation's samples:
 
 * ``("msg", topic, schema, seq, message)``: write one JSON message at the time of tick ``seq``;
 * ``("agent", index, name, tables, gen)``: agent ``index`` runs a program with ``tables``
-  (:class:`~engine.record.sampler.ProgramTables`) from generation ``gen`` on (its channels are
+  (:class:`~xabsl_studio.engine.record.sampler.ProgramTables`) from generation ``gen`` on (its channels are
   registered on first use; the next tick is a key frame for it);
 * ``("static", seq, static_scene, dynamic_scene)``: the static scene (and, for planar worlds, the
   Foxglove field; the dynamic scene shows whether the world is planar);
@@ -32,11 +32,11 @@ from typing import Any, BinaryIO
 
 import orjson
 
-from engine.record import foxglove
-from engine.record import schema as S
-from engine.record.mcapfile import McapWriter
-from engine.record.sampler import ProgramTables
-from engine.types import Value
+from xabsl_studio.engine.record import foxglove
+from xabsl_studio.engine.record import schema as S
+from xabsl_studio.engine.record.mcapfile import McapWriter
+from xabsl_studio.engine.record.sampler import ProgramTables
+from xabsl_studio.engine.types import Value
 
 __all__ = ["CHUNK_SIZE", "DECIMALS", "FOXGLOVE_EVERY", "NO_CHANGE", "RecordingEncoder", "TickSample"]
 

@@ -25,12 +25,12 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from engine.host import Agent, BehaviorLoop, World
-from engine.ir.model import Program
-from engine.record.reader import Recording, RecordingError
-from engine.record.sampler import AgentSampler
-from engine.record.sources import compile_sources, same_sources
-from engine.record.writer import engines_of
+from xabsl_studio.engine.host import Agent, BehaviorLoop, World
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record.reader import Recording, RecordingError
+from xabsl_studio.engine.record.sampler import AgentSampler
+from xabsl_studio.engine.record.sources import compile_sources, same_sources
+from xabsl_studio.engine.record.writer import engines_of
 
 __all__ = ["fork_programs", "resimulate", "switch_programs"]
 
@@ -124,7 +124,7 @@ def switch_programs(world: World, programs: Mapping[str, Program], program_key: 
     """Hot-reload ``programs[key]`` into every agent whose program key is ``key``; returns how many.
 
     Raises:
-        engine.runtime.EngineError: a program does not link or load (the agent keeps its old one).
+        xabsl_studio.engine.runtime.EngineError: a program does not link or load (the agent keeps its old one).
     """
     switched = 0
     for agent, engine in zip(world.agents, engines_of(world), strict=True):
@@ -143,7 +143,7 @@ def fork_programs(
     Args:
         recording: the recording to fork.
         current: per program key the behavior on disk now: its program and its sources
-            (``engine.record.sources.program_sources``).
+            (``xabsl_studio.engine.record.sources.program_sources``).
 
     Returns:
         ``(recorded, switch)``: per key the program of the recorded ticks (compiled again from

@@ -4,7 +4,7 @@ Foxglove's 3D panel (switched to its 2D top-down view) draws ``foxglove.SceneUpd
 world whose scenes follow the planar convention below gets two such channels in a recording: the
 static field once (:func:`static_update`) and the moving bodies every tick (:class:`SceneBuilder`).
 
-The convention is the studio's scene vocabulary (``engine.host.Scene``; lengths in the static
+The convention is the studio's scene vocabulary (``xabsl_studio.engine.host.Scene``; lengths in the static
 scene's ``units.length``, ``mm`` by default, headings in degrees), plus the soccer field's keys:
 
 * static: ``field`` (``{"x": [lo, hi], "y": [lo, hi]}``, or soccer's ``length``/``width``/
@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from engine.host import Scene
+from xabsl_studio.engine.host import Scene
 
 FRAME = "field"
 

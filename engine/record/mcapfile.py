@@ -6,7 +6,7 @@ ticks a second of a 10-agent match that was more than the match itself costs. Th
 implements the parts of the MCAP format (https://mcap.dev/spec, version 0) a recording uses and
 nothing of the ``mcap`` package's internals: a message is one ``struct`` pack appended to the
 open chunk, and its index entry two list appends, about 0.3 us in all. Files are read with the
-``mcap`` package's reader (``engine.record.reader``) and by Foxglove as usual.
+``mcap`` package's reader (``xabsl_studio.engine.record.reader``) and by Foxglove as usual.
 
 Layout of a file: magic, Header; the data section of Chunk records (zstd; in each, the Schema and
 Channel records registered since the previous chunk, then the Message records), each Chunk

@@ -1,6 +1,6 @@
 """Reading a recording: iterate its ticks, seek any tick fast, rebuild activation trees.
 
-:class:`Recording` opens a file written by :class:`~engine.record.writer.Recorder` with the
+:class:`Recording` opens a file written by :class:`~xabsl_studio.engine.record.writer.Recorder` with the
 ``mcap`` package's seeking reader. On open it reads the header, every program generation, the
 static scenes and the events (a few messages); ticks are read on demand:
 
@@ -14,7 +14,7 @@ static scenes and the events (a few messages); ticks are read on demand:
 Each :class:`TickView` holds per agent an :class:`AgentTick`: the path, roots, assignment
 values, input and output values (XABSL names, enums as element names; ``raw_inputs()`` gives host
 values) and the fault; ``AgentTick.tree()`` rebuilds the engine's activation tree
-(:class:`~engine.runtime.OptionNode` / ``BehaviorNode`` / ``AssignmentNode``, equal to what
+(:class:`~xabsl_studio.engine.runtime.OptionNode` / ``BehaviorNode`` / ``AssignmentNode``, equal to what
 ``Engine.activation()`` returned live) from the recorded generation of the behavior.
 """
 
@@ -31,11 +31,11 @@ import orjson
 import zstandard
 from mcap.reader import SeekingReader, make_reader
 
-from engine.ir.ic_reader import read_ic
-from engine.ir.model import Program
-from engine.record import schema as S
-from engine.runtime import AssignmentNode, BehaviorNode, OptionNode, Root
-from engine.types import Kind, Value
+from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record import schema as S
+from xabsl_studio.engine.runtime import AssignmentNode, BehaviorNode, OptionNode, Root
+from xabsl_studio.engine.types import Kind, Value
 
 __all__ = ["AgentTick", "ProgramView", "Recording", "RecordingError", "TickView"]
 
@@ -54,7 +54,7 @@ class ProgramView:
     description: dict[str, Any]
     tables: dict[str, Any]
     changed_files: tuple[str, ...] = ()
-    #: the source files of a program at the start (``engine.record.sources``), None if not recorded
+    #: the source files of a program at the start (``xabsl_studio.engine.record.sources``), None if not recorded
     sources: dict[str, Any] | None = None
     #: the generation's intermediate code (None in recordings made before it was recorded)
     ic: str | None = None
@@ -346,7 +346,7 @@ class Recording:
     ) -> Iterator[tuple[int, int, str, int, list[list[Any]]]]:
         """``(seq, t, agent, gen, path)`` per agent and tick, in recorded order: only the paths.
 
-        The cheap pass for statistics over a whole recording (``engine.profile``): reads only the
+        The cheap pass for statistics over a whole recording (``xabsl_studio.engine.profile``): reads only the
         agents' tick channels and builds no views, symbol tables or trees. ``path`` is the recorded
         activation path (docs/recordings.md, ``xabsl.AgentTick``); ``gen`` indexes
         :meth:`program`.
@@ -481,7 +481,7 @@ class Recording:
 
 
 def _rebuild(program: ProgramView, path: list[list[Any]], assignments: tuple[Value | None, ...]) -> list[Any]:
-    """The activation tree of a recorded path (``engine.runtime.activation.build_tree``'s result)."""
+    """The activation tree of a recorded path (``xabsl_studio.engine.runtime.activation.build_tree``'s result)."""
     description = program.description
     options = description["options"]
     behaviors = description["behaviors"]

@@ -13,7 +13,7 @@ the engine's public per-tick views only and without converting anything:
 
 Converting for display (rounding, enum names) and comparing with the previous tick are left to
 the consumer: the recorder's encoder rounds and encodes deltas, the studio's
-``server.frames.FrameSampler`` converts to the frames' display values. :class:`ProgramTables`
+``xabsl_studio.server.frames.FrameSampler`` converts to the frames' display values. :class:`ProgramTables`
 holds what a consumer needs to interpret the raw values of one program (symbol names in sample
 order, enum host values, basic-behavior parameter names in path order, assignment sites).
 """
@@ -24,10 +24,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
-from engine.codegen.layout import assignment_sites
-from engine.ir.model import Assignment, Program
-from engine.runtime import Engine, Fault, Root
-from engine.types import Kind, Value
+from xabsl_studio.engine.codegen.layout import assignment_sites
+from xabsl_studio.engine.ir.model import Assignment, Program
+from xabsl_studio.engine.runtime import Engine, Fault, Root
+from xabsl_studio.engine.types import Kind, Value
 
 __all__ = ["AgentSample", "AgentSampler", "ProgramTables"]
 
@@ -127,7 +127,7 @@ class AgentSampler:
     """Reads one engine after each tick (see the module docstring); valid until a load or reload.
 
     The one sampling mechanism of the project: the recorder calls :meth:`sample` every tick; the
-    studio's simulation process (``server.frames.FrameSampler``) calls :meth:`path`,
+    studio's simulation process (``xabsl_studio.server.frames.FrameSampler``) calls :meth:`path`,
     :meth:`inputs` and :meth:`outputs` and turns the raw values into display values. Without
     ``assignments`` the sample's ``assignments`` stay empty (the studio does not record them).
 

@@ -211,7 +211,7 @@ RECORDING_SCHEMA: dict[str, Any] = {
 PROGRAM_SCHEMA: dict[str, Any] = {
     "$schema": _DRAFT,
     "title": "xabsl.Program",
-    "description": "A program generation: the behavior description (engine.emit.json) agents run from seq on",
+    "description": "A program generation: the behavior description (engine/emit/json.py) agents run from seq on",
     "type": "object",
     "required": ["seq", "gen", "key", "reason", "program"],
     "properties": {

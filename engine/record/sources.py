@@ -1,6 +1,6 @@
 """The behavior's source files in a recording: what a fork re-simulates the recorded ticks with.
 
-A fork (:mod:`engine.record.fork`) runs ticks ``0 .. k - 1`` again before it goes on with the
+A fork (:mod:`xabsl_studio.engine.record.fork`) runs ticks ``0 .. k - 1`` again before it goes on with the
 behavior on disk, and those ticks must run the behavior that was recorded, not an edited one. The
 program description of ``/xabsl/program`` is for display and cannot be run, so the recorder
 keeps the texts of the include closure (``sources`` of the ``xabsl.Program`` message):
@@ -18,8 +18,8 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from engine.ir.model import Program
-from engine.record.reader import RecordingError
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record.reader import RecordingError
 
 __all__ = ["compile_sources", "program_sources", "same_sources"]
 
@@ -60,7 +60,7 @@ def compile_sources(sources: Mapping[str, Any], what: str = "the recorded behavi
     Raises:
         RecordingError: a malformed ``sources`` (names leaving their folder) or compile errors.
     """
-    from engine.lang import compile_file  # the compiler only when a fork needs it
+    from xabsl_studio.engine.lang import compile_file  # the compiler only when a fork needs it
 
     files = sources.get("files")
     agents = sources.get("agents")

@@ -2,8 +2,8 @@
 
 Feed it after every behavior tick (``run_headless(..., on_tick=recorder.on_tick)`` or, in a loop
 of your own, ``loop.tick(); recorder.tick(now_ms)``). Per tick it samples every XABSL agent
-(:class:`~engine.record.sampler.AgentSampler`) and the world's dynamic scene (its status on key
-frames), and hands them to a :class:`~engine.record.encoder.RecordingEncoder`, which writes the
+(:class:`~xabsl_studio.engine.record.sampler.AgentSampler`) and the world's dynamic scene (its status on key
+frames), and hands them to a :class:`~xabsl_studio.engine.record.encoder.RecordingEncoder`, which writes the
 MCAP file: in the same thread, or with ``background=True`` in a writer process of its own, so
 that encoding, indexing and compressing leave the simulation's thread (operations are sent in
 batches over a pipe). Once, at the start: the header (agents, rates, seed, value tables), each
@@ -12,7 +12,7 @@ program's behavior description and the static scene.
 For the studio (later): :meth:`Recorder.event` writes debugging and session events,
 :meth:`Recorder.reload` starts a new program generation (new description, changed files, fresh
 samplers, a key frame next), :meth:`Recorder.rebind` follows a world that was rebuilt (a reset).
-Message layouts: :mod:`engine.record.schema` and docs/recordings.md.
+Message layouts: :mod:`xabsl_studio.engine.record.schema` and docs/recordings.md.
 """
 
 from __future__ import annotations
@@ -27,15 +27,22 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from engine.emit.ic import emit_ic
-from engine.emit.json import program_to_json
-from engine.host import Agent, World
-from engine.ir.model import Program
-from engine.record import schema as S
-from engine.record.encoder import CHUNK_SIZE, DECIMALS, FOXGLOVE_EVERY, NO_CHANGE, RecordingEncoder, TickSample
-from engine.record.sampler import AgentSampler, ProgramTables
-from engine.runtime import Engine, Fault, Root
-from engine.types import Ms
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.emit.json import program_to_json
+from xabsl_studio.engine.host import Agent, World
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record import schema as S
+from xabsl_studio.engine.record.encoder import (
+    CHUNK_SIZE,
+    DECIMALS,
+    FOXGLOVE_EVERY,
+    NO_CHANGE,
+    RecordingEncoder,
+    TickSample,
+)
+from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables
+from xabsl_studio.engine.runtime import Engine, Fault, Root
+from xabsl_studio.engine.types import Ms
 
 __all__ = ["Recorder", "RecorderStats", "RecordingFailed", "engines_of"]
 
@@ -179,7 +186,7 @@ class Recorder:
             display precision; None: exact). Activation paths and assignment values are always exact.
         chunk_size: uncompressed bytes per MCAP chunk.
         background: encode and write in a writer process (the simulation thread only samples).
-        sources: per program key its source files (:func:`engine.record.sources.program_sources`),
+        sources: per program key its source files (:func:`xabsl_studio.engine.record.sources.program_sources`),
             so that a fork can re-simulate with the recorded behavior.
         world_options: how the world was built (the world plug-in's options, e.g. ``robots``).
         first_seq: the seq of the first tick (a fork continues its original's numbering).
@@ -381,7 +388,7 @@ class Recorder:
     # -- events and generations (the studio) --------------------------------------------------------
 
     def event(self, kind: str, now_ms: Ms, agent: str | None = None, **data: Any) -> None:
-        """Write an event of ``kind`` (one of :data:`engine.record.schema.EVENT_KINDS`) before the next tick.
+        """Write an event of ``kind`` (one of :data:`~xabsl_studio.engine.record.schema.EVENT_KINDS`) before a tick.
 
         Raises:
             ValueError: an unknown kind.

@@ -20,10 +20,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
-from engine.codegen.layout import Layout
-from engine.codegen.support import MS_MASK
-from engine.ir.model import Assignment, BehaviorCall, OptionCall, Parameter, Program
-from engine.types import Kind, Ms, Value
+from xabsl_studio.engine.codegen.layout import Layout
+from xabsl_studio.engine.codegen.support import MS_MASK
+from xabsl_studio.engine.ir.model import Assignment, BehaviorCall, OptionCall, Parameter, Program
+from xabsl_studio.engine.types import Kind, Ms, Value
 
 __all__ = [
     "BEHAVIOR_NODE",
@@ -54,8 +54,8 @@ class Snapshot(NamedTuple):
     """The engine's storage after one tick, copied into tuples (cheap; see module docstring).
 
     After ``now``, ``tick`` and ``roots`` come the storage lists of
-    :data:`engine.codegen.layout.STORAGE` that are snapshotted, in that table's order and with its
-    field names (``engine.runtime.storage`` checks this on import).
+    :data:`xabsl_studio.engine.codegen.layout.STORAGE` that are snapshotted, in that table's order and with its
+    field names (``xabsl_studio.engine.runtime.storage`` checks this on import).
 
     A NamedTuple rather than a frozen dataclass: it is built on every recorded tick, and a
     frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field) costs several times more.
@@ -225,7 +225,7 @@ def node_to_dict(node: Node, enum_name: Callable[[str | None, Value], Any]) -> d
 OPTION_NODE = 0
 BEHAVIOR_NODE = 1
 
-#: The storage lists (:data:`engine.codegen.layout.STORAGE` fields) :func:`compact_path` reads, in order.
+#: The storage lists (:data:`xabsl_studio.engine.codegen.layout.STORAGE` fields) :func:`compact_path` reads, in order.
 PATH_FIELDS = (
     "last_tick",
     "states",

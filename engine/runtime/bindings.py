@@ -31,8 +31,8 @@ from functools import partial
 from operator import attrgetter, itemgetter
 from typing import Any, ClassVar
 
-from engine.ir.model import Parameter, short_name
-from engine.types import Kind, Ms, Value
+from xabsl_studio.engine.ir.model import Parameter, short_name
+from xabsl_studio.engine.types import Kind, Ms, Value
 
 __all__ = ["BasicBehavior", "Bindings", "InputBinding", "OutputBinding"]
 

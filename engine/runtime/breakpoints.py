@@ -9,13 +9,13 @@ stored per behavior as JSON):
 * ``leaf``: the decision of ``option``'s state ``state`` takes leaf ``leaf`` (an id of the
   state's decision tree, docs/protocol.md);
 * ``condition``: an XABSL boolean expression over the program's symbols becomes true (checked by
-  :func:`engine.lang.condition.check_condition`); it hits at the first tick it is true, then again
+  :func:`xabsl_studio.engine.lang.condition.check_condition`); it hits at the first tick it is true, then again
   each time it turns from false to true.
 
 ``robot`` limits one to one robot (None: any robot running the behavior).
 
 :class:`EngineBreakpoints` compiles every breakpoint of one behavior for one engine: one Python
-function per breakpoint, generated like the behavior (``engine.codegen``) and bound to the same
+function per breakpoint, generated like the behavior (``xabsl_studio.engine.codegen``) and bound to the same
 globals as the engine's generated code, so a check reads the storage lists (``LT``, ``PV``,
 ``S``, ``LF``) and the host's input functions directly. It is rebuilt when the engine loads
 another program. Nothing of this runs inside ``Engine.execute``: the host checks after a tick, and
@@ -28,12 +28,12 @@ from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal, cast, get_args
 
-from engine.codegen.python import expression_source
-from engine.errors import DebugError
-from engine.ir.model import Program, leaves
-from engine.lang.condition import CheckedCondition, check_condition
-from engine.runtime.engine import Engine
-from engine.runtime.storage import LoadedProgram
+from xabsl_studio.engine.codegen.python import expression_source
+from xabsl_studio.engine.errors import DebugError
+from xabsl_studio.engine.ir.model import Program, leaves
+from xabsl_studio.engine.lang.condition import CheckedCondition, check_condition
+from xabsl_studio.engine.runtime.engine import Engine
+from xabsl_studio.engine.runtime.storage import LoadedProgram
 
 __all__ = [
     "KINDS",

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import enum
 
-from engine.errors import LoadError
-from engine.ir.model import BehaviorCall, OptionCall, Program
+from xabsl_studio.engine.errors import LoadError
+from xabsl_studio.engine.ir.model import BehaviorCall, OptionCall, Program
 
 __all__ = ["Policy", "check_root"]
 

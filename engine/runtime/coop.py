@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from engine.ir.model import Program
+from xabsl_studio.engine.ir.model import Program
 
 __all__ = ["CoopStates", "TeamMessage"]
 

@@ -1,10 +1,10 @@
 """Reading an engine for debugging: input values and why a decision chose what it chose (§2.12).
 
-A :class:`Debugger` observes an :class:`~engine.runtime.engine.Engine` between ticks: the values
+A :class:`Debugger` observes an :class:`~xabsl_studio.engine.runtime.engine.Engine` between ticks: the values
 of all input symbols without parameters (:meth:`Debugger.input_values`) and why an option's
 decision chose its leaf (:meth:`Debugger.explain`); the activation tree is
 ``engine.activation()``. Steering (selecting an agent, forcing roots, overriding inputs) belongs
-to the engine's :class:`~engine.runtime.roots.RootActions` (``engine.root_actions``).
+to the engine's :class:`~xabsl_studio.engine.runtime.roots.RootActions` (``engine.root_actions``).
 
 :meth:`Debugger.explain` **re-evaluates** the conditions on the path to the recorded leaf after
 the tick, with the option's parameters and the ``state_time``/``option_time`` its decision saw
@@ -26,12 +26,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from engine.codegen.layout import default_value
-from engine.codegen.python import expression_source
-from engine.codegen.support import MS_MASK, modulo
-from engine.emit.json import render_expression
-from engine.errors import DebugError
-from engine.ir.model import (
+from xabsl_studio.engine.codegen.layout import default_value
+from xabsl_studio.engine.codegen.python import expression_source
+from xabsl_studio.engine.codegen.support import MS_MASK, modulo
+from xabsl_studio.engine.emit.json import render_expression
+from xabsl_studio.engine.errors import DebugError
+from xabsl_studio.engine.ir.model import (
     COMPARISON_OPERATORS,
     ENUM_COMPARISON_OPERATORS,
     ActionDone,
@@ -57,8 +57,8 @@ from engine.ir.model import (
     leaf_path,
     walk,
 )
-from engine.runtime.engine import Engine
-from engine.types import Kind, Span, Value
+from xabsl_studio.engine.runtime.engine import Engine
+from xabsl_studio.engine.types import Kind, Span, Value
 
 __all__ = [
     "Comparison",

@@ -1,14 +1,14 @@
 """The Engine: load a program against host bindings and execute it tick by tick (§2).
 
 One :class:`Engine` runs one agent. ``load`` links the program (§2.10), checks the option
-graph of every agent root, generates Python code for it once (:mod:`engine.codegen.python`)
+graph of every agent root, generates Python code for it once (:mod:`xabsl_studio.engine.codegen.python`)
 and binds that code to this engine's storage. ``execute(now_ms)`` runs one tick exactly as
 §2.2 says: one clock value for the whole tick, the root actions in order, decision before
 actions in every option, outputs written through at once.
 
 Persistent per-option state lives in flat lists indexed by option index (active state, tick
 stamps of the last two executions, activation times, the tick's decision record; the table
-:data:`engine.codegen.layout.STORAGE` names them all): a tick stamp replaces the original's
+:data:`xabsl_studio.engine.codegen.layout.STORAGE` names them all): a tick stamp replaces the original's
 per-tick ``wasActive``/``isActive`` flag swap, so nothing is reset at the end of a tick.
 
 Faults (§2.9, architecture "Engine"): a host callable or basic behavior that raises, a ``%`` by
@@ -20,8 +20,8 @@ times of options and states that still exist by name; a program that fails to li
 leaves the running one untouched and raises.
 
 What runs at the root (the selected agent, forced roots, input overrides) belongs to the
-engine's :class:`~engine.runtime.roots.RootActions` (``engine.root_actions``); the storage
-lists to its :class:`~engine.runtime.storage.LoadedProgram` (``engine.loaded``).
+engine's :class:`~xabsl_studio.engine.runtime.roots.RootActions` (``engine.root_actions``); the storage
+lists to its :class:`~xabsl_studio.engine.runtime.storage.LoadedProgram` (``engine.loaded``).
 """
 
 from __future__ import annotations
@@ -32,19 +32,19 @@ from operator import attrgetter, itemgetter
 from types import MappingProxyType
 from typing import Any
 
-from engine.codegen.python import generate
-from engine.codegen.support import MS_MASK
-from engine.errors import DebugError, DoubleExecutionError
-from engine.ir.model import Agent, Program
-from engine.runtime.activation import Node, PathPlan, Snapshot, build_tree, compact_path, node_to_dict
-from engine.runtime.bindings import Bindings
-from engine.runtime.checks import Policy, check_root
-from engine.runtime.coop import CoopStates
-from engine.runtime.fault import Fault
-from engine.runtime.linker import link
-from engine.runtime.roots import RootActions
-from engine.runtime.storage import LoadedProgram
-from engine.types import Ms, Value
+from xabsl_studio.engine.codegen.python import generate
+from xabsl_studio.engine.codegen.support import MS_MASK
+from xabsl_studio.engine.errors import DebugError, DoubleExecutionError
+from xabsl_studio.engine.ir.model import Agent, Program
+from xabsl_studio.engine.runtime.activation import Node, PathPlan, Snapshot, build_tree, compact_path, node_to_dict
+from xabsl_studio.engine.runtime.bindings import Bindings
+from xabsl_studio.engine.runtime.checks import Policy, check_root
+from xabsl_studio.engine.runtime.coop import CoopStates
+from xabsl_studio.engine.runtime.fault import Fault
+from xabsl_studio.engine.runtime.linker import link
+from xabsl_studio.engine.runtime.roots import RootActions
+from xabsl_studio.engine.runtime.storage import LoadedProgram
+from xabsl_studio.engine.types import Ms, Value
 
 __all__ = ["Engine"]
 
@@ -56,7 +56,7 @@ class Engine:
 
     Example::
 
-        engine = Engine(bindings)           # bindings: engine.runtime.bindings.Bindings
+        engine = Engine(bindings)           # bindings: xabsl_studio.engine.runtime.bindings.Bindings
         engine.load(program)                # LinkError lists everything missing
         engine.execute(now_ms)              # one tick; never raises
         engine.activation()                 # the tick's activation tree
@@ -288,7 +288,7 @@ class Engine:
         return tuple(self._require().assignments)
 
     def path(self) -> list[list[Any]]:
-        """The activation path of the last tick, compact (see :func:`~engine.runtime.activation.compact_path`).
+        """The last tick's compact activation path (:func:`~xabsl_studio.engine.runtime.activation.compact_path`).
 
         The cheap alternative to :meth:`activation` for recording every tick: flat lists with
         integer ids, read straight from the engine's storage.

@@ -1,7 +1,7 @@
 """Run-time faults: why and where an agent stopped (recorded, never raised).
 
-Loading a program can fail with :class:`~engine.errors.LinkError` or
-:class:`~engine.errors.LoadError` (raised, see :mod:`engine.errors`). At run time nothing
+Loading a program can fail with :class:`~xabsl_studio.engine.errors.LinkError` or
+:class:`~xabsl_studio.engine.errors.LoadError` (raised, see :mod:`xabsl_studio.engine.errors`). At run time nothing
 propagates out of ``Engine.execute``: a host callable that raises, a ``%`` by zero or a double
 execution under the B2 policy becomes a :class:`Fault` that halts the agent until ``reset()``
 (as hosts of the original engine stop on ``errorsOccurred``, §2.9).
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from engine.types import Span
+from xabsl_studio.engine.types import Span
 
 
 @dataclass(frozen=True, slots=True)

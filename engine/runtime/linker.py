@@ -3,7 +3,7 @@
 This is the Python counterpart of the name resolution in ``Engine::createOptionGraph`` (§2.10):
 every external input/output symbol, enum element, basic behavior and parameter the program
 names must be registered, with the right kind. All problems are collected and raised together
-as one :class:`~engine.errors.LinkError`. Internal symbols and enumerations (§2.1) get
+as one :class:`~xabsl_studio.engine.errors.LinkError`. Internal symbols and enumerations (§2.1) get
 engine storage; internal enum elements get the values 0..n-1 in declaration order.
 """
 
@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from engine.codegen.layout import (
+from xabsl_studio.engine.codegen.layout import (
     BehaviorSlot,
     InputSlot,
     Layout,
@@ -22,8 +22,8 @@ from engine.codegen.layout import (
     assignment_sites,
     default_value,
 )
-from engine.errors import LinkError
-from engine.ir.model import (
+from xabsl_studio.engine.errors import LinkError
+from xabsl_studio.engine.ir.model import (
     Action,
     BehaviorCall,
     DecisionTree,
@@ -37,8 +37,8 @@ from engine.ir.model import (
     Program,
     walk,
 )
-from engine.runtime.bindings import BasicBehavior, Bindings, InputBinding, OutputBinding
-from engine.types import Kind, Value
+from xabsl_studio.engine.runtime.bindings import BasicBehavior, Bindings, InputBinding, OutputBinding
+from xabsl_studio.engine.types import Kind, Value
 
 __all__ = ["Linked", "link", "program_expressions"]
 

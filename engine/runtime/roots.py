@@ -5,7 +5,7 @@ option; a debugger (or the studio) may force any option or basic behavior with c
 parameters in its place (``setRootAction``), add one after the current roots (``addRootAction``),
 add an assignment of a constant to an output symbol (``addRootActionDecimalOutputSymbol`` and
 siblings), and override input symbols with constant values. :class:`RootActions` holds all of
-it, converts every value given from outside once (:func:`engine.runtime.values.coerce`), keeps it
+it, converts every value given from outside once (:func:`xabsl_studio.engine.runtime.values.coerce`), keeps it
 across a hot reload while the names still exist, and builds the callables a tick runs.
 
 Forcing never corrupts state: a forced root is just another root action, so options that stop
@@ -19,13 +19,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from types import MappingProxyType
 
-from engine.errors import DebugError
-from engine.ir.model import Agent, Parameter, short_name
-from engine.runtime.activation import Root
-from engine.runtime.checks import Policy, check_root
-from engine.runtime.storage import LoadedProgram, RootAction
-from engine.runtime.values import coerce
-from engine.types import Value
+from xabsl_studio.engine.errors import DebugError
+from xabsl_studio.engine.ir.model import Agent, Parameter, short_name
+from xabsl_studio.engine.runtime.activation import Root
+from xabsl_studio.engine.runtime.checks import Policy, check_root
+from xabsl_studio.engine.runtime.storage import LoadedProgram, RootAction
+from xabsl_studio.engine.runtime.values import coerce
+from xabsl_studio.engine.types import Value
 
 __all__ = ["RootActions"]
 
@@ -33,9 +33,9 @@ __all__ = ["RootActions"]
 class RootActions:
     """The root actions of one engine: the selected agent, forced roots, overridden inputs.
 
-    ``engine.root_actions`` of an :class:`~engine.runtime.engine.Engine`. Names of parameters
+    ``engine.root_actions`` of an :class:`~xabsl_studio.engine.runtime.engine.Engine`. Names of parameters
     are qualified (``"walk.speed"``) or the IR's short name (``"speed"``); values are converted
-    by :func:`~engine.runtime.values.coerce` (``by_index``: enum ints are element indices).
+    by :func:`~xabsl_studio.engine.runtime.values.coerce` (``by_index``: enum ints are element indices).
     """
 
     def __init__(self, policy: Policy) -> None:

@@ -1,11 +1,11 @@
 """A program bound to one engine: flat storage lists, generated functions, host objects (§2.1).
 
-:class:`LoadedProgram` is what :meth:`engine.runtime.engine.Engine.load` builds: the storage
-lists of :data:`engine.codegen.layout.STORAGE` (active states, tick stamps, activation times,
+:class:`LoadedProgram` is what :meth:`xabsl_studio.engine.runtime.engine.Engine.load` builds: the storage
+lists of :data:`xabsl_studio.engine.codegen.layout.STORAGE` (active states, tick stamps, activation times,
 decision records, parameters, outputs), the generated option functions bound to them as
 globals, the input overrides (the generated code reads an overridden input through a constant)
 and the root actions that call options and basic behaviors with constant parameters (§2.5,
-§2.9). The Engine owns the lifecycle (load, reload, ticks, faults), :mod:`engine.runtime.roots`
+§2.9). The Engine owns the lifecycle (load, reload, ticks, faults), :mod:`xabsl_studio.engine.runtime.roots`
 what runs at the root; this module owns the storage, and derives everything that copies it
 (snapshots, ``reset``, hot reload) from the one table.
 """
@@ -16,16 +16,16 @@ from collections.abc import Callable, Mapping
 from types import SimpleNamespace
 from typing import Any, cast
 
-from engine.codegen.layout import NEVER, STORAGE, Per, Start, StorageList, default_value, engine_order
-from engine.codegen.python import GeneratedProgram
-from engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
-from engine.errors import DoubleExecutionError
-from engine.ir.model import Parameter
-from engine.runtime.activation import PATH_FIELDS, PathPlan, PathStorage, Root, Snapshot
-from engine.runtime.coop import CoopStates
-from engine.runtime.linker import Linked
-from engine.runtime.values import EnumValues
-from engine.types import Ms, Value
+from xabsl_studio.engine.codegen.layout import NEVER, STORAGE, Per, Start, StorageList, default_value, engine_order
+from xabsl_studio.engine.codegen.python import GeneratedProgram
+from xabsl_studio.engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
+from xabsl_studio.engine.errors import DoubleExecutionError
+from xabsl_studio.engine.ir.model import Parameter
+from xabsl_studio.engine.runtime.activation import PATH_FIELDS, PathPlan, PathStorage, Root, Snapshot
+from xabsl_studio.engine.runtime.coop import CoopStates
+from xabsl_studio.engine.runtime.linker import Linked
+from xabsl_studio.engine.runtime.values import EnumValues
+from xabsl_studio.engine.types import Ms, Value
 
 __all__ = ["LoadedProgram", "RootAction"]
 
@@ -177,7 +177,7 @@ class LoadedProgram:
     def run_behavior(self, k: int, now: int, tick: int, changed: bool) -> None:
         """One call of basic behavior ``k`` (§2.2 ``ActionBehavior.execute``), parameters already set.
 
-        Used for root actions; generated calls inline the same steps (``engine.codegen.python``).
+        Used for root actions; generated calls inline the same steps (``xabsl_studio.engine.codegen.python``).
         """
         lt = self.behavior_last_tick[k]
         if lt != tick:

@@ -4,11 +4,11 @@ Debug requests (forcing a root with parameters, overriding an input symbol, an o
 action), the studio's commands and the conformance kit's input traces all hand the engine values
 that came from a user, a JSON message or a file. :func:`coerce` turns each into what the engine
 stores (decimals as finite floats, booleans as bools, enum values as host integers) or refuses it
-with one :class:`~engine.errors.ValueConversionError` naming the value and what was expected.
+with one :class:`~xabsl_studio.engine.errors.ValueConversionError` naming the value and what was expected.
 
 Enum values are given as a qualified element name (``"mode.walk"``), as a host value (an int the
 enumeration registers), or, for clients that number elements as the program JSON does
-(``engine.emit.json``, the studio protocol), as the element's index in declaration order
+(``xabsl_studio.engine.emit.json``, the studio protocol), as the element's index in declaration order
 (``by_index=True``).
 """
 
@@ -18,8 +18,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from engine.errors import ValueConversionError
-from engine.types import Kind, Value
+from xabsl_studio.engine.errors import ValueConversionError
+from xabsl_studio.engine.types import Kind, Value
 
 __all__ = ["EnumValues", "coerce"]
 

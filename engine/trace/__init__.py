@@ -1,1 +1,1 @@
-"""Activation logs: the conformance trace host and runner (:mod:`engine.trace.conformance`)."""
+"""Activation logs: the conformance trace host and runner (:mod:`xabsl_studio.engine.trace.conformance`)."""

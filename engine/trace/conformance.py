@@ -16,7 +16,7 @@ conventions and records one JSON object per tick. This module is that host:
 Bad input (an unknown or parameterized symbol in ``set``, a value of the wrong type or not
 finite, an enum value that is not a qualified element name, an unknown agent) raises
 :class:`TraceInputError` with one line; values are converted by
-:func:`engine.runtime.values.coerce`, as the debugger's and the studio's are.
+:func:`xabsl_studio.engine.runtime.values.coerce`, as the debugger's and the studio's are.
 """
 
 from __future__ import annotations
@@ -25,14 +25,14 @@ import math
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from engine.errors import TraceError, ValueConversionError
-from engine.ir.model import Program
-from engine.runtime.activation import AssignmentNode, BehaviorNode, Node, OptionNode
-from engine.runtime.bindings import BasicBehavior, Bindings
-from engine.runtime.checks import Policy
-from engine.runtime.engine import Engine
-from engine.runtime.values import coerce
-from engine.types import Kind, Value
+from xabsl_studio.engine.errors import TraceError, ValueConversionError
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime.activation import AssignmentNode, BehaviorNode, Node, OptionNode
+from xabsl_studio.engine.runtime.bindings import BasicBehavior, Bindings
+from xabsl_studio.engine.runtime.checks import Policy
+from xabsl_studio.engine.runtime.engine import Engine
+from xabsl_studio.engine.runtime.values import coerce
+from xabsl_studio.engine.types import Kind, Value
 
 __all__ = ["TraceFaultError", "TraceInputError", "TraceRunner", "conformance_bindings"]
 

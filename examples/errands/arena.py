@@ -351,7 +351,7 @@ class Arena:
     # -- scenes ----------------------------------------------------------------------------------
 
     def static_scene(self) -> dict[str, object]:
-        """Walls, obstacles and beacons in the scene vocabulary of ``engine.host.Scene``."""
+        """Walls, obstacles and beacons in the scene vocabulary of ``xabsl_studio.engine.host.Scene``."""
         return {
             "size": [self.layout.size, self.layout.size],
             "walls": [[list(a), list(b)] for a, b in self.walls],

@@ -13,12 +13,12 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from engine.ir.model import Parameter
-from engine.runtime import BasicBehavior, Bindings
-from engine.types import Kind
+from xabsl_studio.engine.ir.model import Parameter
+from xabsl_studio.engine.runtime import BasicBehavior, Bindings
+from xabsl_studio.engine.types import Kind
 
 if TYPE_CHECKING:
-    from examples.errands.world import ErrandsWorld
+    from xabsl_studio.examples.errands.world import ErrandsWorld
 
 #: Host values of the XABSL enumerations (element order of behavior/symbols.xabsl).
 LOCATIONS = ("a", "b", "c")

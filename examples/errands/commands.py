@@ -1,4 +1,4 @@
-"""The errands world's own commands (``engine.host.CommandableWorld``): intervene and query.
+"""The errands world's own commands (``xabsl_studio.engine.host.CommandableWorld``): intervene and query.
 
 The studio forwards them with the op ``world_command`` (docs/protocol.md) and renders them from
 :func:`describe` without knowing the world:
@@ -21,12 +21,12 @@ from __future__ import annotations
 from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
 
-from engine.host import WorldCommandError
-from engine.planning.facts import FactEvent
-from engine.planning.graphplan import format_stats
+from xabsl_studio.engine.host import WorldCommandError
+from xabsl_studio.engine.planning.facts import FactEvent
+from xabsl_studio.engine.planning.graphplan import format_stats
 
 if TYPE_CHECKING:
-    from examples.errands.world import ErrandsWorld
+    from xabsl_studio.examples.errands.world import ErrandsWorld
 
 BEACONS = ("a", "b", "c")
 OBJECTS = ("book", "mug")
@@ -203,7 +203,7 @@ def run(world: ErrandsWorld, name: str, args: dict[str, Any]) -> Any:
     if name == "model":
         return model_json(world)
     if name in ("model_source", "model_check", "model_save"):
-        from examples.errands import model_edit
+        from xabsl_studio.examples.errands import model_edit
 
         if name == "model_source":
             return model_edit.source(world)

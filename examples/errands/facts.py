@@ -1,7 +1,7 @@
 """Facts of the errands world: the derivation rules the robot uses, the ground truth, their agreement.
 
 The robot derives its symbolic facts from the history of its own signals (doc §1.6) with
-:class:`engine.planning.facts.FactDeriver`; this module configures the rule table for the
+:class:`xabsl_studio.engine.planning.facts.FactDeriver`; this module configures the rule table for the
 errands world and measures how well the derived facts match the truth of the simulation
 (§4.4 claims 18–20).
 
@@ -31,9 +31,9 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from engine.planning.facts import FactRule, errands_rules
-from engine.planning.strips import Fact
-from examples.errands.arena import Arena
+from xabsl_studio.engine.planning.facts import FactRule, errands_rules
+from xabsl_studio.engine.planning.strips import Fact
+from xabsl_studio.examples.errands.arena import Arena
 
 #: How long gathering without seeing the object clears its believed location (s) [D].
 SEARCH_GIVE_UP_S = 12.0

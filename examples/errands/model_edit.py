@@ -1,6 +1,6 @@
 """Editing the Dual Dynamics model file from the studio: diagnostics, atomic save, hot swap.
 
-The model loader (:mod:`engine.dynamics.model`) names the file, the key path and, for
+The model loader (:mod:`xabsl_studio.engine.dynamics.model`) names the file, the key path and, for
 expressions, the column inside the expression; :func:`check` turns that into editor diagnostics
 with a line and column in the JSON text (:func:`locate` finds where a key path's value starts).
 :func:`save` writes the text atomically whatever its state (the user's text is never lost, as for
@@ -17,12 +17,12 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from engine.dynamics.model import DDModel, ModelError, ModelSyntaxError, build_model, parse_model_json
-from engine.files import write_atomically
-from engine.host import WorldCommandError
+from xabsl_studio.engine.dynamics.model import DDModel, ModelError, ModelSyntaxError, build_model, parse_model_json
+from xabsl_studio.engine.files import write_atomically
+from xabsl_studio.engine.host import WorldCommandError
 
 if TYPE_CHECKING:
-    from examples.errands.world import ErrandsWorld
+    from xabsl_studio.examples.errands.world import ErrandsWorld
 
 _COLUMN = re.compile(r" at column (\d+)")
 _INDEX = re.compile(r"\[(\d+)\]")

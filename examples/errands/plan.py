@@ -1,7 +1,7 @@
-"""The errands domain's rule for partial plans, on the generic plan board (``engine.planning.monitor``).
+"""The errands domain's rule for partial plans, on the generic plan board (``xabsl_studio.engine.planning.monitor``).
 
 The plan monitor is the XABSL option ``execute_plan`` (behavior/execute_plan.xabsl, pattern P2
-of doc §4.2); the data it reads and drives is an :class:`engine.planning.monitor.PlanBoard`
+of doc §4.2); the data it reads and drives is an :class:`xabsl_studio.engine.planning.monitor.PlanBoard`
 (``plan.next.*``, ``plan.goal_holds``, ``plan.solved``, ``plan.replans``, ``plan.can_extend``,
 the basic behaviors ``plan_from_facts`` and ``complete_operator``). What is the errands' own:
 
@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from engine.planning.monitor import PlanBoard
-from engine.planning.strips import Fact, Task
+from xabsl_studio.engine.planning.monitor import PlanBoard
+from xabsl_studio.engine.planning.strips import Fact, Task
 
 
 class UnlocatedItems:

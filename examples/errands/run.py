@@ -19,9 +19,9 @@ import argparse
 import json
 import sys
 
-from engine.cli import UsageError
-from engine.files import write_atomically
-from examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, physics_rate, run_world, summary
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.files import write_atomically
+from xabsl_studio.examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, physics_rate, run_world, summary
 
 PERTURBATIONS = ("none", "teleport-mug", "remove-book", "block-cb")
 
@@ -100,7 +100,7 @@ def main(args: argparse.Namespace) -> int:
     perturb(world, args.perturb)
     assert world.engine is not None  # build_world compiles and attaches the monitor
     if args.render:
-        from engine.emit.dot import option_graph, state_machine
+        from xabsl_studio.engine.emit.dot import option_graph, state_machine
 
         program = world.engine.program
         text = option_graph(program, "execute_plan") + "\n" + state_machine(program.options["execute_plan"])
@@ -110,7 +110,7 @@ def main(args: argparse.Namespace) -> int:
             raise UsageError(f"cannot write {args.render}: {error.strerror or error}") from None
     recorder = None
     if args.record:
-        from engine.record import Recorder
+        from xabsl_studio.engine.record import Recorder
 
         hz = physics_rate(world.dt)
         recorder = Recorder.for_world(
@@ -162,7 +162,9 @@ def _report(world: ErrandsWorld, out: dict[str, object]) -> str:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(prog="python -m examples.errands.run", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m xabsl_studio.examples.errands.run", description=__doc__.split("\n\n")[0]
+    )
     add_arguments(parser)
     try:
         sys.exit(main(parser.parse_args()))

@@ -1,7 +1,7 @@
-"""How the studio runs the errands example (the world plug-in, see ``engine.host.Example``).
+"""How the studio runs the errands example (the world plug-in, see ``xabsl_studio.engine.host.Example``).
 
 ``xabsl serve examples/errands`` finds this module and calls :func:`example`: the errands robot
-of :mod:`examples.errands.world` (the arena, Dual Dynamics, derived facts, the plan board) whose
+of :mod:`xabsl_studio.examples.errands.world` (the arena, Dual Dynamics, derived facts, the plan board) whose
 controller is the XABSL plan monitor compiled from ``behavior/`` by the studio, so that the
 option graph, the symbols, forcing and hot reload work on it like on any behavior. The world is
 built for a 20 ms tick (50 Hz, physics at 100 Hz), as ``xabsl run examples/errands``.
@@ -15,9 +15,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from engine.host import Agent, AgentController, BehaviorSource, ExampleError, World, behavior_source
-from engine.ir.model import Program
-from engine.runtime import Engine
+from xabsl_studio.engine.host import Agent, AgentController, BehaviorSource, ExampleError, World, behavior_source
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import Engine
 
 #: The tick of the example (s): the rates below follow from it.
 DT = 0.02
@@ -36,7 +36,7 @@ class ErrandsExample:
     """
 
     name = "errands"
-    preload: tuple[str, ...] = ("examples.errands.world", "pymunk", "numpy")
+    preload: tuple[str, ...] = ("xabsl_studio.examples.errands.world", "pymunk", "numpy")
     behavior_hz = 50
     physics_hz = 100
 
@@ -55,7 +55,7 @@ class ErrandsExample:
 
     def build_world(self, seed: int) -> World:
         """The errands world of §1.5, without a controller until :meth:`make_controller`."""
-        from examples.errands.world import MODEL_PATH, ErrandsWorld
+        from xabsl_studio.examples.errands.world import MODEL_PATH, ErrandsWorld
 
         model = self.root / "model" / "errands_dd.json"  # the served folder's model, if it has one
         return ErrandsWorld(
@@ -73,7 +73,7 @@ class ErrandsExample:
 
     def make_controller(self, agent: Agent, program: Program) -> tuple[AgentController, Engine]:
         """The plan monitor's engine on the world's bindings (the robot's controller)."""
-        from examples.errands.world import ErrandsAgent
+        from xabsl_studio.examples.errands.world import ErrandsAgent
 
         if not isinstance(agent, ErrandsAgent):
             raise TypeError("the errands example runs the ErrandsWorld robot")

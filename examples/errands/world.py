@@ -1,13 +1,13 @@
-"""The errands world: the host contract (``engine.host.World``) over the arena, DD, facts and the plan.
+"""The errands world: the host contract (``xabsl_studio.engine.host.World``) over the arena, DD, facts and the plan.
 
 ``build_world(seed)`` makes the errands robot of dual-dynamics.md §1.5: one agent whose
 behavior is two layers,
 
-* the **Dual Dynamics** behavior system (:class:`engine.dynamics.system.DDSystem` on
+* the **Dual Dynamics** behavior system (:class:`xabsl_studio.engine.dynamics.system.DDSystem` on
   ``model/errands_dd.json``): roam, approach_{a,b,c}, gather_{book,mug}, dump_{book,mug}, fused
   into wheel and gripper commands by superposition; and
 * the **plan monitor** written in XABSL (``behavior/execute_plan.xabsl``), the agent's
-  controller (:class:`engine.runtime.Engine`). It reads derived facts and plan data as input
+  controller (:class:`xabsl_studio.engine.runtime.Engine`). It reads derived facts and plan data as input
   symbols and selects the current operator as output symbols; the host turns that into σ_OP,
   so the operator's switch variable s_OP ramps up and its operator-coupling terms bias the
   activations. The plan never commands an actuator.
@@ -23,13 +23,13 @@ One behavior tick follows doc §4.1 inside the host loop's sense / execute / act
 ``plan=False`` selects the XABSL agent ``reactive`` (no operator ever), for the no-plan claims.
 ``program=None`` builds the world without a controller (the studio attaches the program it
 compiled with :meth:`ErrandsWorld.attach`; until then the robot roams with no operator).
-The monitor's symbols and basic behaviors are bound in :mod:`examples.errands.bindings`; the
+The monitor's symbols and basic behaviors are bound in :mod:`xabsl_studio.examples.errands.bindings`; the
 host side of the plan (queue, next executable operator, replanning) is an
-:class:`engine.planning.monitor.PlanBoard` with the errands' partial-plan rule
-(:func:`examples.errands.plan.errands_board`).
+:class:`xabsl_studio.engine.planning.monitor.PlanBoard` with the errands' partial-plan rule
+(:func:`xabsl_studio.examples.errands.plan.errands_board`).
 
 Ground truth (the arena) and what the robot believes (derived facts) are kept apart; the world
-compares them every tick (:class:`examples.errands.facts.Agreement`) and counts what the §4.4
+compares them every tick (:class:`xabsl_studio.examples.errands.facts.Agreement`) and counts what the §4.4
 claims need (:class:`RunRecord`). Perturbation hooks for tests and the studio: ``teleport``,
 ``remove``, ``block_path``, ``place_robot``.
 """
@@ -46,16 +46,16 @@ from typing import Any
 
 import numpy as np
 
-from engine.dynamics.model import DDModel, load_model
-from engine.dynamics.system import DDSystem, TickRecord
-from engine.host import AgentController, RunStats, Scene, run_headless
-from engine.ir.model import Program
-from engine.planning.facts import FactDeriver, FactEvent
-from engine.planning.strips import Fact, Task, load_task
-from engine.runtime import Engine
-from engine.types import Ms
-from examples.errands.arena import Arena, ArenaLayout, Box, wrap
-from examples.errands.bindings import (
+from xabsl_studio.engine.dynamics.model import DDModel, load_model
+from xabsl_studio.engine.dynamics.system import DDSystem, TickRecord
+from xabsl_studio.engine.host import AgentController, RunStats, Scene, run_headless
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.planning.facts import FactDeriver, FactEvent
+from xabsl_studio.engine.planning.strips import Fact, Task, load_task
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.engine.types import Ms
+from xabsl_studio.examples.errands.arena import Arena, ArenaLayout, Box, wrap
+from xabsl_studio.examples.errands.bindings import (
     ITEMS,
     LOCATIONS,
     PDDL_SCHEMA,
@@ -64,8 +64,8 @@ from examples.errands.bindings import (
     STATUSES,
     monitor_bindings,
 )
-from examples.errands.facts import Agreement, Truth, evidence_signals, fact_rules, truth_facts
-from examples.errands.plan import errands_board
+from xabsl_studio.examples.errands.facts import Agreement, Truth, evidence_signals, fact_rules, truth_facts
+from xabsl_studio.examples.errands.plan import errands_board
 
 HERE = Path(__file__).resolve().parent
 MODEL_PATH = HERE / "model" / "errands_dd.json"
@@ -80,7 +80,7 @@ DELIVERY_RADIUS = 0.9
 @cache
 def _program(path: str) -> Program:
     """Compile the behavior once per process (every world of a test session shares it)."""
-    from engine.lang import compile_file
+    from xabsl_studio.engine.lang import compile_file
 
     compilation = compile_file(path)
     if compilation.program is None:
@@ -188,7 +188,7 @@ class ErrandsAgent:
 
 
 class ErrandsWorld:
-    """The errands robot in its arena; implements ``engine.host.World``.
+    """The errands robot in its arena; implements ``xabsl_studio.engine.host.World``.
 
     Args:
         seed: seeds the DD noise (the arena itself is deterministic).
@@ -281,7 +281,7 @@ class ErrandsWorld:
         Selects the XABSL agent ``planner`` (``reactive`` without a plan) when the program has it.
 
         Raises:
-            engine.runtime.LinkError: the program declares a symbol or behavior the bindings lack.
+            xabsl_studio.engine.runtime.LinkError: the program declares a symbol or behavior the bindings lack.
         """
         engine = Engine(monitor_bindings(self), program, agent_name="robot")
         wanted = "planner" if self.with_plan else "reactive"
@@ -470,14 +470,14 @@ class ErrandsWorld:
     # -- interventions (the studio's world commands, commands.py) ---------------------------------
 
     def commands(self) -> list[dict[str, Any]]:
-        """The world's commands (``engine.host.CommandableWorld``): perturb, monitor, query."""
-        from examples.errands.commands import describe
+        """The world's commands (``xabsl_studio.engine.host.CommandableWorld``): perturb, monitor, query."""
+        from xabsl_studio.examples.errands.commands import describe
 
         return describe(self)
 
     def command(self, name: str, args: dict[str, Any]) -> Any:
-        """Carry out one world command (see :mod:`examples.errands.commands`)."""
-        from examples.errands.commands import run
+        """Carry out one world command (see :mod:`xabsl_studio.examples.errands.commands`)."""
+        from xabsl_studio.examples.errands.commands import run
 
         return run(self, name, args)
 
@@ -553,7 +553,7 @@ class ErrandsWorld:
     # -- scenes and debugging ----------------------------------------------------------------------
 
     def static_scene(self) -> Scene:
-        """The arena in the studio's scene vocabulary (``engine.host``), in mm and degrees.
+        """The arena in the studio's scene vocabulary (``xabsl_studio.engine.host``), in mm and degrees.
 
         Walls, obstacles (``rect`` shapes), beacons (a marker and the dashed circle within which
         the robot counts as at it), the robot's size and sensor geometry, the DD behaviors, the
@@ -864,7 +864,7 @@ def run_world(
     """Run ``world`` headless for at most ``duration_s`` at its own tick.
 
     Rates the host loop accepts (30–50 Hz behavior, physics ≥ 100 Hz) go through
-    :func:`engine.host.run_headless`; other ticks (dt = 10 ms for the numerics claims) use the
+    :func:`xabsl_studio.engine.host.run_headless`; other ticks (dt = 10 ms for the numerics claims) use the
     same sense / execute / act / physics order in a local loop.
     """
     behavior_hz, physics_hz = physics_rate(world.dt)

@@ -8,7 +8,7 @@ One concern per module:
 * ``robot``      the walking robot: motion requests, speed/acceleration limits, walk_to, kicks
 * ``game``       the referee: game states, halves, goals, outs, kick-off placement
 * ``perception`` each robot's world model: own pose, ball, opponents, team messages
-* ``world``      ``SoccerWorld``, the host contract (``engine.host.World``) over all of the above
+* ``world``      ``SoccerWorld``, the host contract (``xabsl_studio.engine.host.World``) over all of the above
 * ``scripted``   a placeholder "chase the ball" controller for tests and benchmarks only
 
 Start with ``world.build_world(seed)``.

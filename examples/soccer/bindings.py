@@ -2,8 +2,8 @@
 
 This module is the host half of the symbol files in ``behavior/symbols/`` and of
 ``behavior/basic_behaviors.xabsl``: every name declared there is bound here to one robot's
-:class:`~examples.soccer.perception.WorldModel` (what it believes), its
-:class:`~examples.soccer.robot.MotionRequest` (what it commands) and its team message
+:class:`~xabsl_studio.examples.soccer.perception.WorldModel` (what it believes), its
+:class:`~xabsl_studio.examples.soccer.robot.MotionRequest` (what it commands) and its team message
 (``WorldModel.outgoing``). It is the model to copy for your own robot:
 
 1. **Enumerations** (:func:`register_enums`): the host gives each element its value. Here the
@@ -17,9 +17,9 @@ This module is the host half of the symbol files in ``behavior/symbols/`` and of
    the function takes them.
 3. **Output symbols**: a setter/getter pair writing straight into the outgoing team message
    dict, updated in place (the team channel copies it when it sends).
-4. **Basic behaviors** (:mod:`examples.soccer.skills`): one instance per robot.
-5. **The controller** (:class:`XabslController`): the ``engine.host.AgentController`` of one
-   robot; it owns an :class:`engine.runtime.Engine` and runs one tick per ``execute``.
+4. **Basic behaviors** (:mod:`xabsl_studio.examples.soccer.skills`): one instance per robot.
+5. **The controller** (:class:`XabslController`): the ``xabsl_studio.engine.host.AgentController`` of one
+   robot; it owns an :class:`xabsl_studio.engine.runtime.Engine` and runs one tick per ``execute``.
 
 Per-tick cost matters (ten robots at 40 Hz, 100x real time): world-model symbols are attribute
 reads, team queries are computed at most once per tick and cached, and the opponent list is
@@ -38,14 +38,14 @@ from functools import partial
 
 import numpy as np
 
-from engine.ir.model import Program
-from engine.runtime import Bindings, Engine, Fault
-from engine.types import Kind
-from examples.soccer.game import GameState
-from examples.soccer.perception import WorldModel
-from examples.soccer.robot import MotionMode, MotionRequest
-from examples.soccer.skills import SKILLS
-from examples.soccer.units import DEG_PER_RAD, RAD_PER_DEG, normalize_deg
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import Bindings, Engine, Fault
+from xabsl_studio.engine.types import Kind
+from xabsl_studio.examples.soccer.game import GameState
+from xabsl_studio.examples.soccer.perception import WorldModel
+from xabsl_studio.examples.soccer.robot import MotionMode, MotionRequest
+from xabsl_studio.examples.soccer.skills import SKILLS
+from xabsl_studio.examples.soccer.units import DEG_PER_RAD, RAD_PER_DEG, normalize_deg
 
 D, B, E = Kind.DECIMAL, Kind.BOOLEAN, Kind.ENUM
 
@@ -477,20 +477,20 @@ class ActivationRecorder:
 class XabslController:
     """The brain of one soccer robot: an XABSL engine on the robot's bindings.
 
-    Implements ``engine.host.AgentController``. Each ``execute`` publishes the robot's pose and
+    Implements ``xabsl_studio.engine.host.AgentController``. Each ``execute`` publishes the robot's pose and
     ball estimate in its team message, then runs one engine tick; the behavior's basic behaviors
     write the motion request and its output symbols the rest of the team message.
 
     Args:
         perception: the robot's world model.
         motion: the robot's motion request.
-        program: the compiled behavior (``engine.lang.compile_file(...).program``), shared by
+        program: the compiled behavior (``xabsl_studio.engine.lang.compile_file(...).program``), shared by
             every robot of a team; each controller generates and binds its own engine code.
         agent: the XABSL agent to run (default: the program's first agent).
         record: count option activations and hash the activation trace (statistics, tests).
 
     Raises:
-        engine.runtime.LinkError: the program declares a symbol or behavior this module lacks.
+        xabsl_studio.engine.runtime.LinkError: the program declares a symbol or behavior this module lacks.
     """
 
     __slots__ = ("_out", "engine", "motion", "recorder", "symbols", "wm")

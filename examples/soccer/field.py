@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from examples.soccer.units import to_mm
+from xabsl_studio.examples.soccer.units import to_mm
 
 
 @dataclass(frozen=True, slots=True)

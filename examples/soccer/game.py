@@ -34,7 +34,7 @@ import enum
 from dataclasses import dataclass
 from typing import Protocol
 
-from examples.soccer.field import FieldDimensions
+from xabsl_studio.examples.soccer.field import FieldDimensions
 
 
 class GameState(enum.IntEnum):

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from examples.soccer.units import DEG_PER_RAD, MM_PER_M
+from xabsl_studio.examples.soccer.units import DEG_PER_RAD, MM_PER_M
 
 #: ``ball_time_since_seen`` before the first sighting: large, like a ball seen long ago.
 NEVER_SEEN_MS = 1_000_000_000

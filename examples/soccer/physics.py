@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import pymunk
 from pymunk._chipmunk import lib as _cp
 
-from examples.soccer.field import FieldDimensions
+from xabsl_studio.examples.soccer.field import FieldDimensions
 
 # Collision types, so tests and rules can tell shapes apart.
 BALL = 1

@@ -31,8 +31,8 @@ import enum
 import math
 from dataclasses import dataclass
 
-from examples.soccer.physics import SoccerPhysics
-from examples.soccer.units import M_PER_MM, RAD_PER_DEG, normalize_rad
+from xabsl_studio.examples.soccer.physics import SoccerPhysics
+from xabsl_studio.examples.soccer.units import M_PER_MM, RAD_PER_DEG, normalize_rad
 
 
 class MotionMode(enum.IntEnum):

@@ -9,7 +9,7 @@ shoots only when the lane to the goal is free.
 The pieces, reusable by tests and benchmarks:
 
 * :func:`load_team` compiles a behavior folder (``agents.xabsl``);
-* :func:`build_world` makes a seeded world with an :class:`~examples.soccer.bindings.XabslController`
+* :func:`build_world` makes a seeded world with an :class:`~xabsl_studio.examples.soccer.bindings.XabslController`
   on every robot (home = blue = team 0, away = red = team 1);
 * :class:`MatchStats` watches a running match: possession, shots, passes, goals;
 * :func:`play_match` runs a whole match and returns a :class:`MatchReport`.
@@ -30,17 +30,17 @@ from typing import Any
 
 import orjson
 
-from engine.cli import UsageError
-from engine.emit.dot import option_graph
-from engine.errors import HostError
-from engine.files import write_atomically
-from engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
-from engine.ir.model import Program
-from engine.lang import compile_file
-from examples.soccer.bindings import XabslController
-from examples.soccer.game import GameState
-from examples.soccer.world import SoccerWorld
-from examples.soccer.world import build_world as build_soccer_world
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.emit.dot import option_graph
+from xabsl_studio.engine.errors import HostError
+from xabsl_studio.engine.files import write_atomically
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.lang import compile_file
+from xabsl_studio.examples.soccer.bindings import XabslController
+from xabsl_studio.examples.soccer.game import GameState
+from xabsl_studio.examples.soccer.world import SoccerWorld
+from xabsl_studio.examples.soccer.world import build_world as build_soccer_world
 
 HERE = Path(__file__).resolve().parent
 #: The example team.
@@ -265,9 +265,9 @@ def play_match(
         players: robots per team.
         half_duration_s: playing time per half (a match has two).
         progress: called as ``progress(time_ms, status)`` every simulated second, if given.
-        record: write the match to this MCAP file (``engine.record``).
+        record: write the match to this MCAP file (``xabsl_studio.engine.record``).
         record_keys: the names of the home and away programs in the recording.
-        record_sources: the home and away programs' source files (``engine.record.sources``), kept
+        record_sources: the home and away programs' source files (``xabsl_studio.engine.record.sources``), kept
             in the recording so that a fork can re-simulate it (``xabsl run ... --fork``).
         **options: further ``SoccerWorld`` arguments.
     """
@@ -286,7 +286,7 @@ def play_match(
 
     recorder = None
     if record is not None:
-        from engine.record import Recorder
+        from xabsl_studio.engine.record import Recorder
 
         recorder = Recorder.for_world(
             record,
@@ -443,7 +443,7 @@ def main(args: argparse.Namespace) -> int:
 
 def _sources(folder: str, program: Program) -> dict[str, Any]:
     """The source files of a team behavior, for its recording."""
-    from engine.record.sources import program_sources
+    from xabsl_studio.engine.record.sources import program_sources
 
     return program_sources(Path(folder) / AGENTS_FILE, program.files)
 
@@ -493,7 +493,7 @@ def fork_match(
     Args:
         recording_path: a recording of ``xabsl run examples/soccer --record``.
         at: the fork tick.
-        home: the home team's program on disk and its sources (``engine.record.sources``).
+        home: the home team's program on disk and its sources (``xabsl_studio.engine.record.sources``).
         away: the away team's, likewise.
         keys: the teams' program keys (as in the recording).
         duration_s: simulated seconds to go on.
@@ -505,9 +505,9 @@ def fork_match(
     """
     import time
 
-    from engine.host import BehaviorLoop
-    from engine.record import Recorder, Recording, RecordingError
-    from engine.record.fork import fork_programs, resimulate, switch_programs
+    from xabsl_studio.engine.host import BehaviorLoop
+    from xabsl_studio.engine.record import Recorder, Recording, RecordingError
+    from xabsl_studio.engine.record.fork import fork_programs, resimulate, switch_programs
 
     try:
         recording = Recording(recording_path)
@@ -548,7 +548,7 @@ def fork_match(
         t = loop.now_ms
         recorder = None
         if record is not None:
-            from engine.record import Recorder
+            from xabsl_studio.engine.record import Recorder
 
             recorder = Recorder.for_world(
                 record,

@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import math
 
-from examples.soccer.game import GameState
-from examples.soccer.perception import WorldModel
-from examples.soccer.robot import MotionMode, MotionRequest
-from examples.soccer.units import DEG_PER_RAD, normalize_deg
-from examples.soccer.world import SoccerWorld
+from xabsl_studio.examples.soccer.game import GameState
+from xabsl_studio.examples.soccer.perception import WorldModel
+from xabsl_studio.examples.soccer.robot import MotionMode, MotionRequest
+from xabsl_studio.examples.soccer.units import DEG_PER_RAD, normalize_deg
+from xabsl_studio.examples.soccer.world import SoccerWorld
 
 _OPPONENT_GOAL_X = 4500.0  # mm, team frame
 _BEHIND_BALL = 250.0  # mm: where to stand behind the ball before kicking

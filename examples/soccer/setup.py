@@ -1,7 +1,7 @@
 """The soccer world's test setup: put robots and the ball somewhere and the game into a state.
 
 ``arrange(world, setup)`` is what ``SoccerExample.arrange`` (the behavior tests' setup hook,
-``examples.testing.runner.ArrangeableExample``) runs on a freshly built world, before its first
+``xabsl_studio.examples.testing.runner.ArrangeableExample``) runs on a freshly built world, before its first
 tick. Keys (lengths in mm and angles in degrees, in the world frame of the studio's field: the
 centre spot is the origin, blue attacks +x in the first half):
 
@@ -22,8 +22,8 @@ from collections.abc import Callable, Mapping
 from functools import partial
 from typing import Any
 
-from examples.soccer.game import GameState
-from examples.soccer.world import TEAM_NAMES, SoccerWorld
+from xabsl_studio.examples.soccer.game import GameState
+from xabsl_studio.examples.soccer.world import TEAM_NAMES, SoccerWorld
 
 __all__ = ["KEYS", "arrange", "setup_from_scene"]
 

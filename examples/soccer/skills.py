@@ -3,7 +3,7 @@
 Each class here is one ``behavior`` declared in ``behavior/basic_behaviors.xabsl``. A basic
 behavior is the host's half of a call such as ``walk_to(x = 0, y = 0, rot = 0);``: the engine
 sets the declared parameters, then calls :meth:`execute`, which translates them into the
-robot's :class:`~examples.soccer.robot.MotionRequest`. The legs (``robot.Robot.act``) carry the
+robot's :class:`~xabsl_studio.examples.soccer.robot.MotionRequest`. The legs (``robot.Robot.act``) carry the
 request out after every agent's behavior ran, within the walk's speed and acceleration limits.
 
 How to write one for your own robot:
@@ -26,11 +26,11 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from engine.runtime import BasicBehavior
-from engine.types import Kind
-from examples.soccer.perception import WorldModel
-from examples.soccer.robot import MotionMode, MotionRequest
-from examples.soccer.units import RAD_PER_DEG, normalize_deg
+from xabsl_studio.engine.runtime import BasicBehavior
+from xabsl_studio.engine.types import Kind
+from xabsl_studio.examples.soccer.perception import WorldModel
+from xabsl_studio.examples.soccer.robot import MotionMode, MotionRequest
+from xabsl_studio.examples.soccer.units import RAD_PER_DEG, normalize_deg
 
 _STAND = MotionMode.STAND
 _WALK = MotionMode.WALK

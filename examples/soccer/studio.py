@@ -1,9 +1,9 @@
-"""How the studio runs the soccer example (the world plug-in, see ``engine.host.Example``).
+"""How the studio runs the soccer example (the world plug-in, see ``xabsl_studio.engine.host.Example``).
 
 ``xabsl serve examples/soccer`` finds this module and calls :func:`example`: a match in
-:mod:`examples.soccer.world` whose blue team (team 0) runs ``behavior/`` and whose red team runs
+:mod:`xabsl_studio.examples.soccer.world` whose blue team (team 0) runs ``behavior/`` and whose red team runs
 ``chase/`` when the folder has one (else ``behavior/`` too); each robot's controller is an
-:class:`examples.soccer.bindings.XabslController`. Options: ``robots`` (players per team, 1..7)
+:class:`xabsl_studio.examples.soccer.bindings.XabslController`. Options: ``robots`` (players per team, 1..7)
 and ``half_duration_s``.
 """
 
@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from engine.host import (
+from xabsl_studio.engine.host import (
     DEFAULT_BEHAVIOR_HZ,
     DEFAULT_PHYSICS_HZ,
     Agent,
@@ -23,8 +23,8 @@ from engine.host import (
     World,
     behavior_source,
 )
-from engine.ir.model import Program
-from engine.runtime import Engine
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import Engine
 
 AGENTS_FILE = "agents.xabsl"
 
@@ -43,7 +43,7 @@ class SoccerExample:
 
     name = "soccer"
     #: modules the simulation process imports ahead (the forkserver preloads them once)
-    preload: tuple[str, ...] = ("examples.soccer.world", "examples.soccer.bindings")
+    preload: tuple[str, ...] = ("xabsl_studio.examples.soccer.world", "xabsl_studio.examples.soccer.bindings")
     behavior_hz = DEFAULT_BEHAVIOR_HZ
     physics_hz = DEFAULT_PHYSICS_HZ
 
@@ -71,7 +71,7 @@ class SoccerExample:
 
     def build_world(self, seed: int) -> World:
         """A match with ``players_per_team`` robots a side."""
-        from examples.soccer.world import build_world
+        from xabsl_studio.examples.soccer.world import build_world
 
         return build_world(seed, players_per_team=self.players_per_team, half_duration_s=self.half_duration_s)
 
@@ -82,8 +82,8 @@ class SoccerExample:
 
     def make_controller(self, agent: Agent, program: Program) -> tuple[AgentController, Engine]:
         """An XABSL controller on the robot's perception and motion request."""
-        from examples.soccer.bindings import XabslController
-        from examples.soccer.world import SoccerAgent
+        from xabsl_studio.examples.soccer.bindings import XabslController
+        from xabsl_studio.examples.soccer.world import SoccerAgent
 
         if not isinstance(agent, SoccerAgent):
             raise TypeError("the soccer example runs SoccerWorld robots")
@@ -91,9 +91,9 @@ class SoccerExample:
         return controller, controller.engine
 
     def arrange(self, world: World, setup: Mapping[str, Any]) -> None:
-        """A behavior test's setup: robots, ball, game state (keys: ``examples.soccer.setup``)."""
-        from examples.soccer.setup import arrange
-        from examples.soccer.world import SoccerWorld
+        """A behavior test's setup: robots, ball, game state (keys: ``xabsl_studio.examples.soccer.setup``)."""
+        from xabsl_studio.examples.soccer.setup import arrange
+        from xabsl_studio.examples.soccer.world import SoccerWorld
 
         if not isinstance(world, SoccerWorld):
             raise TypeError("the soccer setup arranges SoccerWorld matches")
@@ -101,7 +101,7 @@ class SoccerExample:
 
     def setup_from_scene(self, scene: Mapping[str, Any], status: Mapping[str, Any], names: list[str]) -> dict[str, Any]:
         """The setup that reproduces a scene ("Save as test" in the studio)."""
-        from examples.soccer.setup import setup_from_scene
+        from xabsl_studio.examples.soccer.setup import setup_from_scene
 
         return setup_from_scene(scene, status, names)
 

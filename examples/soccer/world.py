@@ -1,11 +1,11 @@
-"""The soccer world: the host contract (``engine.host.World``) over physics, referee and robots.
+"""The soccer world: the host contract (``xabsl_studio.engine.host.World``) over physics, referee and robots.
 
 ``build_world(seed)`` makes a match of two teams ("blue" = team 0, "red" = team 1) of 5 players
 (1..7) on an SPL-like field. Each :class:`SoccerAgent` is one robot:
 
-* ``agent.perception`` (:class:`~examples.soccer.perception.WorldModel`): what its behavior
+* ``agent.perception`` (:class:`~xabsl_studio.examples.soccer.perception.WorldModel`): what its behavior
   reads, in mm / degrees / ms, positions in the team frame (own goal at negative x);
-* ``agent.motion`` (:class:`~examples.soccer.robot.MotionRequest`): what its behavior commands;
+* ``agent.motion`` (:class:`~xabsl_studio.examples.soccer.robot.MotionRequest`): what its behavior commands;
 * ``agent.perception.outgoing``: the team message payload its behavior fills;
 * ``agent.controller``: the brain slot, an XABSL engine (or, in tests, ``scripted``).
 
@@ -24,14 +24,21 @@ from typing import Any
 
 import numpy as np
 
-from engine.host import AgentController, Scene
-from examples.soccer import field
-from examples.soccer.field import FieldDimensions, from_team_frame
-from examples.soccer.game import MAX_PLAYERS, GameController, GameRules, GameState, kickoff_position
-from examples.soccer.perception import GaussianNoise, SensorModel, Snapshot, TeamChannel, WorldModel, perceive
-from examples.soccer.physics import BallParameters, RobotBodyParameters, SoccerPhysics
-from examples.soccer.robot import MotionRequest, Robot, WalkLimits
-from examples.soccer.units import DEG_PER_RAD, MM_PER_M, normalize_rad
+from xabsl_studio.engine.host import AgentController, Scene
+from xabsl_studio.examples.soccer import field
+from xabsl_studio.examples.soccer.field import FieldDimensions, from_team_frame
+from xabsl_studio.examples.soccer.game import MAX_PLAYERS, GameController, GameRules, GameState, kickoff_position
+from xabsl_studio.examples.soccer.perception import (
+    GaussianNoise,
+    SensorModel,
+    Snapshot,
+    TeamChannel,
+    WorldModel,
+    perceive,
+)
+from xabsl_studio.examples.soccer.physics import BallParameters, RobotBodyParameters, SoccerPhysics
+from xabsl_studio.examples.soccer.robot import MotionRequest, Robot, WalkLimits
+from xabsl_studio.examples.soccer.units import DEG_PER_RAD, MM_PER_M, normalize_rad
 
 TEAM_NAMES = ("blue", "red")
 
@@ -84,7 +91,7 @@ class SoccerAgent:
 
 
 class SoccerWorld:
-    """A match between two robot teams; implements ``engine.host.World`` and the game's ``Referee``.
+    """A match between two robot teams; implements ``xabsl_studio.engine.host.World`` and the game's ``Referee``.
 
     Args:
         seed: the only source of randomness (perception noise).

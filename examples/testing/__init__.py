@@ -1,24 +1,24 @@
 """Behavior tests: TOML suites that set a world up, run an agent or a forced option, and assert over time.
 
-* :mod:`examples.testing.spec`     the test file format (docs/tests.md): TOML -> :class:`Suite`
-* :mod:`examples.testing.expect`   the temporal assertions, evaluated tick by tick
-* :mod:`examples.testing.runner`   runs one test case in its world; a failure leaves a recording
-* :mod:`examples.testing.coverage` options, states, transitions and decision leaves reached
-* :mod:`examples.testing.report`   the JUnit XML and the text summary
-* :mod:`examples.testing.cli`      ``xabsl test PATH... [-k EXPR] [--junit OUT] [--jobs N]``
-* :mod:`examples.testing.plugin`   the pytest plugin collecting ``*.xabsl-test.toml``
-* :mod:`examples.testing.save`     "Save as test": a test file from the studio tester's state
+* :mod:`xabsl_studio.examples.testing.spec`     the test file format (docs/tests.md): TOML -> :class:`Suite`
+* :mod:`xabsl_studio.examples.testing.expect`   the temporal assertions, evaluated tick by tick
+* :mod:`xabsl_studio.examples.testing.runner`   runs one test case in its world; a failure leaves a recording
+* :mod:`xabsl_studio.examples.testing.coverage` options, states, transitions and decision leaves reached
+* :mod:`xabsl_studio.examples.testing.report`   the JUnit XML and the text summary
+* :mod:`xabsl_studio.examples.testing.cli`      ``xabsl test PATH... [-k EXPR] [--junit OUT] [--jobs N]``
+* :mod:`xabsl_studio.examples.testing.plugin`   the pytest plugin collecting ``*.xabsl-test.toml``
+* :mod:`xabsl_studio.examples.testing.save`     "Save as test": a test file from the studio tester's state
 
-Worlds come through the world plug-ins (``engine.host.Example``, loaded by
-``server.examples.load_example``); a world that offers a setup (positions, game state) implements
-:class:`examples.testing.runner.ArrangeableExample`. Nothing here is imported by ``engine/``.
+Worlds come through the world plug-ins (``xabsl_studio.engine.host.Example``, loaded by
+``xabsl_studio.server.examples.load_example``); a world that offers a setup (positions, game state) implements
+:class:`xabsl_studio.examples.testing.runner.ArrangeableExample`. Nothing here is imported by ``engine/``.
 """
 
 from __future__ import annotations
 
 TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing: `xabsl --help` stays light
 if TYPE_CHECKING:
-    from examples.testing.spec import Case, Expect, SpecError, Suite, load_suite
+    from xabsl_studio.examples.testing.spec import Case, Expect, SpecError, Suite, load_suite
 
 __all__ = ["Case", "Expect", "SpecError", "Suite", "load_suite"]
 
@@ -27,7 +27,7 @@ def __getattr__(name: str) -> object:
     # The format's names load with the format (PEP 562): registering `xabsl test` on the command
     # line imports this package, and `xabsl --help` must not pay for TOML, JSON and dataclasses.
     if name in __all__:
-        from examples.testing import spec
+        from xabsl_studio.examples.testing import spec
 
         return getattr(spec, name)
-    raise AttributeError(f"module 'examples.testing' has no attribute {name!r}")
+    raise AttributeError(f"module 'xabsl_studio.examples.testing' has no attribute {name!r}")

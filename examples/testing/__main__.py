@@ -1,7 +1,7 @@
-"""``python -m examples.testing PATH...``: ``xabsl test`` without the installed entry point."""
+"""``python -m xabsl_studio.examples.testing PATH...``: ``xabsl test`` without the installed entry point."""
 
 import sys
 
-from examples.testing.cli import main
+from xabsl_studio.examples.testing.cli import main
 
 sys.exit(main())

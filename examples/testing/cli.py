@@ -1,7 +1,7 @@
 """``xabsl test PATH... [-k EXPR] [--junit OUT] [--jobs N]``: run behavior test suites.
 
-Registered under the ``xabsl.commands`` entry-point group (``test = "examples.testing.cli:register"``);
-``python -m examples.testing`` runs the same command. ``PATH`` is a test file or a folder
+Registered under the ``xabsl.commands`` entry-point group (``test = "xabsl_studio.examples.testing.cli:register"``);
+``python -m xabsl_studio.examples.testing`` runs the same command. ``PATH`` is a test file or a folder
 (searched recursively for ``*.xabsl-test.toml``). Exit status: 0 every selected test passed,
 1 a test failed or could not run (or nothing was selected), 2 usage (a bad file, a bad ``-k``).
 """
@@ -19,10 +19,10 @@ TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing
 if TYPE_CHECKING:
     from typing import Any
 
-    from examples.testing.runner import CaseResult
-    from examples.testing.spec import Case
+    from xabsl_studio.examples.testing.runner import CaseResult
+    from xabsl_studio.examples.testing.spec import Case
 
-#: How test files are named (``examples.testing.spec.SUFFIX``; a test checks that they agree).
+#: How test files are named (``xabsl_studio.examples.testing.spec.SUFFIX``; a test checks that they agree).
 SUFFIX = ".xabsl-test.toml"
 
 __all__ = ["collect", "main", "register", "run_cases"]
@@ -43,7 +43,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The command's flags (shared by ``xabsl test`` and ``python -m examples.testing``)."""
+    """The command's flags (shared by ``xabsl test`` and ``python -m xabsl_studio.examples.testing``)."""
     parser.add_argument("paths", nargs="+", metavar="PATH", help=f"test files or folders (with *{SUFFIX})")
     parser.add_argument("-k", dest="keyword", metavar="EXPR", help="only tests whose suite::name matches EXPR")
     parser.add_argument("--junit", metavar="OUT", help="write a JUnit XML report")
@@ -64,7 +64,7 @@ def collect(paths: Iterable[str | Path]) -> list[Case]:
     Raises:
         SpecError: a bad test file, or a path that is neither.
     """
-    from examples.testing.spec import SpecError, load_suite
+    from xabsl_studio.examples.testing.spec import SpecError, load_suite
 
     cases: list[Case] = []
     for raw in paths:
@@ -85,7 +85,7 @@ def run_cases(cases: Sequence[Case], jobs: int = 1, recordings: Path | None = No
     import concurrent.futures
     import multiprocessing
 
-    from examples.testing.runner import run_case
+    from xabsl_studio.examples.testing.runner import run_case
 
     if jobs <= 1 or len(cases) <= 1:
         return [run_case(case, recordings) for case in cases]
@@ -97,16 +97,16 @@ def run_cases(cases: Sequence[Case], jobs: int = 1, recordings: Path | None = No
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m examples.testing``: the same as ``xabsl test``."""
+    """``python -m xabsl_studio.examples.testing``: the same as ``xabsl test``."""
     parser = argparse.ArgumentParser(prog="xabsl test", description=__doc__.split("\n\n")[0] if __doc__ else None)
     add_arguments(parser)
     return _run(parser.parse_args(argv))
 
 
 def _run(args: argparse.Namespace) -> int:
-    from examples.testing.coverage import Coverage
-    from examples.testing.report import KeywordError, keyword_matcher, write_junit
-    from examples.testing.spec import SpecError
+    from xabsl_studio.examples.testing.coverage import Coverage
+    from xabsl_studio.examples.testing.report import KeywordError, keyword_matcher, write_junit
+    from xabsl_studio.examples.testing.spec import SpecError
 
     try:
         cases = collect(args.paths)

@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
-from engine.ir.model import Program, leaves
-from engine.runtime.activation import Node, OptionNode
+from xabsl_studio.engine.ir.model import Program, leaves
+from xabsl_studio.engine.runtime.activation import Node, OptionNode
 
 __all__ = ["Coverage", "ProgramCoverage"]
 

@@ -1,6 +1,6 @@
 """The temporal assertions of a behavior test, evaluated tick by tick on an engine's public views.
 
-Each :class:`~examples.testing.spec.Expect` becomes a :class:`Monitor`: after every tick the
+Each :class:`~xabsl_studio.examples.testing.spec.Expect` becomes a :class:`Monitor`: after every tick the
 runner hands it a :class:`TickView` (the tick's index and test time, the activation tree from
 ``Engine.activation()``, the engine for symbol values); the monitor decides as early as it can
 (``always`` fails at the first tick the predicate is false, ``eventually`` passes at the first
@@ -15,9 +15,9 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from engine.runtime import Engine
-from engine.runtime.activation import BehaviorNode, Node, OptionNode
-from examples.testing.spec import Expect
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.engine.runtime.activation import BehaviorNode, Node, OptionNode
+from xabsl_studio.examples.testing.spec import Expect
 
 __all__ = ["Failure", "Monitor", "TickView", "path_text", "read_symbol"]
 

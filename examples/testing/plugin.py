@@ -1,7 +1,7 @@
 """The pytest plugin: collects ``*.xabsl-test.toml`` files, one pytest item per ``[[test]]``.
 
-Registered as the ``pytest11`` entry point ``examples.testing.plugin`` (so ``-p
-examples.testing.plugin`` loads the same module once, also before the package is reinstalled).
+Registered as the ``pytest11`` entry point ``xabsl_studio.examples.testing.plugin`` (so ``-p
+xabsl_studio.examples.testing.plugin`` loads the same module once, also before the package is reinstalled).
 A team adds its test folders to ``testpaths`` and runs ``pytest``: each test shows as
 ``FILE::TEST``, a failure prints the assertions that failed with tick and values and the path of
 the recording it left (``--xabsl-recordings DIR``, default ``$TMPDIR/xabsl-test-recordings``).
@@ -17,9 +17,9 @@ from typing import Any
 
 import pytest
 
-from examples.testing.coverage import Coverage
-from examples.testing.runner import CaseResult, run_case
-from examples.testing.spec import SUFFIX, Case, SpecError, load_suite
+from xabsl_studio.examples.testing.coverage import Coverage
+from xabsl_studio.examples.testing.runner import CaseResult, run_case
+from xabsl_studio.examples.testing.spec import SUFFIX, Case, SpecError, load_suite
 
 _RESULTS = pytest.StashKey[list[CaseResult]]()
 

@@ -13,8 +13,8 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
-from engine.files import write_atomically
-from examples.testing.runner import CaseResult
+from xabsl_studio.engine.files import write_atomically
+from xabsl_studio.examples.testing.runner import CaseResult
 
 __all__ = ["KeywordError", "junit_xml", "keyword_matcher", "write_junit"]
 

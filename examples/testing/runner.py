@@ -1,6 +1,6 @@
 """Runs one behavior test: build the world, set it up, run the agent or the forced root, assert tick by tick.
 
-The world comes from the suite's world plug-in (``server.examples.load_example``: the example
+The world comes from the suite's world plug-in (``xabsl_studio.server.examples.load_example``: the example
 folder's ``studio.py``, a world named with ``world =``, else the bench world); its programs are
 compiled once per process. A test's world-specific ``setup`` goes to the plug-in's
 ``arrange(world, setup)`` (:class:`ArrangeableExample`; the soccer world places robots and the
@@ -9,7 +9,7 @@ engine (``engine.root_actions``), timed ``commands`` go to ``CommandableWorld.co
 
 A test ends at its duration, or as soon as every assertion is decided. When one fails and a
 recording folder is given, the test runs again, identically (the world is a pure function of its
-seed and the stimuli), under an ``engine.record.Recorder``: the failing tick of the result is
+seed and the stimuli), under an ``xabsl_studio.engine.record.Recorder``: the failing tick of the result is
 the recording's tick ``seq`` (its tick 0 is the test's first tick).
 """
 
@@ -22,16 +22,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
-from engine.errors import XabslError
-from engine.host import BehaviorLoop, CommandableWorld, World, WorldCommandError
-from engine.ir.model import Program
-from engine.record import Recorder, Recording, RecordingError
-from engine.record.fork import resimulate
-from engine.record.writer import engines_of
-from engine.runtime import Engine
-from examples.testing.coverage import Coverage
-from examples.testing.expect import AssertionSpecError, Failure, Monitor, TickView
-from examples.testing.spec import Case, Expect, Suite
+from xabsl_studio.engine.errors import XabslError
+from xabsl_studio.engine.host import BehaviorLoop, CommandableWorld, World, WorldCommandError
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record import Recorder, Recording, RecordingError
+from xabsl_studio.engine.record.fork import resimulate
+from xabsl_studio.engine.record.writer import engines_of
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.examples.testing.coverage import Coverage
+from xabsl_studio.examples.testing.expect import AssertionSpecError, Failure, Monitor, TickView
+from xabsl_studio.examples.testing.spec import Case, Expect, Suite
 
 __all__ = ["ArrangeableExample", "CaseResult", "TestSetupError", "run_case"]
 
@@ -95,7 +95,7 @@ _PROGRAMS: dict[tuple[str, float], Program] = {}
 
 
 def _plugin(suite: Suite) -> Any:
-    from server.examples import load_example  # the plug-in loader (imports no world itself)
+    from xabsl_studio.server.examples import load_example  # the plug-in loader (imports no world itself)
 
     key = (str(suite.path), suite.world, repr(sorted(suite.options.items())))
     plugin = _PLUGINS.get(key)
@@ -105,7 +105,7 @@ def _plugin(suite: Suite) -> Any:
 
 
 def _program(agents_file: Path) -> Program:
-    from engine.lang import compile_file
+    from xabsl_studio.engine.lang import compile_file
 
     # Keyed by the newest modification time of the behavior's files, so an edited behavior is recompiled.
     stamp = max((p.stat().st_mtime for p in agents_file.parent.rglob("*.xabsl")), default=0.0)

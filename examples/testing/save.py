@@ -21,8 +21,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from engine.runtime.breakpoints import Breakpoint
-from examples.testing.spec import SUFFIX, parse_suite
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint
+from xabsl_studio.examples.testing.spec import SUFFIX, parse_suite
 
 __all__ = ["DraftError", "draft_file_name", "draft_test", "hit_expects", "toml_value"]
 

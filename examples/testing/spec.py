@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from engine.errors import XabslError
+from xabsl_studio.engine.errors import XabslError
 
 __all__ = ["COMPARATORS", "QUANTIFIERS", "Case", "Expect", "SpecError", "Suite", "load_suite", "parse_suite"]
 
@@ -106,7 +106,7 @@ class Case:
 
     Attributes:
         inputs: ``(t_ms, {symbol: value})`` in time order (the ``xabsl trace`` input format).
-        commands: ``(t_ms, name, args)`` world commands (``engine.host.CommandableWorld``).
+        commands: ``(t_ms, name, args)`` world commands (``xabsl_studio.engine.host.CommandableWorld``).
         force: ``("option" | "behavior", name, params)`` forced as root, or None (the agent runs).
         fork: ``(recording path, tick, verify)``: start from that tick of a recording.
     """

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from examples.testing.runner import CaseResult, run_case
-from examples.testing.spec import load_suite
 from tests.behaviortest.conftest import one_test
+from xabsl_studio.examples.testing.runner import CaseResult, run_case
+from xabsl_studio.examples.testing.spec import load_suite
 
 
 def run(write_suite: Callable[..., Path], expect: str, extra: str = "") -> CaseResult:

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from engine.record import Recording
-from engine.runtime.activation import OptionNode
-from examples.testing.cli import collect, main, run_cases
-from examples.testing.report import KeywordError, keyword_matcher
 from tests.behaviortest.conftest import INPUTS
+from xabsl_studio.engine.record import Recording
+from xabsl_studio.engine.runtime.activation import OptionNode
+from xabsl_studio.examples.testing.cli import collect, main, run_cases
+from xabsl_studio.examples.testing.report import KeywordError, keyword_matcher
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -118,13 +118,16 @@ def test_keyword_expressions() -> None:
 
 def test_registered_as_xabsl_test_and_pytest_plugin() -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert project["entry-points"]["xabsl.commands"]["test"] == "examples.testing.cli:register"
-    assert project["entry-points"]["pytest11"]["examples.testing.plugin"] == "examples.testing.plugin"
+    assert project["entry-points"]["xabsl.commands"]["test"] == "xabsl_studio.examples.testing.cli:register"
+    assert (
+        project["entry-points"]["pytest11"]["xabsl_studio.examples.testing.plugin"]
+        == "xabsl_studio.examples.testing.plugin"
+    )
 
 
 def test_module_entry_point_runs(suite: Path, tmp_path: Path) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "examples.testing", str(suite), "-k", "kicks", "-q"],
+        [sys.executable, "-m", "xabsl_studio.examples.testing", str(suite), "-k", "kicks", "-q"],
         capture_output=True,
         text=True,
         cwd=tmp_path,
@@ -137,7 +140,7 @@ def test_module_entry_point_runs(suite: Path, tmp_path: Path) -> None:
 def test_register_adds_the_subcommand(suite: Path) -> None:
     import argparse
 
-    from examples.testing.cli import register
+    from xabsl_studio.examples.testing.cli import register
 
     parser = argparse.ArgumentParser(prog="xabsl")
     register(parser.add_subparsers(dest="command"))
@@ -147,7 +150,7 @@ def test_register_adds_the_subcommand(suite: Path) -> None:
 
 
 def test_the_command_line_names_test_files_as_the_format_does() -> None:
-    # examples.testing.cli keeps its own copy so that registering `xabsl test` loads no TOML.
-    from examples.testing import cli, spec
+    # xabsl_studio.examples.testing.cli keeps its own copy so that registering `xabsl test` loads no TOML.
+    from xabsl_studio.examples.testing import cli, spec
 
     assert cli.SUFFIX == spec.SUFFIX

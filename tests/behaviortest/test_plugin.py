@@ -16,7 +16,9 @@ def test_collects_and_reports(pytester: pytest.Pytester) -> None:
     body += one_test('[[test.expect]]\nnever = true\nbehavior = "kick"').replace('name = "t"', 'name = "no kick"')
     pytester.makefile(".xabsl-test.toml", team=HEAD + body)
     pytester.makefile(".toml", ignored=HEAD + body)  # not a behavior test file name
-    result = pytester.runpytest("-p", "examples.testing.plugin", "-v", "--xabsl-recordings", str(pytester.path / "rec"))
+    result = pytester.runpytest(
+        "-p", "xabsl_studio.examples.testing.plugin", "-v", "--xabsl-recordings", str(pytester.path / "rec")
+    )
     result.assert_outcomes(passed=1, failed=1)
     result.stdout.fnmatch_lines(
         [
@@ -33,6 +35,6 @@ def test_collects_and_reports(pytester: pytest.Pytester) -> None:
 
 def test_bad_file_is_a_collection_error(pytester: pytest.Pytester) -> None:
     pytester.makefile(".xabsl-test.toml", bad=HEAD + "[[test]]\nname = 'x'\n")
-    result = pytester.runpytest("-p", "examples.testing.plugin")
+    result = pytester.runpytest("-p", "xabsl_studio.examples.testing.plugin")
     result.assert_outcomes(errors=1)
     assert "bad.xabsl-test.toml: test 'x': a test needs at least one [[test.expect]] table" in result.stdout.str()

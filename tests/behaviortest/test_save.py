@@ -11,13 +11,13 @@ from pathlib import Path
 import httpx
 import pytest
 
-from engine.runtime.breakpoints import Breakpoint
-from examples.soccer.studio import SoccerExample
-from examples.testing.runner import run_case
-from examples.testing.save import DraftError, draft_file_name, draft_test, hit_expects, toml_value
-from examples.testing.spec import load_suite
-from server.session import Session
 from tests.server.conftest import LiveServer
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint
+from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.examples.testing.runner import run_case
+from xabsl_studio.examples.testing.save import DraftError, draft_file_name, draft_test, hit_expects, toml_value
+from xabsl_studio.examples.testing.spec import load_suite
+from xabsl_studio.server.session import Session
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from examples.testing.spec import SpecError, load_suite, parse_suite
 from tests.behaviortest.conftest import HEAD
+from xabsl_studio.examples.testing.spec import SpecError, load_suite, parse_suite
 
 FILE = Path("/tmp/x.xabsl-test.toml")
 

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from examples.soccer.setup import arrange, setup_from_scene
-from examples.soccer.world import build_world
-from examples.testing.runner import run_case
-from examples.testing.spec import parse_suite
+from xabsl_studio.examples.soccer.setup import arrange, setup_from_scene
+from xabsl_studio.examples.soccer.world import build_world
+from xabsl_studio.examples.testing.runner import run_case
+from xabsl_studio.examples.testing.spec import parse_suite
 
 SOCCER = Path(__file__).resolve().parents[2] / "examples" / "soccer"
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import COMMAND_GROUP, ENGINE_COMMANDS, build_parser, entry_points, load_entry_point, main
+from xabsl_studio.engine.cli import COMMAND_GROUP, ENGINE_COMMANDS, build_parser, entry_points, load_entry_point, main
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -47,7 +47,8 @@ def test_help_lists_engine_and_entry_point_commands(capsys: pytest.CaptureFixtur
 
 def _modules_after(argv: list[str]) -> set[str]:
     code = (
-        f"import sys\nfrom engine.cli import build_parser\nbuild_parser({argv!r})\nprint(' '.join(sorted(sys.modules)))"
+        "import sys\nfrom xabsl_studio.engine.cli import build_parser\n"
+        f"build_parser({argv!r})\nprint(' '.join(sorted(sys.modules)))"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True).stdout
@@ -57,18 +58,25 @@ def _modules_after(argv: list[str]) -> set[str]:
 @pytest.mark.parametrize("argv", [["--help"], ["compile", "--help"], ["trace", "x"]])
 def test_building_the_parser_imports_nothing_heavy(argv: list[str]) -> None:
     modules = _modules_after(argv)
-    heavy = {"engine.lang", "engine.ir", "engine.emit.ic", "engine.runtime", "orjson", "importlib.metadata"}
+    heavy = {
+        "xabsl_studio.engine.lang",
+        "xabsl_studio.engine.ir",
+        "xabsl_studio.engine.emit.ic",
+        "xabsl_studio.engine.runtime",
+        "orjson",
+        "importlib.metadata",
+    }
     assert modules & heavy == set()
     if argv == ["--help"]:  # not even these (trace imports typing for its annotations)
         assert modules & {"logging", "typing", "shutil", "json"} == set()
     # only the named engine subcommand's module is imported
-    commands = {f"engine.cli.{name}" for name in ENGINE_COMMANDS}
-    assert modules & commands == ({f"engine.cli.{argv[0]}"} if argv[0] in ENGINE_COMMANDS else set())
+    commands = {f"xabsl_studio.engine.cli.{name}" for name in ENGINE_COMMANDS}
+    assert modules & commands == ({f"xabsl_studio.engine.cli.{argv[0]}"} if argv[0] in ENGINE_COMMANDS else set())
     # an engine subcommand needs no entry point: the server's and the examples' modules stay out
     if argv[0] != "--help":
-        assert not {"server.cli", "examples.cli"} & modules
+        assert not {"xabsl_studio.server.cli", "xabsl_studio.examples.cli"} & modules
     else:
-        assert {"server.cli", "examples.cli"} <= modules
+        assert {"xabsl_studio.server.cli", "xabsl_studio.examples.cli"} <= modules
 
 
 def test_the_command_table_gives_each_module_s_own_help() -> None:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
 from tests.kit import KIT
+from xabsl_studio.engine.cli import main
 
 DEMO = Path(__file__).resolve().parents[2] / "examples" / "demo" / "agents.xabsl"
 
@@ -63,14 +63,18 @@ def test_json_format(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_missing_file_is_one_line_exit_2() -> None:
     result = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "compile", "no/such/agents.xabsl"], capture_output=True, text=True
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "compile", "no/such/agents.xabsl"],
+        capture_output=True,
+        text=True,
     )
     assert result.returncode == 2
     assert result.stderr.strip() == "xabsl compile: no such file: no/such/agents.xabsl"
 
 
 def test_usage_error_exit_2() -> None:
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "compile"], capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "compile"], capture_output=True, text=True
+    )
     assert result.returncode == 2 and "AGENTS_FILE" in result.stderr
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
+from xabsl_studio.engine.cli import main
 
 ERRANDS = Path(__file__).resolve().parents[2] / "examples" / "errands" / "pddl"
 DOMAIN, PROBLEM = str(ERRANDS / "domain.pddl"), str(ERRANDS / "problem.pddl")
@@ -69,7 +69,7 @@ def test_missing_file_exits_2(capsys):
 def test_unreadable_inputs_exit_2_with_one_line(tmp_path, capsys, kind):
     import os
 
-    from engine.planning.strips import MAX_PDDL_BYTES
+    from xabsl_studio.engine.planning.strips import MAX_PDDL_BYTES
 
     path = tmp_path / "p.pddl"
     if kind == "/dev/zero":

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
 from tests.kit import KIT
+from xabsl_studio.engine.cli import main
 
 
 @pytest.fixture

@@ -9,14 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
-from engine.docs import GraphLayoutError, build, write
-from engine.docs.graphs import render_all
-from engine.docs.xref import cross_references
-from engine.ir.ic_reader import read_ic_file
-from engine.lang import Compilation
 from tests.docs.sitecheck import broken_links, read_site
 from tests.kit import KIT
+from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.docs import GraphLayoutError, build, write
+from xabsl_studio.engine.docs.graphs import render_all
+from xabsl_studio.engine.docs.xref import cross_references
+from xabsl_studio.engine.ir.ic_reader import read_ic_file
+from xabsl_studio.engine.lang import Compilation
 
 SOURCES = {
     "agents.xabsl": '/*** Title: Tiny <set> & co */\ninclude "s.xabsl"; include "b.xabsl"; include "o.xabsl";\n'

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import pytest
 
-from engine import ir
-from engine.docs import generate
-from engine.docs.xref import own_decision
-from engine.emit.dot import reachable_options
-from engine.lang import compile_file
 from tests.docs.sitecheck import SVG, XLINK, Page, broken_links, read_site, search_index, svg_nodes
 from tests.kit import KIT, SETS
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.docs import generate
+from xabsl_studio.engine.docs.xref import own_decision
+from xabsl_studio.engine.emit.dot import reachable_options
+from xabsl_studio.engine.lang import compile_file
 
 ROOT = Path(__file__).resolve().parents[2]
 BEHAVIORS = {

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from server.app import create_app
-from server.bench_world import BenchExample
-from server.docs import DocsCache
-from server.session import Session
+from xabsl_studio.server.app import create_app
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.docs import DocsCache
+from xabsl_studio.server.session import Session
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from engine.dynamics.expr import (
+from xabsl_studio.engine.dynamics.expr import (
     RUNTIME,
     Binary,
     ExprError,

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.dynamics.model import load_model
-from engine.dynamics.system import DDSystem
+from xabsl_studio.engine.dynamics.model import load_model
+from xabsl_studio.engine.dynamics.system import DDSystem
 
 MODEL_PATH = Path(__file__).resolve().parents[2] / "examples" / "errands" / "model" / "errands_dd.json"
 

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.dynamics.model import ModelError, build_model, load_model
+from xabsl_studio.engine.dynamics.model import ModelError, build_model, load_model
 
 MODEL_PATH = Path(__file__).resolve().parents[2] / "examples/errands/model/errands_dd.json"
 RAW = json.loads(MODEL_PATH.read_text(encoding="utf-8"))
@@ -293,8 +293,8 @@ def test_a_model_path_that_is_not_a_regular_file_is_a_model_error(tmp_path):
 
 
 def test_xabsl_run_errands_reports_a_broken_model_without_a_traceback(tmp_path, monkeypatch, capsys):
-    import examples.errands.world as world
-    from engine.cli import main
+    import xabsl_studio.examples.errands.world as world
+    from xabsl_studio.engine.cli import main
 
     broken = _write(tmp_path, _edit_drive("(" * 163 + "1" + ")" * 163))
     monkeypatch.setattr(world, "_model", lambda path, dt: load_model(broken, dt=dt))

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from engine.dynamics.model import ModelError, load_model
-from engine.dynamics.system import DDSystem
+from xabsl_studio.engine.dynamics.model import ModelError, load_model
+from xabsl_studio.engine.dynamics.system import DDSystem
 
 MODEL_PATH = Path(__file__).resolve().parents[2] / "examples/errands/model/errands_dd.json"
 DT = 0.02

@@ -137,7 +137,7 @@ def studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     # The copy says how the studio runs it as any example folder does: a studio.py (here the
     # soccer plug-in's factory, applied to the copy; the world's code comes from the package).
     (example / "studio.py").write_text(
-        '"""The soccer world plug-in."""\n\nfrom examples.soccer.studio import example\n'
+        '"""The soccer world plug-in."""\n\nfrom xabsl_studio.examples.soccer.studio import example\n'
     )
     with serving(example, root) as server:
         yield server

@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 
-from engine.cli import main
 from tests.e2e.conftest import StudioServer, screenshot, watched_tab
+from xabsl_studio.engine.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -27,7 +27,9 @@ def errands(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
     example.mkdir()
     shutil.copytree(REPO / "examples" / "errands" / "behavior", example / "behavior")
     shutil.copytree(REPO / "examples" / "errands" / "model", example / "model")
-    (example / "studio.py").write_text('"""The errands plug-in."""\n\nfrom examples.errands.studio import example\n')
+    (example / "studio.py").write_text(
+        '"""The errands plug-in."""\n\nfrom xabsl_studio.examples.errands.studio import example\n'
+    )
     with serving(example, root) as server:
         yield server
 

@@ -15,9 +15,9 @@ from typing import Any
 
 import pytest
 
-from engine.cli import main
 from tests.e2e.conftest import screenshot, watched_tab
 from tests.profile.conftest import record
+from xabsl_studio.engine.cli import main
 
 
 @pytest.fixture(scope="module")

@@ -11,9 +11,9 @@ from typing import Any
 
 import pytest
 
-from engine.cli import main
-from engine.record import Recording
 from tests.e2e.conftest import REPO, StudioServer, screenshot, serving, studio_tab
+from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.record import Recording
 
 STUDIO = "window.xabslStudio"
 FORK_AT = 700  # into PLAYING (pre-game is about 16 s)
@@ -28,7 +28,7 @@ def live_studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Stud
     for name in ("behavior", "chase"):
         shutil.copytree(REPO / "examples" / "soccer" / name, example / name)
     (example / "studio.py").write_text(
-        '"""The soccer world plug-in."""\n\nfrom examples.soccer.studio import example\n'
+        '"""The soccer world plug-in."""\n\nfrom xabsl_studio.examples.soccer.studio import example\n'
     )
     recordings = root / "recordings"  # the record folder StudioServer passes to xabsl serve
     recordings.mkdir()

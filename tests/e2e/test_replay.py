@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from engine.record import Recording
 from tests.e2e.conftest import REPO, StudioServer, screenshot, serving, studio_tab
+from xabsl_studio.engine.record import Recording
 
 STUDIO = "window.xabslStudio"
 
@@ -21,7 +21,17 @@ STUDIO = "window.xabslStudio"
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("replay-e2e") / "match.mcap"
-    command = [sys.executable, "-m", "engine.cli", "run", "examples/soccer", "--duration", "20", "--players", "2"]
+    command = [
+        sys.executable,
+        "-m",
+        "xabsl_studio.engine.cli",
+        "run",
+        "examples/soccer",
+        "--duration",
+        "20",
+        "--players",
+        "2",
+    ]
     env = dict(os.environ, PYTHONPATH=str(REPO))
     subprocess.run([*command, "--record", str(path)], cwd=REPO, env=env, check=True, capture_output=True)
     return path

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from examples.testing.runner import run_case
-from examples.testing.spec import load_suite
 from tests.e2e.conftest import StudioServer
+from xabsl_studio.examples.testing.runner import run_case
+from xabsl_studio.examples.testing.spec import load_suite
 
 
 def test_save_as_test_writes_a_suite_that_passes(page: Any, studio: StudioServer) -> None:

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from examples.testing.runner import run_case
-from examples.testing.spec import load_suite
 from tests.e2e.conftest import StudioServer, screenshot
 from tests.e2e.test_breakpoints import (  # noqa: F401 (state_dir: the autouse private state folder)
     STUDIO,
@@ -16,6 +14,8 @@ from tests.e2e.test_breakpoints import (  # noqa: F401 (state_dir: the autouse p
     run_until_hit,
     state_dir,
 )
+from xabsl_studio.examples.testing.runner import run_case
+from xabsl_studio.examples.testing.spec import load_suite
 
 
 def test_save_as_test_from_a_hit_writes_a_test_that_passes(page: Any, studio: StudioServer) -> None:

@@ -6,10 +6,10 @@ import re
 
 import pytest
 
-from engine import ir
-from engine.emit.dot import option_graph, reachable_options, render_svg, state_machine
-from engine.lang import compile_file
 from tests.kit import KIT, SETS
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.emit.dot import option_graph, reachable_options, render_svg, state_machine
+from xabsl_studio.engine.lang import compile_file
 
 
 def program(name: str) -> ir.Program:

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import re
 
-from engine.emit.dot import state_machine
 from tests.emit.test_dot import program
+from xabsl_studio.engine.emit.dot import state_machine
 
 
 def test_labels_name_the_deciding_conditions_and_tooltips_the_whole_path() -> None:

@@ -11,13 +11,13 @@ from collections.abc import Callable
 
 import pytest
 
-from engine import ir
-from engine.emit.ic import emit_ic
-from engine.emit.json import program_to_json, render_expression
-from engine.ir.ic_reader import ICError, read_ic
-from engine.lang import Compilation
-from engine.types import Kind
 from tests.lang.dotted import sources
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.emit.json import program_to_json, render_expression
+from xabsl_studio.engine.ir.ic_reader import ICError, read_ic
+from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.types import Kind
 
 Compile = Callable[..., Compilation]
 

@@ -6,8 +6,8 @@ from collections.abc import Callable
 
 import pytest
 
-from engine.emit.ic import emit_ic, format_number
-from engine.lang import Compilation
+from xabsl_studio.engine.emit.ic import emit_ic, format_number
+from xabsl_studio.engine.lang import Compilation
 
 SYMBOLS = """namespace s("S") {
   enum mode { idle, walk };

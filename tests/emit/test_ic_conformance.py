@@ -6,9 +6,9 @@ import os
 
 import pytest
 
-from engine.emit.ic import emit_ic
-from engine.lang import compile_file
 from tests.kit import KIT, SETS
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.lang import compile_file
 
 
 @pytest.mark.parametrize("name", SETS)

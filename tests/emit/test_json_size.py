@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from engine.emit.json import dumps, program_to_json
-from engine.lang import compile_file
+from xabsl_studio.engine.emit.json import dumps, program_to_json
+from xabsl_studio.engine.lang import compile_file
 
 
 def _chain(folder: Path, n: int) -> int:

@@ -19,9 +19,9 @@ from functools import cache
 
 import pytest
 
-from engine.dynamics.model import ModelError
-from examples.errands.run import perturb
-from examples.errands.world import ErrandsWorld, build_world, run_world, summary
+from xabsl_studio.engine.dynamics.model import ModelError
+from xabsl_studio.examples.errands.run import perturb
+from xabsl_studio.examples.errands.world import ErrandsWorld, build_world, run_world, summary
 
 SEEDS = tuple(range(1, 21))
 NO_PLAN_SEEDS = (1, 2, 3, 4, 5)

@@ -10,9 +10,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from engine.host import WorldCommandError
-from examples.errands import model_edit
-from examples.errands.world import MODEL_PATH
+from xabsl_studio.engine.host import WorldCommandError
+from xabsl_studio.examples.errands import model_edit
+from xabsl_studio.examples.errands.world import MODEL_PATH
 
 RAW = json.loads(MODEL_PATH.read_text(encoding="utf-8"))
 

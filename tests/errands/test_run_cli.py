@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from engine.cli import main
+from xabsl_studio.engine.cli import main
 
 
 def test_json_prints_one_line_with_the_outcome(capsys):

@@ -7,14 +7,14 @@ import math
 import orjson
 import pytest
 
-from engine.host import Agent, World
-from engine.lang import compile_file
-from engine.planning.monitor import PlanBoard
-from engine.planning.strips import load_task
-from examples.errands.arena import Arena, Box
-from examples.errands.facts import Truth, truth_facts
-from examples.errands.plan import errands_board
-from examples.errands.world import AGENTS_PATH, DOMAIN_PATH, PROBLEM_PATH, build_world, run_world
+from xabsl_studio.engine.host import Agent, World
+from xabsl_studio.engine.lang import compile_file
+from xabsl_studio.engine.planning.monitor import PlanBoard
+from xabsl_studio.engine.planning.strips import load_task
+from xabsl_studio.examples.errands.arena import Arena, Box
+from xabsl_studio.examples.errands.facts import Truth, truth_facts
+from xabsl_studio.examples.errands.plan import errands_board
+from xabsl_studio.examples.errands.world import AGENTS_PATH, DOMAIN_PATH, PROBLEM_PATH, build_world, run_world
 
 # -- arena sensors ----------------------------------------------------------------------------------
 

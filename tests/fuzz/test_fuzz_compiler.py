@@ -16,10 +16,10 @@ from pathlib import Path
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.cli import main
-from engine.lang import compile_file
 from tests.fuzz.probes import fuzz_settings, mutate_many, time_bound
 from tests.kit import KIT, SETS
+from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.lang import compile_file
 
 SOURCES = {name: {p.relative_to(KIT / name): p.read_bytes() for p in (KIT / name).rglob("*.xabsl")} for name in SETS}
 

@@ -10,8 +10,8 @@ from pathlib import Path
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.dynamics.model import ModelError, load_model
 from tests.fuzz.probes import fuzz_settings, mutate_many, splice_odd_value, time_bound
+from xabsl_studio.engine.dynamics.model import ModelError, load_model
 
 MODEL = Path(__file__).resolve().parents[2] / "examples" / "errands" / "model" / "errands_dd.json"
 RAW = MODEL.read_bytes()
@@ -42,7 +42,7 @@ def test_mutated_models_load_or_raise_model_error(rnd: random.Random) -> None:
 def test_mutated_model_texts_in_the_studio_give_diagnostics(rnd: random.Random) -> None:
     from types import SimpleNamespace
 
-    from examples.errands import model_edit
+    from xabsl_studio.examples.errands import model_edit
 
     if rnd.random() < 0.6:
         text = splice_odd_value(DOCUMENT, rnd)

@@ -11,8 +11,8 @@ from pathlib import Path
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.cli import main
 from tests.fuzz.probes import fuzz_settings, mutate_many, time_bound
+from xabsl_studio.engine.cli import main
 
 PDDL = Path(__file__).resolve().parents[2] / "examples" / "errands" / "pddl"
 FILES = {"domain": (PDDL / "domain.pddl").read_bytes(), "problem": (PDDL / "problem.pddl").read_bytes()}

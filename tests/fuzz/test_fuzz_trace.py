@@ -14,9 +14,9 @@ from typing import Any
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.cli import main
 from tests.fuzz.probes import fuzz_settings, mutate_many, splice_odd_value, time_bound
 from tests.kit import KIT, SETS
+from xabsl_studio.engine.cli import main
 
 TRACED = [name for name in SETS if (KIT / name / "in.jsonl").is_file() and (KIT / name / "expected.ic").is_file()]
 #: Sets whose IC needs the declarations from the sources (enum order, input parameter order).

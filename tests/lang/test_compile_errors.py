@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine.lang import compile_file
 from tests.kit import ERROR_CASES, KIT, expected_error
+from xabsl_studio.engine.lang import compile_file
 
 
 @pytest.mark.parametrize("case", ERROR_CASES)

@@ -1,6 +1,6 @@
 """One broken snippet per diagnostic code: each asserts the file, line, column and code.
 
-The table covers every code of :data:`engine.lang.diagnostics.CODES`, so a new code without a
+The table covers every code of :data:`xabsl_studio.engine.lang.diagnostics.CODES`, so a new code without a
 test fails ``test_every_code_has_a_case``.
 """
 
@@ -10,8 +10,8 @@ from collections.abc import Callable
 
 import pytest
 
-from engine.lang import Compilation
-from engine.lang.diagnostics import CODES, Severity
+from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.lang.diagnostics import CODES, Severity
 
 DEFS = """namespace defs("Definitions") {
   enum color { red, green };

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from engine import ir
-from engine.lang import Compilation
-from engine.types import Kind
 from tests.lang.dotted import GUARD, KEEPER, sources
+from xabsl_studio.engine import ir
+from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.types import Kind
 
 Compile = Callable[..., Compilation]
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from engine.lang import compile_file
+from xabsl_studio.engine.lang import compile_file
 
 SYMBOLS = 'namespace s("S") {{ float output {name}; }}\n'
 OPTION = "option o {{ initial state s {{ action {{ {name} = 1; }} }} }}\n"

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from engine.lang import ast
-from engine.lang.diagnostics import Diagnostics
-from engine.lang.parser import parse_file
+from xabsl_studio.engine.lang import ast
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.lang.parser import parse_file
 
 
 def parse(text: str) -> tuple[ast.SourceFile, Diagnostics]:

@@ -40,12 +40,12 @@ from typing import TypeVar
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from engine.emit.ic import emit_ic
-from engine.lang import Compilation, compile_file
-from engine.lang.diagnostics import CODES, Diagnostics
-from engine.lang.tokens import TokenType, tokenize
-from engine.types import Span
 from tests.kit import KIT, SETS
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.lang import Compilation, compile_file
+from xabsl_studio.engine.lang.diagnostics import CODES, Diagnostics
+from xabsl_studio.engine.lang.tokens import TokenType, tokenize
+from xabsl_studio.engine.types import Span
 
 # --------------------------------------------------------------------------------------------
 # expression trees and their printer

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from engine.lang import Compilation
+from xabsl_studio.engine.lang import Compilation
 
 SYMBOLS = 'namespace s("S") { float output x; }\n'
 
@@ -78,7 +78,7 @@ def test_options_differing_only_in_case_are_ordered_independently_of_include_ord
     # __init__.compile_file sorts options by name.lower() only; the tie keeps the include order,
     # so the IC (option order, hence option indices) changes when include lines are swapped.
     # Same for internal symbols / internal enums sorted by lower-cased name in emit.ic.
-    from engine.emit.ic import emit_ic
+    from xabsl_studio.engine.emit.ic import emit_ic
 
     options = {
         "Foo.xabsl": "option Foo { initial state s { action { } } }\n",
@@ -110,7 +110,7 @@ def _chain_option(levels: int, common: bool = False) -> str:
 
 
 def test_decision_trees_nest_up_to_the_limit(compile_sources: Callable[..., Compilation]) -> None:
-    from engine.lang.parser import MAX_DECISION_DEPTH
+    from xabsl_studio.engine.lang.parser import MAX_DECISION_DEPTH
 
     compilation = compile_sources(
         {"agents.xabsl": 'include "o.xabsl";\nagent a("A", o);\n', "o.xabsl": _chain_option(MAX_DECISION_DEPTH)}
@@ -121,7 +121,7 @@ def test_decision_trees_nest_up_to_the_limit(compile_sources: Callable[..., Comp
 def test_a_13000_deep_else_if_chain_fails_fast_at_the_limit(compile_sources: Callable[..., Compilation]) -> None:
     # Issue 18: the parser recursed to the recursion limit (~12,000 levels, 1.3 s of CPU) before
     # "nesting too deep"; it must stop at the limit's first level too many, and say only that.
-    from engine.lang.parser import MAX_DECISION_DEPTH
+    from xabsl_studio.engine.lang.parser import MAX_DECISION_DEPTH
 
     compilation = compile_sources({"o.xabsl": _chain_option(13_000)})
     (error,) = compilation.diagnostics
@@ -131,7 +131,7 @@ def test_a_13000_deep_else_if_chain_fails_fast_at_the_limit(compile_sources: Cal
 
 
 def test_a_deep_common_decision_chain_fails_at_the_limit(compile_sources: Callable[..., Compilation]) -> None:
-    from engine.lang.parser import MAX_DECISION_DEPTH
+    from xabsl_studio.engine.lang.parser import MAX_DECISION_DEPTH
 
     (error,) = compile_sources({"o.xabsl": _chain_option(5_000, common=True)}).diagnostics
     assert error.code == "nesting-too-deep"
@@ -139,7 +139,7 @@ def test_a_deep_common_decision_chain_fails_at_the_limit(compile_sources: Callab
 
 
 def test_expressions_nest_up_to_the_limit_and_not_beyond(compile_sources: Callable[..., Compilation]) -> None:
-    from engine.lang.parser import MAX_EXPRESSION_DEPTH
+    from xabsl_studio.engine.lang.parser import MAX_EXPRESSION_DEPTH
 
     agents = {"agents.xabsl": 'include "o.xabsl";\nagent a("A", o);\n'}
     # the condition itself is one level: MAX - 1 parentheses and unary operators around `true`

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from engine.lang.diagnostics import Diagnostics
-from engine.lang.tokens import KEYWORDS, TokenType, doc_text, tokenize
+from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.lang.tokens import KEYWORDS, TokenType, doc_text, tokenize
 
 
 def lex(text: str) -> tuple[list[tuple[str, str]], Diagnostics]:

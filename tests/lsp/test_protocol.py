@@ -7,8 +7,8 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from engine.lang import compile_file
 from tests.lsp.client import ROOT, LspClient, position, uri
+from xabsl_studio.engine.lang import compile_file
 
 
 def labels(result: Any) -> list[str]:
@@ -312,7 +312,7 @@ def test_semantic_tokens_and_folding(client: LspClient, demo: Path) -> None:
         decoded.append((line, char, length, kind))
     lines = text.split("\n")
     words = {lines[ln][c : c + n]: k for ln, c, n, k in decoded}
-    from lsp.server import TOKEN_TYPES
+    from xabsl_studio.lsp.server import TOKEN_TYPES
 
     assert TOKEN_TYPES[words["option"]] == "keyword"
     assert TOKEN_TYPES[words["approach_ball"]] == "class"

@@ -12,11 +12,11 @@ import pytest
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
-from server.bench_world import BenchExample
-from server.security import SecurityPolicy
-from server.session import Session
 from tests.lsp.client import ROOT
 from tests.server.conftest import LiveServer
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.security import SecurityPolicy
+from xabsl_studio.server.session import Session
 
 
 @pytest.fixture

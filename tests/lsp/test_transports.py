@@ -18,9 +18,9 @@ from tests.lsp.client import ROOT
 
 def test_the_subcommand_is_registered_through_the_entry_point_group() -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    assert project["project"]["entry-points"]["xabsl.commands"]["lsp"] == "lsp.cli:register"
+    assert project["project"]["entry-points"]["xabsl.commands"]["lsp"] == "xabsl_studio.lsp.cli:register"
     assert any(d.startswith("pygls") for d in project["project"]["dependencies"])
-    from lsp.cli import register, run
+    from xabsl_studio.lsp.cli import register, run
 
     parser = argparse.ArgumentParser()
     register(parser.add_subparsers(dest="command"))
@@ -29,7 +29,9 @@ def test_the_subcommand_is_registered_through_the_entry_point_group() -> None:
 
 
 def test_engine_imports_without_pygls() -> None:
-    code = "import sys; sys.modules['pygls'] = None; import engine.lang, engine.cli; print('ok')"
+    code = (
+        "import sys; sys.modules['pygls'] = None; import xabsl_studio.engine.lang, xabsl_studio.engine.cli; print('ok')"
+    )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
     assert out.stdout.strip() == "ok", out.stderr

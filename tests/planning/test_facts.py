@@ -1,6 +1,6 @@
 import pytest
 
-from engine.planning.facts import FactDeriver, FactRule, FactRuleError, Term, errands_rules
+from xabsl_studio.engine.planning.facts import FactDeriver, FactRule, FactRuleError, Term, errands_rules
 
 DT = 0.02
 INIT = {"at-robot a", "at book b", "at mug c"}
@@ -192,8 +192,8 @@ def test_event_log_and_reset(deriver):
 def test_errands_rules_read_only_signals_the_dd_model_publishes():
     from pathlib import Path
 
-    from engine.dynamics.model import load_model
-    from engine.dynamics.system import DDSystem
+    from xabsl_studio.engine.dynamics.model import load_model
+    from xabsl_studio.engine.dynamics.system import DDSystem
 
     path = Path(__file__).resolve().parents[2] / "examples/errands/model/errands_dd.json"
     dd = DDSystem(load_model(path))

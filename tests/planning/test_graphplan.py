@@ -2,8 +2,8 @@ from pathlib import Path
 
 import pytest
 
-from engine.planning.graphplan import execute, format_stats, graphplan
-from engine.planning.strips import load_task, parse_task
+from xabsl_studio.engine.planning.graphplan import execute, format_stats, graphplan
+from xabsl_studio.engine.planning.strips import load_task, parse_task
 
 # Copies of /work/shared/data/errands so the tests do not depend on files outside the repository.
 DATA = Path(__file__).parent / "data"

@@ -1,11 +1,11 @@
-"""The plan board (engine.planning.monitor): the queue an XABSL plan monitor reads, and replanning."""
+"""The plan board (xabsl_studio.engine.planning.monitor): the queue an XABSL plan monitor reads, and replanning."""
 
 from pathlib import Path
 
 import pytest
 
-from engine.planning.monitor import PlanBoard
-from engine.planning.strips import Fact, load_task
+from xabsl_studio.engine.planning.monitor import PlanBoard
+from xabsl_studio.engine.planning.strips import Fact, load_task
 
 # Copies of /work/shared/data/errands so the tests do not depend on files outside the repository.
 DATA = Path(__file__).parent / "data"

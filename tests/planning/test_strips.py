@@ -2,7 +2,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.planning.strips import (
+from xabsl_studio.engine.planning.strips import (
     PlanningError,
     UnsupportedPDDLError,
     fact,
@@ -95,7 +95,7 @@ def test_construct_check_independent_of_requirements():
     from pddl.parser.domain import DomainParser
     from pddl.parser.problem import ProblemParser
 
-    from engine.planning.strips import ground
+    from xabsl_studio.engine.planning.strips import ground
 
     dom = DomainParser()(DOMAIN)
     goto = next(a for a in dom.actions if a.name == "goto")

@@ -15,9 +15,9 @@ from typing import Any
 
 import pytest
 
-from engine.profile import ProfileError, profile
-from engine.record import Recording
 from tests.profile.conftest import record
+from xabsl_studio.engine.profile import ProfileError, profile
+from xabsl_studio.engine.record import Recording
 
 
 def _profile(path: Path, **options: Any) -> dict[str, Any]:

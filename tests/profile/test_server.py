@@ -10,10 +10,10 @@ import orjson
 import pytest
 from fastapi.testclient import TestClient
 
-from server.app import create_app
-from server.bench_world import BenchExample
-from server.session import Session
 from tests.profile.conftest import FILES
+from xabsl_studio.server.app import create_app
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.session import Session
 
 
 @pytest.fixture

@@ -8,11 +8,11 @@ from typing import Any
 
 import pytest
 
-from engine.host import BehaviorLoop
-from engine.profile import profile
-from engine.record import Recorder, Recording
-from engine.runtime import OptionNode
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
+from xabsl_studio.engine.host import BehaviorLoop
+from xabsl_studio.engine.profile import profile
+from xabsl_studio.engine.record import Recorder, Recording
+from xabsl_studio.engine.runtime import OptionNode
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 TICKS = 1000  # pre-game (about 16 s at 40 Hz is 640 ticks) and some play
 

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from engine.host import BehaviorLoop
-from engine.record import Recorder, Recording, RecordingError
-from engine.record.fork import resimulate, switch_programs
-from engine.record.writer import engines_of
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
+from xabsl_studio.engine.host import BehaviorLoop
+from xabsl_studio.engine.record import Recorder, Recording, RecordingError
+from xabsl_studio.engine.record.fork import resimulate, switch_programs
+from xabsl_studio.engine.record.writer import engines_of
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 TICKS = 800  # into PLAYING (pre-game is about 16 s = 640 ticks)
 FORK_AT = 700

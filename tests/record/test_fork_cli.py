@@ -14,12 +14,12 @@ import orjson
 import pytest
 from mcap.reader import make_reader
 
-from engine.cli import main
-from engine.host import BehaviorLoop
-from engine.record import Recorder, Recording
-from engine.record import schema as S
-from examples.soccer.run import build_world
 from tests.record.test_recordings import _validate_all
+from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.host import BehaviorLoop
+from xabsl_studio.engine.record import Recorder, Recording
+from xabsl_studio.engine.record import schema as S
+from xabsl_studio.examples.soccer.run import build_world
 
 ROOT = Path(__file__).resolve().parents[2]
 SOCCER = ROOT / "examples" / "soccer"

@@ -10,7 +10,7 @@ from mcap.reader import make_reader
 from mcap.records import Chunk, DataEnd, Footer, Message, MessageIndex, Statistics
 from mcap.stream_reader import StreamReader, breakup_chunk
 
-from engine.record.mcapfile import McapWriter
+from xabsl_studio.engine.record.mcapfile import McapWriter
 
 
 def _file(chunk_size: int, messages: int = 500, compress: bool = True) -> tuple[bytes, list[tuple[int, int, bytes]]]:

@@ -6,11 +6,11 @@ import json
 import textwrap
 from typing import Any
 
-from engine.ir.ic_reader import read_ic
-from engine.ir.model import Program
-from engine.runtime import Engine, Policy
-from engine.trace.conformance import conformance_bindings
-from engine.types import Value
+from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime import Engine, Policy
+from xabsl_studio.engine.trace.conformance import conformance_bindings
+from xabsl_studio.engine.types import Value
 
 
 def ic(text: str) -> Program:

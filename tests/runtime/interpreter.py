@@ -12,8 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from engine.ir import model as ir
-from engine.types import Kind
+from xabsl_studio.engine.ir import model as ir
+from xabsl_studio.engine.types import Kind
 
 MASK = 0xFFFFFFFF
 GROUP = {Kind.DECIMAL: 0, Kind.BOOLEAN: 1, Kind.ENUM: 2}

@@ -6,12 +6,12 @@ from pathlib import Path
 
 import pytest
 
-from engine.ir.model import Program
-from engine.lang import compile_file
-from engine.lang.condition import check_condition
-from engine.runtime import Engine
-from engine.runtime.breakpoints import Breakpoint, BreakpointError, BreakpointSet, check_breakpoint
-from engine.trace.conformance import conformance_bindings
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.lang import compile_file
+from xabsl_studio.engine.lang.condition import check_condition
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint, BreakpointError, BreakpointSet, check_breakpoint
+from xabsl_studio.engine.trace.conformance import conformance_bindings
 
 SYMBOLS = """
 namespace world("World") {

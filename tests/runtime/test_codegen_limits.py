@@ -6,9 +6,9 @@ from collections.abc import Callable
 
 import pytest
 
-from engine.lang import Compilation
-from engine.runtime import LoadError
 from tests.runtime.helpers import Host
+from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.runtime import LoadError
 
 SYMBOLS = 'namespace s("S") { float input a; float output o; }\n'
 AGENTS = 'include "s.xabsl";\ninclude "o.xabsl";\nagent x("X", o);\n'

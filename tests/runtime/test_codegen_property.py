@@ -14,11 +14,11 @@ from typing import Any
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from engine.ir import model as ir
-from engine.runtime import Engine
-from engine.trace.conformance import conformance_bindings
-from engine.types import Kind
 from tests.runtime.interpreter import Interpreter
+from xabsl_studio.engine.ir import model as ir
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.engine.trace.conformance import conformance_bindings
+from xabsl_studio.engine.types import Kind
 
 NUMBERS = [0.0, -0.0, 1.0, -2.5, 0.0, 3.0, 100.0, 0.1, 1e-7, 7.0]
 D, B = Kind.DECIMAL, Kind.BOOLEAN

@@ -12,10 +12,10 @@ from typing import Any
 
 import pytest
 
-from engine.lang import compile_file
-from engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE, BehaviorNode, OptionNode
-from engine.trace.conformance import TraceRunner
 from tests.kit import KIT, SETS
+from xabsl_studio.engine.lang import compile_file
+from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE, BehaviorNode, OptionNode
+from xabsl_studio.engine.trace.conformance import TraceRunner
 
 
 def flatten(program: Any, nodes: list[Any], depth: int = 0) -> list[list[Any]]:

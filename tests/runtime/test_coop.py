@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from engine.runtime.coop import TeamMessage
 from tests.runtime.helpers import Host, ic
+from xabsl_studio.engine.runtime.coop import TeamMessage
 
 TEAM = """
 0 0 1 team 0

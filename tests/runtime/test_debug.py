@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine.runtime import DebugError, Debugger, ValueConversionError
 from tests.runtime.helpers import Host, ic
+from xabsl_studio.engine.runtime import DebugError, Debugger, ValueConversionError
 
 PROGRAM = """
 0 0 2 child 1 d child.v main 0

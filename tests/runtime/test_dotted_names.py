@@ -12,16 +12,16 @@ from typing import ClassVar
 
 import pytest
 
-from engine.emit.ic import emit_ic
-from engine.ir.ic_reader import read_ic
-from engine.ir.model import Program
-from engine.lang import Compilation
-from engine.runtime import Engine
-from engine.runtime.activation import BehaviorNode, OptionNode
-from engine.runtime.bindings import BasicBehavior
-from engine.trace.conformance import conformance_bindings
-from engine.types import Kind, Value
 from tests.lang.dotted import sources
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.runtime import Engine
+from xabsl_studio.engine.runtime.activation import BehaviorNode, OptionNode
+from xabsl_studio.engine.runtime.bindings import BasicBehavior
+from xabsl_studio.engine.trace.conformance import conformance_bindings
+from xabsl_studio.engine.types import Kind, Value
 
 
 class Dive(BasicBehavior):
@@ -105,8 +105,8 @@ def test_forced_basic_behavior_and_option_take_dotted_parameter_names(program: P
 def test_the_debugger_writes_dotted_parameters_and_elements_whole() -> None:
     # "why" renders an operand from the IR when the condition's text cannot be cut: the option's
     # prefix goes, the parameter's own dots stay (it used to say "@y" for "@offset.y").
-    from engine.ir.model import Argument, EnumLiteral, InputRef, ParameterRef
-    from engine.runtime.debug import render
+    from xabsl_studio.engine.ir.model import Argument, EnumLiteral, InputRef, ParameterRef
+    from xabsl_studio.engine.runtime.debug import render
 
     assert render(ParameterRef("offset_walk.offset.y", Kind.DECIMAL), "offset_walk") == "@offset.y"
     call = InputRef(

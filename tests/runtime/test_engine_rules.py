@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine.runtime import Bindings, Engine
 from tests.runtime.helpers import Host, ic
+from xabsl_studio.engine.runtime import Bindings, Engine
 
 # -- §2.2 decision before action, also on the activation tick -----------------------------------
 

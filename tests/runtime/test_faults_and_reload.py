@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from engine.runtime import BasicBehavior, Bindings, Engine, LinkError, LoadError, Policy
-from engine.trace.conformance import conformance_bindings
-from engine.types import Kind
 from tests.runtime.helpers import Host, ic
+from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Engine, LinkError, LoadError, Policy
+from xabsl_studio.engine.trace.conformance import conformance_bindings
+from xabsl_studio.engine.types import Kind
 
 V1 = """
 0 0 2 child 0 main 0

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from engine.ir.ic_reader import ICError, read_ic, read_ic_file
-from engine.ir.model import If, Transition, leaves
-from engine.types import Kind
 from tests.kit import KIT, SETS
+from xabsl_studio.engine.ir.ic_reader import ICError, read_ic, read_ic_file
+from xabsl_studio.engine.ir.model import If, Transition, leaves
+from xabsl_studio.engine.types import Kind
 
 
 @pytest.mark.parametrize("name", SETS)

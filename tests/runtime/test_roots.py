@@ -7,11 +7,19 @@ import re
 
 import pytest
 
-from engine.codegen.layout import STORAGE
-from engine.ir import model as ir
-from engine.runtime import BasicBehavior, Bindings, DebugError, Engine, EnumValues, ValueConversionError, coerce
-from engine.runtime.activation import Snapshot
-from engine.types import Kind
+from xabsl_studio.engine.codegen.layout import STORAGE
+from xabsl_studio.engine.ir import model as ir
+from xabsl_studio.engine.runtime import (
+    BasicBehavior,
+    Bindings,
+    DebugError,
+    Engine,
+    EnumValues,
+    ValueConversionError,
+    coerce,
+)
+from xabsl_studio.engine.runtime.activation import Snapshot
+from xabsl_studio.engine.types import Kind
 
 D, B, E = Kind.DECIMAL, Kind.BOOLEAN, Kind.ENUM
 MODE = EnumValues("mode", {"mode.idle": 7, "mode.walk": 9})

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from engine.ir.ic_reader import read_ic
-from engine.runtime import Bindings, Engine
-from engine.types import Kind
+from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.runtime import Bindings, Engine
+from xabsl_studio.engine.types import Kind
 
 PROGRAM = read_ic(
     """

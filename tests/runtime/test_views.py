@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from engine.ir import model as ir
-from engine.runtime import BasicBehavior, Bindings, Debugger, Engine
-from engine.types import Kind
+from xabsl_studio.engine.ir import model as ir
+from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Debugger, Engine
+from xabsl_studio.engine.types import Kind
 
 D = Kind.DECIMAL
 

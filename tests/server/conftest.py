@@ -23,13 +23,13 @@ import pytest
 import uvicorn
 from websockets.sync.client import ClientConnection, connect
 
-from examples.soccer.studio import SoccerExample
-from server.app import create_app
-from server.bench_world import BenchExample
-from server.protocol import MAX_LSP_MESSAGE_BYTES
-from server.security import SecurityPolicy
-from server.session import Session
-from server.transport import WebSocketProtocol
+from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.server.app import create_app
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.protocol import MAX_LSP_MESSAGE_BYTES
+from xabsl_studio.server.security import SecurityPolicy
+from xabsl_studio.server.session import Session
+from xabsl_studio.server.transport import WebSocketProtocol
 
 REPO = Path(__file__).resolve().parents[2]
 

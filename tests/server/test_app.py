@@ -10,11 +10,11 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-from server.app import create_app
-from server.bench_world import BenchExample
-from server.protocol import MAX_BODY_BYTES
-from server.security import SecurityPolicy
-from server.session import Session
+from xabsl_studio.server.app import create_app
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.protocol import MAX_BODY_BYTES
+from xabsl_studio.server.security import SecurityPolicy
+from xabsl_studio.server.session import Session
 
 BASE = "http://127.0.0.1"
 

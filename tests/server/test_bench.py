@@ -9,11 +9,11 @@ from typing import Any
 import httpx2 as httpx
 import pytest
 
-from engine.host import ExampleError
-from server.bench_world import BenchExample, BenchWorld
-from server.session import Session
-from server.worker import Simulation, WorkerConfig
 from tests.server.conftest import LiveServer
+from xabsl_studio.engine.host import ExampleError
+from xabsl_studio.server.bench_world import BenchExample, BenchWorld
+from xabsl_studio.server.session import Session
+from xabsl_studio.server.worker import Simulation, WorkerConfig
 
 
 def simulation(example: BenchExample) -> tuple[Session, Simulation]:
@@ -55,7 +55,7 @@ def test_an_input_function_returns_the_hand_set_value_and_its_calls_are_listed(d
 
 
 def _force(sim: Simulation, option: str, **params: Any) -> Any:
-    from server.messages import ForceOption
+    from xabsl_studio.server.messages import ForceOption
 
     return ForceOption(op="force_option", robot=0, option=option, params=params)
 
@@ -94,7 +94,7 @@ def test_a_plain_input_set_by_hand_stays_until_changed_and_a_world_input_can_fol
     ],
 )
 def test_bad_values_by_hand_are_refused_with_what_is_wrong(demo_dir: Path, name: str, args: Any, error: str) -> None:
-    from engine.host import WorldCommandError
+    from xabsl_studio.engine.host import WorldCommandError
 
     _, sim = simulation(BenchExample(demo_dir))
     with pytest.raises(WorldCommandError, match=None) as raised:
@@ -158,8 +158,8 @@ def test_a_trace_naming_what_the_behavior_lacks_says_where(demo_dir: Path, tmp_p
 
 BINDINGS = """
 import math
-from engine.runtime import BasicBehavior
-from engine.types import Kind
+from xabsl_studio.engine.runtime import BasicBehavior
+from xabsl_studio.engine.types import Kind
 
 
 class Stand(BasicBehavior):
@@ -199,7 +199,7 @@ def test_a_bindings_module_supplies_functions_plain_inputs_and_basic_behaviors(d
         command(sim, "set_function", robot=0, symbol="clamp", value=1.0)
     engine = sim.engines[0]
     assert engine is not None and engine.input_sampler(["ball.time_since_seen"])() == (1234.0,)
-    from server.messages import ForceBehavior
+    from xabsl_studio.server.messages import ForceBehavior
 
     sim.execute(ForceBehavior(op="force_behavior", robot=0, behavior="stand", params={}))
     sim.tick()
@@ -289,7 +289,7 @@ def test_a_hot_reload_that_adds_inputs_runs_on_the_bench(demo_dir: Path) -> None
     )
     compilation = session.compile(key)
     assert compilation.program is not None, [d.format() for d in compilation.errors]
-    from engine.emit.json import program_to_json
+    from xabsl_studio.engine.emit.json import program_to_json
 
     assert sim.apply(key, compilation.program, program_to_json(compilation.program, compilation.source_text)) is None
     command(sim, "set_input", robot=0, symbol="ball.speed", value=12.5)
@@ -335,7 +335,7 @@ def test_serve_refuses_bench_flags_that_do_not_load(demo_dir: Path, flags: list[
     import sys
 
     result = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "serve", str(demo_dir), *flags],
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "serve", str(demo_dir), *flags],
         capture_output=True,
         text=True,
         cwd=demo_dir,
@@ -349,7 +349,7 @@ def test_serve_says_the_bench_flags_are_the_bench_worlds(tmp_path: Path) -> None
 
     soccer = Path(__file__).resolve().parents[2] / "examples" / "soccer"
     result = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "serve", str(soccer), "--inputs", str(tmp_path / "x.jsonl")],
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "serve", str(soccer), "--inputs", str(tmp_path / "x.jsonl")],
         capture_output=True,
         text=True,
     )

@@ -10,9 +10,9 @@ import httpx2 as httpx
 import orjson
 import pytest
 
-from server.bench_world import BenchExample
-from server.session import Session
 from tests.server.conftest import LiveServer
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.session import Session
 
 
 @pytest.fixture

@@ -13,7 +13,9 @@ from tests.server.conftest import free_port
 
 
 def test_serve_is_registered() -> None:
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "serve", "--help"], capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "serve", "--help"], capture_output=True, text=True
+    )
     assert result.returncode == 0 and "--token" in result.stdout and "--speed" in result.stdout
 
 
@@ -23,7 +25,7 @@ def test_serve_runs_an_example_and_prints_the_url(demo_dir: Path) -> None:
         [
             sys.executable,
             "-m",
-            "engine.cli",
+            "xabsl_studio.engine.cli",
             "serve",
             str(demo_dir),
             "--port",
@@ -57,6 +59,8 @@ def test_serve_runs_an_example_and_prints_the_url(demo_dir: Path) -> None:
 
 def test_serve_refuses_a_bad_example(tmp_path: Path) -> None:
     result = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "serve", str(tmp_path / "nope")], capture_output=True, text=True
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "serve", str(tmp_path / "nope")],
+        capture_output=True,
+        text=True,
     )
     assert result.returncode == 2 and "no such folder" in result.stderr

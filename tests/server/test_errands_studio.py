@@ -15,9 +15,9 @@ from typing import Any
 
 import pytest
 
-from server.examples import load_example
-from server.session import Session
 from tests.server.conftest import LiveServer, WsClient
+from xabsl_studio.server.examples import load_example
+from xabsl_studio.server.session import Session
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -28,7 +28,9 @@ def errands_session(tmp_path: Path) -> Iterator[Session]:
     root.mkdir()
     shutil.copytree(REPO / "examples" / "errands" / "behavior", root / "behavior")
     shutil.copytree(REPO / "examples" / "errands" / "model", root / "model")
-    (root / "studio.py").write_text('"""The errands plug-in."""\n\nfrom examples.errands.studio import example\n')
+    (root / "studio.py").write_text(
+        '"""The errands plug-in."""\n\nfrom xabsl_studio.examples.errands.studio import example\n'
+    )
     plugin = load_example(root)
     session = Session(plugin, seed=1, speed=20.0, behavior_hz=plugin.behavior_hz, physics_hz=plugin.physics_hz)
     yield session

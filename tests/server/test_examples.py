@@ -1,6 +1,6 @@
 """World plug-ins: how ``xabsl serve PATH`` finds the world that runs PATH, and errands served live.
 
-The loader (``server.examples``) must find a folder's ``studio.py`` (inside the package or
+The loader (``xabsl_studio.server.examples``) must find a folder's ``studio.py`` (inside the package or
 anywhere on disk), an installed ``xabsl.worlds`` entry point, or fall back to the bench world for
 a behavior folder or an agents file; the simulation process must get the same plug-in (it is
 pickled as the way to load it again), and the server itself must name no example.
@@ -22,13 +22,13 @@ from typing import Any
 import httpx2 as httpx
 import pytest
 
-from engine.host import Example, ExampleError
-from examples.errands.studio import ErrandsExample
-from examples.soccer.studio import SoccerExample
-from server.bench_world import BenchExample
-from server.examples import WorldPlugin, load_example
-from server.session import Session
 from tests.server.conftest import REPO, LiveServer, WsClient
+from xabsl_studio.engine.host import Example, ExampleError
+from xabsl_studio.examples.errands.studio import ErrandsExample
+from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.examples import WorldPlugin, load_example
+from xabsl_studio.server.session import Session
 
 # -- finding the plug-in -------------------------------------------------------------------------
 
@@ -40,7 +40,10 @@ def test_example_folders_name_their_world_through_studio_py() -> None:
     assert [s.key for s in soccer.sources] == ["behavior", "chase"]
     assert (errands.behavior_hz, errands.physics_hz) == (50, 100)
     # the factory's module is importable by name, so the forkserver preloads it
-    assert errands.preload[0] == "examples.errands.studio" and "examples.errands.world" in errands.preload
+    assert (
+        errands.preload[0] == "xabsl_studio.examples.errands.studio"
+        and "xabsl_studio.examples.errands.world" in errands.preload
+    )
     assert isinstance(errands, Example)
 
 
@@ -98,7 +101,7 @@ def test_a_users_folder_outside_the_package_runs_through_its_studio_py(tmp_path:
             """A user's world: the bench world with a name of its own and three robots."""
             from pathlib import Path
 
-            from server.bench_world import BenchExample
+            from xabsl_studio.server.bench_world import BenchExample
 
             from .robots import COUNT
 
@@ -142,7 +145,7 @@ def _robots_after_unpickling(data: bytes) -> tuple[str, int]:
 def test_world_option_picks_an_installed_entry_point(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     shutil.copytree(REPO / "examples" / "soccer" / "behavior", tmp_path / "behavior")
     points = importlib.metadata.EntryPoints(
-        [importlib.metadata.EntryPoint("football", "examples.soccer.studio:example", "xabsl.worlds")]
+        [importlib.metadata.EntryPoint("football", "xabsl_studio.examples.soccer.studio:example", "xabsl.worlds")]
     )
     monkeypatch.setattr(importlib.metadata, "entry_points", lambda **kw: points.select(**kw))
     plugin = load_example(tmp_path, "football", robots=2)
@@ -200,7 +203,9 @@ def errands_session(tmp_path: Path) -> Iterator[Session]:
     root = tmp_path / "errands"
     root.mkdir()
     shutil.copytree(REPO / "examples" / "errands" / "behavior", root / "behavior")
-    (root / "studio.py").write_text('"""The errands plug-in."""\n\nfrom examples.errands.studio import example\n')
+    (root / "studio.py").write_text(
+        '"""The errands plug-in."""\n\nfrom xabsl_studio.examples.errands.studio import example\n'
+    )
     plugin = load_example(root)
     session = Session(plugin, seed=1, speed=10.0, behavior_hz=plugin.behavior_hz, physics_hz=plugin.physics_hz)
     yield session

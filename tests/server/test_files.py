@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from server.files import BehaviorFiles, FileError, version_of
+from xabsl_studio.server.files import BehaviorFiles, FileError, version_of
 
 
 @pytest.fixture
@@ -164,9 +164,9 @@ def test_a_fifo_is_neither_listed_nor_opened(files: BehaviorFiles) -> None:
 def test_the_http_api_answers_4xx_for_bad_text_and_long_names(demo_dir: Path) -> None:
     from fastapi.testclient import TestClient
 
-    from server.app import create_app
-    from server.bench_world import BenchExample
-    from server.session import Session
+    from xabsl_studio.server.app import create_app
+    from xabsl_studio.server.bench_world import BenchExample
+    from xabsl_studio.server.session import Session
 
     os.mkfifo(demo_dir / "options" / "pipe.xabsl")
     session = Session(BenchExample(demo_dir), seed=2)

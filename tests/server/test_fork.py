@@ -14,10 +14,11 @@ import httpx2 as httpx
 import orjson
 import pytest
 
-from examples.soccer.studio import SoccerExample
-from server.bench_world import BenchExample
-from server.frames import FrameRecorder, Generation, Ring
-from server.messages import (
+from tests.server.conftest import LiveServer
+from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.frames import FrameRecorder, Generation, Ring
+from xabsl_studio.server.messages import (
     Apply,
     Explain,
     ForceOption,
@@ -32,9 +33,8 @@ from server.messages import (
     Step,
     WorldCommand,
 )
-from server.session import CommandError, Session, fork_request
-from server.worker import Simulation, WorkerConfig
-from tests.server.conftest import LiveServer
+from xabsl_studio.server.session import CommandError, Session, fork_request
+from xabsl_studio.server.worker import Simulation, WorkerConfig
 
 #: the soccer game is in its playing phase (robots and ball in contact) from about tick 340
 PLAYING = 360
@@ -97,7 +97,7 @@ def _edited(joined: Joined, root: Path) -> Apply:
     text = path.read_text(encoding="utf-8").replace("game_playing();", "stand();")
     compilation = joined.session.compile("behavior", {str(path.resolve()): text})
     assert compilation.program is not None, [d.as_dict() for d in compilation.diagnostics]
-    from engine.emit.json import program_to_json
+    from xabsl_studio.engine.emit.json import program_to_json
 
     return Apply("behavior", compilation.program, program_to_json(compilation.program, compilation.source_text))
 
@@ -238,7 +238,7 @@ def test_forks_outside_the_history_or_the_log_are_refused_and_change_nothing(soc
     with pytest.raises(CommandError, match="not in the history"):
         joined.fork(before_reset)
     # The simulation refuses what its log dropped (the run before the reset left the window).
-    from server.messages import ForkAt
+    from xabsl_studio.server.messages import ForkAt
 
     with pytest.raises(CommandError, match="older than the session log"):
         joined.sim.execute(ForkAt(before_reset, {}))
@@ -300,7 +300,7 @@ def test_fork_over_the_websocket_announces_the_fork_and_serves_the_original(socc
 
 
 def test_the_log_bounds_refuse_with_the_reason(soccer_dir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from server import runlog, worker
+    from xabsl_studio.server import runlog, worker
 
     monkeypatch.setattr(runlog, "MAX_EVENTS", 3)
     joined = Joined(SoccerExample(soccer_dir, players_per_team=2))
@@ -324,7 +324,7 @@ def test_the_log_bounds_refuse_with_the_reason(soccer_dir: Path, monkeypatch: py
 
 
 def test_the_errands_world_forks_exactly_with_its_commands_replayed() -> None:
-    from examples.errands.studio import example
+    from xabsl_studio.examples.errands.studio import example
 
     joined = Joined(example(Path(__file__).resolve().parents[2] / "examples" / "errands"), seed=2)
     joined.run(200)

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from engine.ir.ic_reader import read_ic
-from engine.record import AgentSampler
-from engine.runtime import Bindings, Engine
-from engine.types import Kind
-from server.frames import FrameSampler, ProgramCodec
+from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.record import AgentSampler
+from xabsl_studio.engine.runtime import Bindings, Engine
+from xabsl_studio.engine.types import Kind
+from xabsl_studio.server.frames import FrameSampler, ProgramCodec
 
 PROGRAM = read_ic(
     """

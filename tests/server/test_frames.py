@@ -7,12 +7,12 @@ from pathlib import Path
 
 import orjson
 
-from server.bench_world import BenchExample
-from server.frames import Entry, FrameEncoder, FrameRecorder, Generation, Ring, history
-from server.messages import FromWorker, NewGeneration, Sample
-from server.protocol import FULL_EVERY
-from server.session import Session
-from server.worker import Simulation, WorkerConfig
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.frames import Entry, FrameEncoder, FrameRecorder, Generation, Ring, history
+from xabsl_studio.server.messages import FromWorker, NewGeneration, Sample
+from xabsl_studio.server.protocol import FULL_EVERY
+from xabsl_studio.server.session import Session
+from xabsl_studio.server.worker import Simulation, WorkerConfig
 
 
 class _Recorded:

@@ -7,9 +7,9 @@ from typing import Any
 
 import httpx2 as httpx
 
-from server.frames import Entry, Generation, Ring
-from server.generations import MAX_GENERATIONS, Generations, changed_files, unified_diff
 from tests.server.conftest import LiveServer, WsClient
+from xabsl_studio.server.frames import Entry, Generation, Ring
+from xabsl_studio.server.generations import MAX_GENERATIONS, Generations, changed_files, unified_diff
 
 PLAY = "options/play.xabsl"
 

@@ -16,8 +16,8 @@ import httpx2 as httpx
 import orjson
 import pytest
 
-from server.session import Session
 from tests.server.conftest import LiveServer, WsClient
+from xabsl_studio.server.session import Session
 
 
 def _names(client: WsClient, agent: int) -> list[str]:
@@ -426,7 +426,7 @@ def test_conflicting_write_gets_409(live_demo: LiveServer) -> None:
 
 
 def test_token_is_required_off_loopback(demo_session: Session, client_for: Any) -> None:
-    from server.security import SecurityPolicy
+    from xabsl_studio.server.security import SecurityPolicy
 
     policy = SecurityPolicy.for_host("0.0.0.0", None)
     assert policy.token and not policy.loopback

@@ -8,16 +8,16 @@ from typing import Any
 import httpx2 as httpx
 from pydantic import TypeAdapter
 
-from server import messages as m
-from server.tsgen import TS_FILE, generate
 from tests.server.conftest import LiveServer, WsClient
+from xabsl_studio.server import messages as m
+from xabsl_studio.server.tsgen import TS_FILE, generate
 
 SERVER_MESSAGE: TypeAdapter[Any] = TypeAdapter(m.ServerMessage)
 
 
 def test_the_committed_typescript_is_generated_from_the_python_definitions() -> None:
     assert TS_FILE.read_text(encoding="utf-8") == generate(), (
-        "web/src/messages.gen.ts drifted from server/messages.py: run `python -m server.tsgen --write`"
+        "web/src/messages.gen.ts drifted from server/messages.py: run `python -m xabsl_studio.server.tsgen --write`"
     )
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import orjson
 import pytest
 
-from server.messages import (
+from xabsl_studio.server.messages import (
     ForceOption,
     OverrideInput,
     Pause,
@@ -18,7 +18,7 @@ from server.messages import (
     parse_command,
     parse_message,
 )
-from server.protocol import CloseCode
+from xabsl_studio.server.protocol import CloseCode
 
 
 def test_good_messages() -> None:

@@ -10,9 +10,9 @@ from typing import Any
 
 import pytest
 
-from engine.record import Recording
-from server.replay import ReplaySession
 from tests.server.conftest import LiveServer
+from xabsl_studio.engine.record import Recording
+from xabsl_studio.server.replay import ReplaySession
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -22,7 +22,17 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A 2 v 2 soccer match of 20 s recorded headless by the command line."""
     path = tmp_path_factory.mktemp("replay") / "match.mcap"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    command = [sys.executable, "-m", "engine.cli", "run", "examples/soccer", "--duration", "20", "--players", "2"]
+    command = [
+        sys.executable,
+        "-m",
+        "xabsl_studio.engine.cli",
+        "run",
+        "examples/soccer",
+        "--duration",
+        "20",
+        "--players",
+        "2",
+    ]
     subprocess.run([*command, "--record", str(path)], cwd=ROOT, env=env, check=True, capture_output=True)
     return path
 
@@ -156,7 +166,7 @@ def test_commands_needing_a_world_are_refused(replay: LiveServer, client_for: An
 
 
 def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Path, client_for: Any) -> None:
-    from server.recording import LiveRecorder
+    from xabsl_studio.server.recording import LiveRecorder
 
     folder = soccer_dir.parent / "recordings"
     session = soccer_session
@@ -202,7 +212,7 @@ def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Pa
 
 
 def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer_dir: Path, client_for: Any) -> None:
-    from server.recording import LiveRecorder
+    from xabsl_studio.server.recording import LiveRecorder
 
     folder = soccer_dir.parent / "rolling"
     session = soccer_session

@@ -13,12 +13,12 @@ import httpx
 import orjson
 import pytest
 
-from examples.soccer.studio import SoccerExample
-from examples.testing.cli import main as xabsl_test
-from examples.testing.runner import run_case
-from examples.testing.spec import load_suite
-from server.session import Session
 from tests.server.conftest import LiveServer
+from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.examples.testing.cli import main as xabsl_test
+from xabsl_studio.examples.testing.runner import run_case
+from xabsl_studio.examples.testing.spec import load_suite
+from xabsl_studio.server.session import Session
 
 REPO = Path(__file__).resolve().parents[2]
 

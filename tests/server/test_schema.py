@@ -16,9 +16,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis.errors import Unsatisfiable
 from schemathesis import GenerationMode
 
-from server.bench_world import BenchExample
-from server.session import Session
 from tests.server.conftest import REPO, LiveServer
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.session import Session
 
 # PUT needs the version edited, from If-Match *or* the body's "version": OpenAPI cannot say
 # "one of the two", so a PUT without either is schema-valid and still (rightly) a 428.

@@ -12,14 +12,14 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-from server.app import create_app
-from server.bench_world import BenchExample
-from server.security import MIN_TOKEN_CHARS, SecurityPolicy, TokenError, new_token
-from server.session import Session
+from xabsl_studio.server.app import create_app
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.security import MIN_TOKEN_CHARS, SecurityPolicy, TokenError, new_token
+from xabsl_studio.server.session import Session
 
 BASE = "http://127.0.0.1"
 TOKEN = "k" * MIN_TOKEN_CHARS
-SERVE = (sys.executable, "-m", "engine.cli", "serve")
+SERVE = (sys.executable, "-m", "xabsl_studio.engine.cli", "serve")
 
 
 def test_a_generated_token_has_at_least_128_bits() -> None:

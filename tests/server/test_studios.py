@@ -17,12 +17,12 @@ import orjson
 import pytest
 from websockets.sync.client import connect
 
-from engine.cli import main
-from engine.record import Recording
-from server.library import RecordingLibrary
-from server.replay import ReplaySession
-from server.security import SecurityPolicy
 from tests.server.conftest import LiveServer, WsClient
+from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.record import Recording
+from xabsl_studio.server.library import RecordingLibrary
+from xabsl_studio.server.replay import ReplaySession
+from xabsl_studio.server.security import SecurityPolicy
 
 ROOT = Path(__file__).resolve().parents[2]
 SOCCER = ROOT / "examples" / "soccer"
@@ -206,9 +206,9 @@ def test_run_from_here_starts_a_live_session_that_continues_the_recording(folder
 
 
 def test_run_from_here_refuses_a_live_recording(tmp_path: Path) -> None:
-    from engine.host import BehaviorLoop
-    from engine.record import Recorder
-    from examples.soccer.run import build_world
+    from xabsl_studio.engine.host import BehaviorLoop
+    from xabsl_studio.engine.record import Recorder
+    from xabsl_studio.examples.soccer.run import build_world
 
     path = tmp_path / "live.mcap"
     world = build_world(3, players=1)
@@ -228,8 +228,8 @@ def test_run_from_here_refuses_a_live_recording(tmp_path: Path) -> None:
 
 
 def test_a_live_studio_opens_its_recordings_and_forks_run_its_edited_behavior(folder: Path, soccer_dir: Path) -> None:
-    from server.examples import load_example
-    from server.session import Session
+    from xabsl_studio.server.examples import load_example
+    from xabsl_studio.server.session import Session
 
     ball = soccer_dir / "chase" / "chase_ball.xabsl"
     text = ball.read_text()
@@ -312,9 +312,9 @@ def test_a_forks_recording_replays_from_its_fork_tick(folder: Path, tmp_path: Pa
 
 def test_a_fork_that_does_not_reach_the_recorded_state_is_a_422(tmp_path: Path) -> None:
     """A recording whose world options lie: the simulation cannot re-simulate it and says why."""
-    from engine.host import BehaviorLoop
-    from engine.record import Recorder
-    from examples.soccer.run import build_world
+    from xabsl_studio.engine.host import BehaviorLoop
+    from xabsl_studio.engine.record import Recorder
+    from xabsl_studio.examples.soccer.run import build_world
 
     path = tmp_path / "lying.mcap"
     world = build_world(3, players=1, half_duration_s=600.0)

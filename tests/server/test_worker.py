@@ -11,11 +11,11 @@ from typing import Any
 
 import httpx2 as httpx
 
-from server.bench_world import BenchExample
-from server.channel import Channel
-from server.session import Session
 from tests.server.conftest import LiveServer
 from tests.server.worlds import CrashingDemo
+from xabsl_studio.server.bench_world import BenchExample
+from xabsl_studio.server.channel import Channel
+from xabsl_studio.server.session import Session
 
 
 def test_the_simulation_runs_in_another_process_and_stops_without_a_zombie(
@@ -107,8 +107,8 @@ def test_a_number_beyond_a_decimal_is_a_command_error_even_past_the_edge(demo_di
     """Issue 18 item 3 in the simulation itself: no ``internal error: OverflowError``."""
     import pytest
 
-    from server.messages import ForceBehavior, OverrideInput
-    from server.worker import CommandError, Simulation, WorkerConfig
+    from xabsl_studio.server.messages import ForceBehavior, OverrideInput
+    from xabsl_studio.server.worker import CommandError, Simulation, WorkerConfig
 
     session = Session(BenchExample(demo_dir), seed=4)  # compiles; its process is never started
     programs = {k: (s.running, s.running_json) for k, s in session.programs.items()}

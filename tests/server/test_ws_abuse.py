@@ -30,10 +30,10 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
-from server import messages
-from server.clients import ClientState
-from server.protocol import MAX_CLIENTS, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL
 from tests.server.conftest import LiveServer, WsClient
+from xabsl_studio.server import messages
+from xabsl_studio.server.clients import ClientState
+from xabsl_studio.server.protocol import MAX_CLIENTS, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL
 
 #: Frames per second the healthy client asks for.
 HEALTHY_RATE = 20.0

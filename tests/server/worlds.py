@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from engine.host import World
-from server.bench_world import BenchExample, BenchWorld
+from xabsl_studio.engine.host import World
+from xabsl_studio.server.bench_world import BenchExample, BenchWorld
 
 
 class CrashingWorld(BenchWorld):

@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from engine.host import BehaviorLoop
-from examples.soccer.game import GameRules, GameState
-from examples.soccer.perception import SensorModel
-from examples.soccer.world import SoccerWorld, build_world
+from xabsl_studio.engine.host import BehaviorLoop
+from xabsl_studio.examples.soccer.game import GameRules, GameState
+from xabsl_studio.examples.soccer.perception import SensorModel
+from xabsl_studio.examples.soccer.world import SoccerWorld, build_world
 
 
 def playing_world(players_per_team: int = 1, seed: int = 0, **options) -> SoccerWorld:

@@ -7,7 +7,7 @@ import math
 import orjson
 import pytest
 
-from examples.soccer.field import (
+from xabsl_studio.examples.soccer.field import (
     FieldDimensions,
     from_team_frame,
     heading_to_team_frame,

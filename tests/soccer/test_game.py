@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from examples.soccer.field import FieldDimensions, from_team_frame
-from examples.soccer.game import GameController, GameRules, GameState, kickoff_position
+from xabsl_studio.examples.soccer.field import FieldDimensions, from_team_frame
+from xabsl_studio.examples.soccer.game import GameController, GameRules, GameState, kickoff_position
 
 from .conftest import place, playing_world, run_ticks
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from examples.soccer.perception import NEVER_SEEN_MS, SensorModel, TeamChannel, WorldModel
+from xabsl_studio.examples.soccer.perception import NEVER_SEEN_MS, SensorModel, TeamChannel, WorldModel
 
 from .conftest import place, playing_world, run_ticks
 

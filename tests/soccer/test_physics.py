@@ -5,8 +5,8 @@ from __future__ import annotations
 import itertools
 import math
 
-from examples.soccer.field import FieldDimensions
-from examples.soccer.physics import SoccerPhysics
+from xabsl_studio.examples.soccer.field import FieldDimensions
+from xabsl_studio.examples.soccer.physics import SoccerPhysics
 
 DT = 1 / 120
 

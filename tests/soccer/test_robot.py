@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
-from examples.soccer.game import GameState
-from examples.soccer.robot import MotionMode
+from xabsl_studio.examples.soccer.game import GameState
+from xabsl_studio.examples.soccer.robot import MotionMode
 
 from .conftest import place, playing_world, run_ticks
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 from typing import Any
 
-from examples.soccer.bindings import Role, SoccerSymbols
+from xabsl_studio.examples.soccer.bindings import Role, SoccerSymbols
 
 
 def _model(now: int, messages: dict[int, Any]) -> Any:

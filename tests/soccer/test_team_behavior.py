@@ -7,11 +7,11 @@ from collections import Counter
 
 import pytest
 
-from engine.host import BehaviorLoop
-from engine.lang import compile_file
-from examples.soccer.bindings import Role, XabslController
-from examples.soccer.game import GameState
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
+from xabsl_studio.engine.host import BehaviorLoop
+from xabsl_studio.engine.lang import compile_file
+from xabsl_studio.examples.soccer.bindings import Role, XabslController
+from xabsl_studio.examples.soccer.game import GameState
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 HOME = load_team(DEFAULT_HOME)
 AWAY = load_team(DEFAULT_AWAY)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from examples.soccer.run import play_match
+from xabsl_studio.examples.soccer.run import play_match
 
 
 def test_same_seed_gives_the_same_score_and_activation_trace():

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from multiprocessing import get_context
 
-from examples.soccer.run import play_match
+from xabsl_studio.examples.soccer.run import play_match
 
 SEEDS = range(10)
 

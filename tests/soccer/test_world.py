@@ -7,10 +7,10 @@ import hashlib
 import orjson
 import pytest
 
-from engine.host import Agent, AgentController, World, run_headless
-from examples.soccer.game import GameRules, GameState
-from examples.soccer.scripted import plug_scripted_team
-from examples.soccer.world import SoccerWorld, build_world
+from xabsl_studio.engine.host import Agent, AgentController, World, run_headless
+from xabsl_studio.examples.soccer.game import GameRules, GameState
+from xabsl_studio.examples.soccer.scripted import plug_scripted_team
+from xabsl_studio.examples.soccer.world import SoccerWorld, build_world
 
 
 def scene_hash_after(seed: int, seconds: float) -> str:

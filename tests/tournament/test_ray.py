@@ -11,9 +11,9 @@ import sys
 import orjson
 import pytest
 
-from engine.cli import UsageError
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME
 from tests.tournament.test_tournament import run_cli
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME
 
 
 def test_a_local_ray_cluster_gives_the_local_results(capsys):

@@ -13,9 +13,9 @@ from pathlib import Path
 import orjson
 import pytest
 
-from engine.cli import UsageError
-from examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, load_team
-from examples.soccer.tournament import cli, match, report, runners, versions
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, load_team
+from xabsl_studio.examples.soccer.tournament import cli, match, report, runners, versions
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -1,7 +1,7 @@
 """Programs of the conformance kit for the engine tests: from expected.ic and from the sources.
 
 The IC alone cannot tell the declaration order of external enum elements or input-symbol
-parameters (see engine.ir.ic_reader), so when the source compiler is importable the IC is read
+parameters (see xabsl_studio.engine.ir.ic_reader), so when the source compiler is importable the IC is read
 with the compiled program's declarations; without it, from the IC alone (inference).
 """
 
@@ -13,12 +13,12 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from engine.ir.ic_reader import read_ic_file
-from engine.ir.model import Program
 from tests.kit import KIT
+from xabsl_studio.engine.ir.ic_reader import read_ic_file
+from xabsl_studio.engine.ir.model import Program
 
 try:
-    from engine.lang import compile_file
+    from xabsl_studio.engine.lang import compile_file
 except ImportError:  # the source compiler is written concurrently; the IC still works alone
     compile_file = None  # type: ignore[assignment]
 

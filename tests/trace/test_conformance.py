@@ -6,9 +6,9 @@ import json
 
 import pytest
 
-from engine.trace.conformance import TraceRunner
 from tests.kit import KIT, SETS
 from tests.trace.kit_programs import MODES, lines, program
+from xabsl_studio.engine.trace.conformance import TraceRunner
 
 
 @pytest.mark.parametrize("mode", MODES)

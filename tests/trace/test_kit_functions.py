@@ -6,9 +6,9 @@ import math
 import random
 import struct
 
-from engine.ir import model as ir
-from engine.trace.conformance import conformance_bindings
-from engine.types import Kind
+from xabsl_studio.engine.ir import model as ir
+from xabsl_studio.engine.trace.conformance import conformance_bindings
+from xabsl_studio.engine.types import Kind
 
 D = Kind.DECIMAL
 

@@ -1,7 +1,7 @@
 /// The studio protocol, version 1 (docs/protocol.md): the web UI's side of server/messages.py.
 ///
 /// The wire types are generated from the server's message definitions (`messages.gen.ts`, by
-/// `python -m server.tsgen --write`); this module re-exports them, narrows the parts the server
+/// `python -m xabsl_studio.server.tsgen --write`); this module re-exports them, narrows the parts the server
 /// leaves to the world or to the program JSON (scenes, status, programs), and owns the decoding a
 /// client must do: activation paths from their compact arrays (`decodePath`), and symbol values
 /// from full frames and deltas (`applyValues`).

@@ -1,7 +1,7 @@
 """``xabsl tournament HOME AWAY``: the command line of soccer tournaments.
 
 Registered under the ``xabsl.commands`` entry-point group (``tournament =
-"examples.soccer.tournament.cli:register"`` in ``pyproject.toml``). Exit status: 0 every match
+"xabsl_studio.examples.soccer.tournament.cli:register"`` in ``pyproject.toml``). Exit status: 0 every match
 was played, 1 a behavior does not compile or a match failed, 2 usage, 130 interrupted (the
 report of the finished matches is printed first).
 """
@@ -15,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError
 
 # This module registers `xabsl tournament` whenever `xabsl` starts: what a match needs loads when
 # the command runs.
@@ -23,7 +23,7 @@ TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing
 if TYPE_CHECKING:
     from typing import Any
 
-    from engine.ir.model import Program
+    from xabsl_studio.engine.ir.model import Program
 
 
 def _cores() -> int:
@@ -104,9 +104,9 @@ def main(args: argparse.Namespace) -> int:
 
     import orjson
 
-    from engine.files import write_atomically
-    from examples.soccer.run import TeamError, load_team
-    from examples.soccer.tournament import match, report, runners, versions
+    from xabsl_studio.engine.files import write_atomically
+    from xabsl_studio.examples.soccer.run import TeamError, load_team
+    from xabsl_studio.examples.soccer.tournament import match, report, runners, versions
 
     if not 1 <= args.players <= 7:
         raise UsageError(f"--players must be in 1..7, got {args.players}")

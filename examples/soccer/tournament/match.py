@@ -16,9 +16,9 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from engine.host import DEFAULT_BEHAVIOR_HZ
-from engine.ir.model import Program
-from examples.soccer.run import play_match
+from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.examples.soccer.run import play_match
 
 #: The keys of a result's per-side dicts: the two versions, not the colours.
 SIDES = ("home", "away")

@@ -24,7 +24,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from examples.soccer.tournament.match import SIDES
+from xabsl_studio.examples.soccer.tournament.match import SIDES
 
 #: z for a two-sided 95 % interval.
 Z95 = 1.959963984540054

@@ -23,9 +23,9 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from pathlib import Path
 from typing import Any
 
-from engine.cli import UsageError
-from engine.ir.model import Program
-from examples.soccer.tournament.match import MatchSpec, play
+from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.examples.soccer.tournament.match import MatchSpec, play
 
 OnResult = Callable[[dict[str, Any]], None]
 
@@ -60,7 +60,7 @@ def _failure(spec: MatchSpec, error: str) -> dict[str, Any]:
 def run_local(specs: Sequence[MatchSpec], programs: tuple[Program, Program], jobs: int, on_result: OnResult) -> None:
     """Play ``specs`` in ``jobs`` worker processes (forkserver: no threads are forked)."""
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(["examples.soccer.tournament.match"])
+    context.set_forkserver_preload(["xabsl_studio.examples.soccer.tournament.match"])
     stop = context.Event()
     executor = ProcessPoolExecutor(
         max_workers=max(1, min(jobs, len(specs))),
@@ -102,11 +102,10 @@ def _import_ray() -> Any:
 
 
 def _code_modules() -> list[str]:
-    """The packages a Ray worker elsewhere needs: this checkout's ``engine`` and ``examples``."""
-    import engine
-    import examples
+    """The package a Ray worker elsewhere needs: this checkout's ``xabsl_studio``."""
+    import xabsl_studio
 
-    return [str(Path(engine.__file__).parent), str(Path(examples.__file__).parent)]
+    return [str(Path(xabsl_studio.__file__).parent)]
 
 
 #: Where ``ray start`` notes the address of the cluster it started on this machine.
@@ -156,7 +155,7 @@ def run_ray(
         address: ``local`` starts a Ray instance in this process (``jobs`` CPUs); ``auto`` joins
             the cluster running on this machine (``ray start --head``); anything else is a
             cluster address (``HOST:6379``, ``ray://HOST:10001``). Joined clusters get this
-            checkout's ``engine`` and ``examples`` packages shipped (``py_modules``), so the
+            checkout's ``xabsl_studio`` package shipped (``py_modules``), so the
             nodes need only the dependencies (pymunk, numpy, ...), not the sources.
         jobs: CPUs of a ``local`` instance (None: all cores); a joined cluster has its own.
         on_result: called with each match's result as it arrives.

@@ -15,7 +15,7 @@ import tarfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError
 
 GIT_PREFIX = "git:"
 
