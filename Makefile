@@ -10,7 +10,7 @@ STAMP  := $(VENV)/.installed-stamp
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT_INSTALL := DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends
 
-.PHONY: run test lint check-python system-deps test-deps web web-test clean
+.PHONY: run test lint check-python system-deps test-deps web web-test dist clean
 
 system-deps:
 	@command -v dot >/dev/null || { $(SUDO) apt-get update -q && $(APT_INSTALL) graphviz; }
@@ -64,5 +64,10 @@ lint: $(STAMP)
 test: $(STAMP) $(RAY_STAMP) test-deps lint web web-test
 	$(BIN)/python -m pytest
 
+# The sdist and, built from it, the wheel (with the studio UI inside) into dist/; tests/install
+# builds and installs the same into a fresh venv as part of `make test`.
+dist: $(STAMP) web
+	$(BIN)/python -m build --outdir dist .
+
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build dist *.egg-info

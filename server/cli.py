@@ -30,6 +30,22 @@ def _option(text: str) -> tuple[str, object]:
         return key, value
 
 
+def example_folder(name: str) -> Path:
+    """The folder of the example ``name`` that came with the package (``--example``).
+
+    Raises:
+        UsageError: no example of that name.
+    """
+    import xabsl_studio.examples
+    from xabsl_studio.engine.cli import UsageError
+
+    root = Path(xabsl_studio.examples.__file__).parent
+    known = sorted(p.name for p in root.iterdir() if (p / "studio.py").is_file() or (p / "agents.xabsl").is_file())
+    if name not in known:
+        raise UsageError(f"--example: no example {name!r} (installed: {', '.join(known)})")
+    return root / name
+
+
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``serve`` subcommand to the ``xabsl`` parser."""
     parser = subparsers.add_parser(
@@ -46,6 +62,12 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         nargs="?",
         default=".",
         help="example folder, behavior folder or agents file (default: the current folder)",
+    )
+    parser.add_argument(
+        "--example",
+        default=None,
+        metavar="NAME",
+        help="serve an example that came with the package instead of PATH (an unknown NAME lists them)",
     )
     parser.add_argument(
         "--world", default=None, metavar="NAME", help="run PATH in this world plug-in (xabsl.worlds entry point)"
@@ -121,6 +143,8 @@ def run(args: argparse.Namespace) -> int:
     from xabsl_studio.server.session import Session
     from xabsl_studio.server.transport import WebSocketProtocol
 
+    if args.example is not None:
+        args.path = str(example_folder(args.example))
     if not 0 < args.record_cap_mb < float("inf"):
         raise UsageError("--record-cap-mb must be a positive number")
     try:

@@ -30,6 +30,7 @@ import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
 
+from xabsl_studio import __version__
 from xabsl_studio.engine.errors import CommandLineError
 
 #: Engine-level subcommands in the order ``--help`` lists them: name -> (module, one-line help).
@@ -162,6 +163,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         prog="xabsl",
         description="XABSL 2 toolchain, engine and studio for hierarchical state-machine behaviors.",
     )
+    parser.add_argument("--version", action="version", version=f"xabsl {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_ArgumentParser)
     subparsers.required = True
     named = _command_named(argv)
