@@ -4,7 +4,7 @@ Question (issue 13, "Cheap: compiled like the behavior, measured in a benchmark"
 breakpoint enabled the tick path must not pay for them (one attribute read per tick); with
 breakpoints set, each costs one generated function call per robot and tick.
 
-Runs ``xabsl_studio.server.worker.Simulation`` (the simulation process's tick: world, engines, sampling) on
+Runs ``xabsl_studio.server.simulation.worker.Simulation`` (the simulation process's tick: world, engines, sampling) on
 the soccer example, 5 vs 5, ``--ticks`` ticks per run, alternating so that drift of a shared
 machine hits all sides alike (``--repeat`` rounds): (a) no breakpoints, (b) breakpoints set but
 all disabled, (c) one breakpoint of each kind for any robot (six per robot of the example team,
@@ -24,8 +24,8 @@ from pathlib import Path
 
 from xabsl_studio.engine.runtime.breakpoints import Breakpoint
 from xabsl_studio.examples.soccer.studio import SoccerExample
-from xabsl_studio.server.session import Session
-from xabsl_studio.server.worker import Simulation, WorkerConfig
+from xabsl_studio.server.session.live import Session
+from xabsl_studio.server.simulation.worker import Simulation, WorkerConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -2,9 +2,10 @@
 
 Question (issue 12 item 4): a fork rebuilds the world from its seed and replays the session log
 up to the tick, so its cost is the headless tick cost times the ticks since the last reset. Runs
-``xabsl_studio.server.worker.Simulation`` with the server's ring (``xabsl_studio.server.frames``) in one process on the
-soccer example, 5 vs 5: ``--ticks`` live ticks (sampled and recorded as the studio does, a force
-and an override on the way), then a fork at the newest tick. Printed: the live ticks' wall time,
+``xabsl_studio.server.simulation.worker.Simulation`` with the server's ring
+(``xabsl_studio.server.session.frames``) in one process on the soccer example, 5 vs 5:
+``--ticks`` live ticks (sampled and recorded as the studio does, a force and an override on the
+way), then a fork at the newest tick. Printed: the live ticks' wall time,
 the fork's ticks and milliseconds, and ms per re-simulated tick.
 
     .venv/bin/python benchmarks/live_fork_cost.py [--ticks 4800]
@@ -17,10 +18,11 @@ from pathlib import Path
 from time import perf_counter
 
 from xabsl_studio.examples.soccer.studio import SoccerExample
-from xabsl_studio.server.frames import FrameRecorder, Generation, Ring
-from xabsl_studio.server.messages import ForceOption, FromWorker, NewGeneration, OverrideInput, Release, Sample
-from xabsl_studio.server.session import Session, fork_request
-from xabsl_studio.server.worker import Simulation, WorkerConfig
+from xabsl_studio.server.protocol.commands import ForceOption, OverrideInput, Release
+from xabsl_studio.server.protocol.host import FromWorker, NewGeneration, Sample
+from xabsl_studio.server.session.frames import FrameRecorder, Generation, Ring
+from xabsl_studio.server.session.live import Session, fork_request
+from xabsl_studio.server.simulation.worker import Simulation, WorkerConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 

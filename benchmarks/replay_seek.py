@@ -1,7 +1,7 @@
 """How long ``xabsl serve --replay`` takes to seek a tick of a 10-minute 10-agent match.
 
 Records a 5 v 5 soccer match headless (``xabsl run examples/soccer --duration 600 --players 5
---record``; skipped with ``--file``), opens it as a :class:`xabsl_studio.server.replay.ReplaySession` and seeks
+--record``; skipped with ``--file``), opens it as a :class:`xabsl_studio.server.session.replay.ReplaySession` and seeks
 random ticks the way the ``seek`` command does: read the tick from the file, turn it into the
 sample the simulation would have sent, record the frame (delta + full frame) into the ring. Also
 times ``explain`` at a random tick and a 10 s ``history`` hunk. Goal: seeking under 100 ms.
@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from xabsl_studio.server.replay import ReplaySession  # noqa: E402
+from xabsl_studio.server.session.replay import ReplaySession  # noqa: E402
 
 
 def main() -> int:

@@ -21,11 +21,11 @@ from pathlib import Path
 
 import uvicorn
 
-from xabsl_studio.server.app import WEB_DIST, create_app
-from xabsl_studio.server.bench_world import BenchExample
-from xabsl_studio.server.protocol import MAX_MESSAGE_BYTES
-from xabsl_studio.server.security import SecurityPolicy
-from xabsl_studio.server.session import Session
+from xabsl_studio.engine.worlds.bench import BenchExample
+from xabsl_studio.server.api.app import WEB_DIST, create_app
+from xabsl_studio.server.api.security import SecurityPolicy
+from xabsl_studio.server.protocol.limits import MAX_MESSAGE_BYTES
+from xabsl_studio.server.session.live import Session
 
 OPTIONS = 100
 AGENTS = 10

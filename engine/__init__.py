@@ -8,8 +8,9 @@ The pipeline reads top to bottom in the folder names:
 * ``xabsl_studio.engine.codegen``  IR -> Python source, compiled once (the fast path)
 * ``xabsl_studio.engine.runtime``  the Engine: bindings, tick, activation tree, debug interface
 * ``xabsl_studio.engine.host``     the contract a simulated world fulfils
+* ``xabsl_studio.engine.worlds``   the world plug-in loader and the bench world
+
+Tools over it: ``trace``, ``record``, ``profile``, ``docs``, ``testing`` (behavior tests), ``cli``.
 
 Nothing here imports pymunk, the web server or an example world.
 """
-
-__version__ = "0.1.0"

@@ -27,7 +27,7 @@ world with XABSL engines: the behavior sources to compile, a world per seed, whi
 robot runs and the controller that runs it. A folder declares its world with a module
 ``studio.py`` exposing ``example(path, **options) -> Example`` (or an installed distribution
 registers such a factory under the entry-point group :data:`WORLDS_GROUP`); the loader is
-``xabsl_studio.server.examples.load_example``. docs/architecture.md describes the contract.
+``xabsl_studio.engine.worlds.loader.load_example``. docs/architecture.md describes the contract.
 """
 
 from __future__ import annotations

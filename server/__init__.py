@@ -1,18 +1,14 @@
-"""The studio server: a live simulation session over FastAPI and websockets (docs/protocol.md).
+"""The studio server, in four layers along its process line (imports point down only).
 
-One module per concern:
+* ``api``         the HTTP/websocket edge (server process): FastAPI app, clients, security, the
+                  routes of files, graphs, docs, profile, recordings and forks
+* ``session``     a studio session (server process): the live one and its simulation process's
+                  server end, replays, forks started from recordings, frames and the ring,
+                  generations, breakpoints, behavior files, the live recording
+* ``simulation``  the simulation process: worlds, engines, commands between two ticks, one
+                  sample per tick, the run log that forks replay
+* ``protocol``    what both processes and the browser speak: message types, limits, the pipe
 
-* ``protocol``  message types, the schema version, close codes, limits (what the UI codes against)
-* ``examples``  the world plug-in loader: from ``xabsl serve PATH`` to an ``xabsl_studio.engine.host.Example``
-* ``bench_world`` the bench world, for behaviors without a world of their own
-* ``worker``    the simulation process: world, engines, commands, one sample per tick
-* ``channel``   the non-blocking pipe between the server and the simulation process
-* ``session``   the server's end of it: starts, restarts and stops the process, records frames
-* ``frames``    per-tick frames: sampling engines, compact encoding, the ring buffer, deltas
-* ``clients``   one websocket client: state, latest-frame slot, bounded control queue, sender
-* ``files``     behavior files: confinement, versions, atomic writes
-* ``graphs``    option-graph and state-machine SVGs cached by content hash
-* ``security``  token, origin and host checks, body size limits
-* ``app``       FastAPI wiring of all of the above
-* ``cli``       ``xabsl serve``
+``cli`` is ``xabsl serve``. The world loader and the bench world are ``xabsl_studio.engine.worlds``
+(headless runs, tests and tournaments use them without a server). docs/architecture.md walks it.
 """

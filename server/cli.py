@@ -2,7 +2,7 @@
 
 PATH is an example folder (its ``studio.py`` says how to run it), a behavior folder or an agents
 file anywhere on disk (both run in the bench world); ``--world NAME`` picks an installed world
-plug-in instead (``xabsl_studio.server.examples`` is the loader).
+plug-in instead (``xabsl_studio.engine.worlds.loader`` is the loader).
 
 Registered through the ``xabsl.commands`` entry point (``serve = "xabsl_studio.server.cli:register"``) so the
 engine's command line never imports the server. Binds to 127.0.0.1 unless told otherwise; off
@@ -136,12 +136,12 @@ def run(args: argparse.Namespace) -> int:
     import uvicorn
 
     from xabsl_studio.engine.cli import UsageError
-    from xabsl_studio.server.app import WEB_DIST, create_app
-    from xabsl_studio.server.examples import ExampleError, load_example
-    from xabsl_studio.server.protocol import MAX_LSP_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
-    from xabsl_studio.server.security import SecurityPolicy, TokenError
-    from xabsl_studio.server.session import Session
-    from xabsl_studio.server.transport import WebSocketProtocol
+    from xabsl_studio.engine.worlds.loader import ExampleError, load_example
+    from xabsl_studio.server.api.app import WEB_DIST, create_app
+    from xabsl_studio.server.api.security import SecurityPolicy, TokenError
+    from xabsl_studio.server.api.transport import WebSocketProtocol
+    from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
+    from xabsl_studio.server.session.live import Session
 
     if args.example is not None:
         args.path = str(example_folder(args.example))
@@ -163,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     session: Session
     try:
         if args.replay is not None:
-            from xabsl_studio.server.replay import ReplaySession
+            from xabsl_studio.server.session.replay import ReplaySession
 
             session = ReplaySession(args.replay, speed=args.speed)
         else:
@@ -177,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
             )
             session.paused = args.paused
             if not args.no_record:
-                from xabsl_studio.server.recording import LiveRecorder, default_folder
+                from xabsl_studio.server.session.recording import LiveRecorder, default_folder
 
                 folder = Path(args.record_dir) if args.record_dir else default_folder()
                 cap = int(args.record_cap_mb * 1e6)
@@ -203,8 +203,8 @@ def run(args: argparse.Namespace) -> int:
             for diagnostic in comp.errors[:10]:
                 print("  " + diagnostic.format(), file=sys.stderr)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
-    from xabsl_studio.server.library import RecordingLibrary
-    from xabsl_studio.server.recording import default_folder
+    from xabsl_studio.server.api.library import RecordingLibrary
+    from xabsl_studio.server.session.recording import default_folder
 
     # The recordings the studio lists and opens: its record folder, and a file named here.
     library = RecordingLibrary(

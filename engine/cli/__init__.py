@@ -1,8 +1,9 @@
 """The ``xabsl`` command line: one subcommand per module.
 
-Engine subcommands live in this package (``compile``, ``trace``, ...). Subcommands that belong
-to layers above the engine (``serve`` in ``server``, ``run`` in ``examples``) are found through the
-``xabsl.commands`` entry-point group, so the engine never imports the layers that depend on it.
+Engine subcommands live in the engine (``compile``, ``trace``, ``run``, ``test``, ...). Subcommands
+that belong to layers above it (``serve`` in ``server``, ``lsp``, the soccer ``tournament``) are found
+through the ``xabsl.commands`` entry-point group, so the engine never imports the layers that
+depend on it.
 
 Each subcommand module exposes ``register(subparsers)``, which adds its parser and sets
 ``func`` to a callable taking the parsed namespace and returning the exit status:
@@ -53,6 +54,14 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "profile a recording: time per option and state, transitions, oscillations, coverage",
     ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
+    "run": (
+        "xabsl_studio.engine.cli.run",
+        "run an example world headless (xabsl run examples/soccer --help for its flags)",
+    ),
+    "test": (
+        "xabsl_studio.engine.testing.cli",
+        "run behavior test suites (*.xabsl-test.toml): setups, forced options, timed assertions",
+    ),
 }
 #: The entry-point group of the subcommands of other layers.
 COMMAND_GROUP = "xabsl.commands"

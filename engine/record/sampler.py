@@ -13,7 +13,7 @@ the engine's public per-tick views only and without converting anything:
 
 Converting for display (rounding, enum names) and comparing with the previous tick are left to
 the consumer: the recorder's encoder rounds and encodes deltas, the studio's
-``xabsl_studio.server.frames.FrameSampler`` converts to the frames' display values. :class:`ProgramTables`
+``xabsl_studio.server.simulation.sampling.FrameSampler`` converts to the frames' display values. :class:`ProgramTables`
 holds what a consumer needs to interpret the raw values of one program (symbol names in sample
 order, enum host values, basic-behavior parameter names in path order, assignment sites).
 """
@@ -127,7 +127,7 @@ class AgentSampler:
     """Reads one engine after each tick (see the module docstring); valid until a load or reload.
 
     The one sampling mechanism of the project: the recorder calls :meth:`sample` every tick; the
-    studio's simulation process (``xabsl_studio.server.frames.FrameSampler``) calls :meth:`path`,
+    studio's simulation process (``xabsl_studio.server.simulation.sampling.FrameSampler``) calls :meth:`path`,
     :meth:`inputs` and :meth:`outputs` and turns the raw values into display values. Without
     ``assignments`` the sample's ``assignments`` stay empty (the studio does not record them).
 

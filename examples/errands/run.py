@@ -27,7 +27,7 @@ PERTURBATIONS = ("none", "teleport-mug", "remove-book", "block-cb")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The example's flags (hook of ``xabsl run``, see examples/cli.py)."""
+    """The example's flags (hook of ``xabsl run``, see engine/cli/run.py)."""
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument(
         "--plan",

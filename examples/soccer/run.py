@@ -14,7 +14,7 @@ The pieces, reusable by tests and benchmarks:
 * :class:`MatchStats` watches a running match: possession, shots, passes, goals;
 * :func:`play_match` runs a whole match and returns a :class:`MatchReport`.
 
-The command line part (:func:`add_arguments`, :func:`main`) is what ``examples/cli.py`` plugs
+The command line part (:func:`add_arguments`, :func:`main`) is what ``engine/cli/run.py`` plugs
 under ``xabsl run``.
 """
 

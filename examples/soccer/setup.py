@@ -1,7 +1,7 @@
 """The soccer world's test setup: put robots and the ball somewhere and the game into a state.
 
 ``arrange(world, setup)`` is what ``SoccerExample.arrange`` (the behavior tests' setup hook,
-``xabsl_studio.examples.testing.runner.ArrangeableExample``) runs on a freshly built world, before its first
+``xabsl_studio.engine.testing.runner.ArrangeableExample``) runs on a freshly built world, before its first
 tick. Keys (lengths in mm and angles in degrees, in the world frame of the studio's field: the
 centre spot is the origin, blue attacks +x in the first half):
 

@@ -70,13 +70,13 @@ def test_building_the_parser_imports_nothing_heavy(argv: list[str]) -> None:
     if argv == ["--help"]:  # not even these (trace imports typing for its annotations)
         assert modules & {"logging", "typing", "shutil", "json"} == set()
     # only the named engine subcommand's module is imported
-    commands = {f"xabsl_studio.engine.cli.{name}" for name in ENGINE_COMMANDS}
-    assert modules & commands == ({f"xabsl_studio.engine.cli.{argv[0]}"} if argv[0] in ENGINE_COMMANDS else set())
-    # an engine subcommand needs no entry point: the server's and the examples' modules stay out
+    commands = {module for module, _ in ENGINE_COMMANDS.values()}
+    assert modules & commands == ({ENGINE_COMMANDS[argv[0]][0]} if argv[0] in ENGINE_COMMANDS else set())
+    # an engine subcommand needs no entry point: the server's and the language server's modules stay out
     if argv[0] != "--help":
-        assert not {"xabsl_studio.server.cli", "xabsl_studio.examples.cli"} & modules
+        assert not {"xabsl_studio.server.cli", "xabsl_studio.lsp.cli"} & modules
     else:
-        assert {"xabsl_studio.server.cli", "xabsl_studio.examples.cli"} <= modules
+        assert {"xabsl_studio.server.cli", "xabsl_studio.lsp.cli"} <= modules
 
 
 def test_the_command_table_gives_each_module_s_own_help() -> None:

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from xabsl_studio.server.app import create_app
-from xabsl_studio.server.bench_world import BenchExample
-from xabsl_studio.server.docs import DocsCache
-from xabsl_studio.server.session import Session
+from xabsl_studio.engine.worlds.bench import BenchExample
+from xabsl_studio.server.api.app import create_app
+from xabsl_studio.server.api.docs import DocsCache
+from xabsl_studio.server.session.live import Session
 
 REPO = Path(__file__).resolve().parents[2]
 

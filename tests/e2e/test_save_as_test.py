@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 from tests.e2e.conftest import StudioServer
-from xabsl_studio.examples.testing.runner import run_case
-from xabsl_studio.examples.testing.spec import load_suite
+from xabsl_studio.engine.testing.runner import run_case
+from xabsl_studio.engine.testing.spec import load_suite
 
 
 def test_save_as_test_writes_a_suite_that_passes(page: Any, studio: StudioServer) -> None:

@@ -14,8 +14,8 @@ from tests.e2e.test_breakpoints import (  # noqa: F401 (state_dir: the autouse p
     run_until_hit,
     state_dir,
 )
-from xabsl_studio.examples.testing.runner import run_case
-from xabsl_studio.examples.testing.spec import load_suite
+from xabsl_studio.engine.testing.runner import run_case
+from xabsl_studio.engine.testing.spec import load_suite
 
 
 def test_save_as_test_from_a_hit_writes_a_test_that_passes(page: Any, studio: StudioServer) -> None:

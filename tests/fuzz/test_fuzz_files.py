@@ -14,7 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tests.fuzz.probes import fuzz_settings, time_bound
-from xabsl_studio.server.files import BehaviorFiles, FileError
+from xabsl_studio.server.session.files import BehaviorFiles, FileError
 
 _SEGMENTS = st.one_of(
     st.sampled_from(["behavior", "options", "o.xabsl", "pipe.xabsl", "loop.xabsl", "dangling.xabsl", "dir.xabsl",

@@ -14,9 +14,9 @@ from websockets.sync.client import ClientConnection, connect
 
 from tests.lsp.client import ROOT
 from tests.server.conftest import LiveServer
-from xabsl_studio.server.bench_world import BenchExample
-from xabsl_studio.server.security import SecurityPolicy
-from xabsl_studio.server.session import Session
+from xabsl_studio.engine.worlds.bench import BenchExample
+from xabsl_studio.server.api.security import SecurityPolicy
+from xabsl_studio.server.session.live import Session
 
 
 @pytest.fixture

@@ -9,7 +9,7 @@ import pytest
 from xabsl_studio.engine.host import BehaviorLoop
 from xabsl_studio.engine.lang import compile_file
 from xabsl_studio.engine.record import Recorder
-from xabsl_studio.server.bench_world import BenchController, BenchWorld
+from xabsl_studio.engine.worlds.bench import BenchController, BenchWorld
 
 #: Root ``cycle``: state ``a`` for 4 ticks (calls ``sub``), ``b`` for 2, again (a 6-tick period at
 #: 40 Hz); ``sub``: ``x`` for its first tick, then ``y``; ``z`` and the option ``unused`` are never

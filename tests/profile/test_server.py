@@ -11,9 +11,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from tests.profile.conftest import FILES
-from xabsl_studio.server.app import create_app
-from xabsl_studio.server.bench_world import BenchExample
-from xabsl_studio.server.session import Session
+from xabsl_studio.engine.worlds.bench import BenchExample
+from xabsl_studio.server.api.app import create_app
+from xabsl_studio.server.session.live import Session
 
 
 @pytest.fixture

@@ -23,13 +23,13 @@ import pytest
 import uvicorn
 from websockets.sync.client import ClientConnection, connect
 
+from xabsl_studio.engine.worlds.bench import BenchExample
 from xabsl_studio.examples.soccer.studio import SoccerExample
-from xabsl_studio.server.app import create_app
-from xabsl_studio.server.bench_world import BenchExample
-from xabsl_studio.server.protocol import MAX_LSP_MESSAGE_BYTES
-from xabsl_studio.server.security import SecurityPolicy
-from xabsl_studio.server.session import Session
-from xabsl_studio.server.transport import WebSocketProtocol
+from xabsl_studio.server.api.app import create_app
+from xabsl_studio.server.api.security import SecurityPolicy
+from xabsl_studio.server.api.transport import WebSocketProtocol
+from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
+from xabsl_studio.server.session.live import Session
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from xabsl_studio.engine.host import World
-from xabsl_studio.server.bench_world import BenchExample, BenchWorld
+from xabsl_studio.engine.worlds.bench import BenchExample, BenchWorld
 
 
 class CrashingWorld(BenchWorld):

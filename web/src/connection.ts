@@ -257,7 +257,7 @@ export class Connection {
 
   /// Send a command and wait for its reply; rejects with the server's error text.
   ///
-  /// `args` are the op's arguments as `server/messages.py` declares them (generated types).
+  /// `args` are the op's arguments as `server/protocol/commands.py` declares them (generated types).
   command<Op extends CommandOp>(
     op: Op,
     ...rest: {} extends CommandArgs<Op> ? [args?: CommandArgs<Op>] : [args: CommandArgs<Op>]

@@ -1,7 +1,7 @@
-/// The studio protocol, version 1 (docs/protocol.md): the web UI's side of server/messages.py.
+/// The studio protocol, version 1 (docs/protocol.md): the web UI's side of server/protocol/ (commands, replies).
 ///
 /// The wire types are generated from the server's message definitions (`messages.gen.ts`, by
-/// `python -m xabsl_studio.server.tsgen --write`); this module re-exports them, narrows the parts the server
+/// `python -m xabsl_studio.server.protocol.tsgen --write`); this module re-exports them, narrows the parts the server
 /// leaves to the world or to the program JSON (scenes, status, programs), and owns the decoding a
 /// client must do: activation paths from their compact arrays (`decodePath`), and symbol values
 /// from full frames and deltas (`applyValues`).
@@ -29,7 +29,7 @@ export type {
 } from "./messages.gen";
 export type { OptionNode as WireOptionNode, BehaviorNode as WireBehaviorNode, PathNode as WirePathNode } from "./messages.gen";
 
-/// Websocket close codes (server/protocol.py `CloseCode`).
+/// Websocket close codes (server/protocol/limits.py `CloseCode`).
 export const CloseCode = {
   NORMAL: 1000,
   GOING_AWAY: 1001,

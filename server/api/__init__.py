@@ -1,0 +1,1 @@
+"""The studio's HTTP and websocket edge (server process): routes, clients, token and origin checks."""

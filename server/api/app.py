@@ -1,0 +1,840 @@
+"""FastAPI wiring: the websocket, the REST API under /api, the web UI at /, the session's lifetime.
+
+:func:`create_app` joins a :class:`~xabsl_studio.server.session.live.Session` (started and stopped with the app's
+lifespan), a :class:`~xabsl_studio.server.api.clients.Hub` for the websocket clients, the behavior files, the
+graph cache and the security middleware. Handlers here stay thin: they validate, hand the work
+to the module that owns it, and turn that module's errors into 4xx answers
+(``{"detail": message}``). Anything slow runs off the event loop: compiling in a worker thread,
+engine work in the simulation process (``Session.request``), Graphviz in a worker thread.
+
+Writing a behavior file compiles every behavior the file belongs to (here, in the server process)
+and hot-swaps clean ones into the simulation (``Session.apply``); one asyncio lock serialises
+write + compile + swap so two saves cannot interleave their reloads.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import AsyncIterator, Iterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import orjson
+from fastapi import APIRouter, Depends, FastAPI, Header, HTTPException, Query, Request, Response, WebSocket
+from fastapi import Path as FastApiPath
+from fastapi.exception_handlers import http_exception_handler
+from fastapi.responses import HTMLResponse, JSONResponse, StreamingResponse
+from fastapi.routing import APIRoute
+from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, Field, JsonValue
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
+
+import xabsl_studio
+from xabsl_studio.engine.emit.dot import GraphvizMissing
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.runtime.activation import OPTION_NODE
+from xabsl_studio.server.api.clients import Client, Hub
+from xabsl_studio.server.api.docs import router as docs_router
+from xabsl_studio.server.api.forks import router as fork_router
+from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
+from xabsl_studio.server.api.library import RecordingLibrary
+from xabsl_studio.server.api.library import router as library_router
+from xabsl_studio.server.api.openapi import ErrorBody, error_responses
+from xabsl_studio.server.api.profile import router as profile_router
+from xabsl_studio.server.api.security import SecurityMiddleware, SecurityPolicy
+from xabsl_studio.server.api.studios import Studios, StudiosMiddleware
+from xabsl_studio.server.protocol.commands import Command, History, Reload, guess_id, openapi_schemas, parse_command
+from xabsl_studio.server.protocol.limits import HISTORY_CHUNK, MAX_CLIENTS, VERSION
+from xabsl_studio.server.protocol.replies import CompileEvent, FileEvent, Reply, RestReply, encode, encode_history_chunk
+from xabsl_studio.server.protocol.types import (
+    BEHAVIOR_PARAMS_INDEX,
+    DEPTH_INDEX,
+    ID_INDEX,
+    OPTION_PARAMS_INDEX,
+    ProtocolError,
+)
+from xabsl_studio.server.session import frames
+from xabsl_studio.server.session.files import BehaviorFiles, FileError
+from xabsl_studio.server.session.frames import Generation
+from xabsl_studio.server.session.generations import GenerationGone
+from xabsl_studio.server.session.live import CommandError, Session
+from xabsl_studio.server.session.replay import ReplaySession
+
+log = logging.getLogger("xabsl.server")
+
+#: the built studio UI: web/dist in a checkout (xabsl_studio/web links to it), package data in a wheel
+WEB_DIST = Path(xabsl_studio.__file__).parent / "web"
+
+_NO_UI = """<!doctype html>
+<html><head><meta charset="utf-8"><title>xabsl studio</title></head>
+<body style="font-family: sans-serif; max-width: 40em; margin: 3em auto">
+<h1>xabsl studio</h1>
+<p>The server runs, but the web UI is not built: <code>web/dist</code> is missing.</p>
+<p>Build it with <code>make</code> (or <code>cd web &amp;&amp; npm install &amp;&amp; npm run build</code>),
+then reload this page.</p>
+<p>The API is live: <a href="/api/status">/api/status</a>, schema at
+<a href="/api/openapi.json">/api/openapi.json</a>, websocket at <code>/ws</code>
+(see docs/protocol.md).</p>
+</body></html>
+"""
+
+
+#: What a behavior file path looks like (documented, not enforced here: ``xabsl_studio.server.session.files`` checks
+#: paths and answers 400/403/404 with the reason, which a pattern mismatch could not give).
+FILE_PATH_PATTERN = r"^([^/\\\x00.][^/\\\x00]*/)*[^/\\\x00.][^/\\\x00]*\.xabsl$"
+_FILE_PATH: dict[str, JsonValue] = {"pattern": FILE_PATH_PATTERN}
+FilePath = Annotated[str, FastApiPath(description="relative to the example folder", json_schema_extra=_FILE_PATH)]
+
+
+class FileBody(BaseModel):
+    """The body of writing or creating a file."""
+
+    text: str = Field(description="the whole file content")
+    version: str | None = Field(default=None, description="the version edited (instead of If-Match)")
+
+
+class RenameBody(BaseModel):
+    """The body of renaming a file."""
+
+    path: str = Field(description="the new path, relative to the example folder", json_schema_extra=_FILE_PATH)
+
+
+class CompileBody(BaseModel):
+    """The body of compiling unsaved text."""
+
+    path: str = Field(
+        description="the file the text belongs to, relative to the example folder", pattern=FILE_PATH_PATTERN
+    )
+    text: str = Field(description="its unsaved content")
+
+
+class NdjsonResponse(StreamingResponse):
+    """JSON lines (``/api/log``)."""
+
+    media_type = "application/x-ndjson"
+
+
+class SvgResponse(Response):
+    """An SVG document (``/api/graph``)."""
+
+    media_type = "image/svg+xml"
+
+
+def _etag(value: str | None) -> str | None:
+    if value is None:
+        return None
+    value = value.strip()
+    if value.startswith("W/"):
+        value = value[2:]
+    return value.strip('"')
+
+
+class Studio:
+    """The objects one app serves (reachable from handlers as ``request.app.state.studio``)."""
+
+    def __init__(self, session: Session, policy: SecurityPolicy) -> None:
+        self.session = session
+        self.policy = policy
+        self.files = BehaviorFiles(session.example.root, [f for s in session.example.sources for f in s.file_folders])
+        self.graphs = GraphCache()
+        self.hub: Hub | None = None
+        self.write_lock = asyncio.Lock()
+        #: the recordings it may open, and the replays and forks served beside it (``create_app``)
+        self.library: RecordingLibrary
+        self.studios: Studios
+
+    # -- commands -------------------------------------------------------------------------------
+
+    async def run_command(self, command: Command, client: Client | None) -> Reply:
+        """Carry out a (validated) websocket or REST command; its reply.
+
+        ``reload`` and ``history`` are the server process's (compiling, the ring buffer); every
+        other op goes to the simulation (``Session.request``).
+        """
+        session = self.session
+        try:
+            if isinstance(command, Reload):
+                key = command.program
+                if key is not None and key not in session.programs:
+                    raise CommandError(f"unknown program {key!r}")
+                results = await self.recompile([key] if key else list(session.programs))
+                ok = all(r["ok"] for r in results.values())
+                error = None if ok else "a behavior has errors; the running one is kept"
+                return Reply(id=command.id, ok=ok, result={"programs": results}, error=error)
+            if isinstance(command, History):
+                return Reply(id=command.id, ok=True, result=self.start_history(command, client))
+            owner = client.id if client is not None else None
+            return Reply(id=command.id, ok=True, result=await session.request(command, owner))
+        except CommandError as error:
+            return Reply(id=command.id, ok=False, error=str(error))
+
+    def start_history(self, command: History, client: Client | None) -> dict[str, Any]:
+        """Queue the ``history`` chunks for ``client``; the reply's result (frames, chunks, generations).
+
+        A live session serves every generation still in the ring (``t0``, ``t1``: timeline times,
+        ``t`` plus the generation's offset), each with what the client needs to read its ticks.
+        """
+        t0, t1, every = command.t0, command.t1, command.every
+        if t1 < t0:
+            raise CommandError("history needs t0 <= t1")
+        if client is None:
+            raise CommandError("history streams over the websocket; use GET /api/log over REST")
+        generations: list[dict[str, Any]] = []
+        if isinstance(self.session, ReplaySession):  # the whole recording, read from the file
+            count, encoded = self.session.history_frames(t0, t1, every)
+        else:
+            gens, count, encoded = frames.span_history(self.session.ring, t0, t1, every)
+            generations = [_generation_info(self.session, gen) for gen in gens]
+        chunks = max(1, -(-count // HISTORY_CHUNK)) if count else 0
+
+        def messages() -> Iterator[bytes]:
+            chunk: list[bytes] = []
+            index = 0
+            for frame in encoded:
+                chunk.append(frame)
+                if len(chunk) == HISTORY_CHUNK:
+                    yield encode_history_chunk(command.id, index, False, chunk)
+                    index += 1
+                    chunk = []
+            yield encode_history_chunk(command.id, index, True, chunk)
+
+        if count:
+            client.history.append(messages())
+            client.wake.set()
+        return {"frames": count, "chunks": chunks, "generations": generations}
+
+    # -- compiling and hot reload -------------------------------------------------------------------------
+
+    async def recompile(self, keys: list[str]) -> dict[str, dict[str, Any]]:
+        """Compile behaviors from disk and hot-swap the clean ones; per key ok + diagnostics."""
+        session = self.session
+        results: dict[str, dict[str, Any]] = {}
+        for key in keys:
+            compilation = await asyncio.to_thread(session.compile, key)
+            problem = await session.apply(key, compilation)
+            diagnostics = [d.as_dict() for d in compilation.diagnostics]
+            results[key] = {"ok": problem is None, "diagnostics": diagnostics, "error": problem}
+            if self.hub is not None:
+                self.hub.broadcast(CompileEvent(program=key, ok=problem is None, diagnostics=diagnostics))
+        return results
+
+    def programs_of(self, path: str) -> list[str]:
+        """The behaviors a file belongs to: its folder's, plus any whose last compile read it."""
+        keys = []
+        real = self.files.root / path
+        for key, state in self.session.programs.items():
+            inside = real.resolve().is_relative_to(state.source.folder)
+            read = state.compilation is not None and path in state.compilation.files
+            if inside or read:
+                keys.append(key)
+        return keys
+
+    async def after_write(
+        self, paths: list[str], version: str | None, status: int, deleted: str | None = None
+    ) -> Response:
+        """Recompile the behavior sets ``paths`` belong to, tell the clients, answer the write."""
+        keys: list[str] = []
+        for path in paths:
+            keys.extend(k for k in self.programs_of(path) if k not in keys)
+        results = await self.recompile(keys)
+        ok = all(r["ok"] for r in results.values())
+        diagnostics = [dict(d, program=k) for k, r in results.items() for d in r["diagnostics"]]
+        if self.hub is not None:
+            for path in paths:
+                gone = path == deleted
+                self.hub.broadcast(FileEvent(path=path, version=None if gone else version, deleted=gone))
+        body: dict[str, Any] = {
+            "path": paths[-1],
+            "version": version,
+            "saved": True,
+            "ok": ok,
+            "diagnostics": diagnostics,
+            "reloaded": [k for k, r in results.items() if r["ok"]],
+        }
+        if not ok:
+            errors = [r["error"] for r in results.values() if r["error"]]
+            body["detail"] = "saved, but " + "; ".join(errors)
+            return JSONResponse(body, status_code=422)
+        return JSONResponse(body, status_code=status)
+
+
+def _generation_info(session: Session, gen: Generation) -> dict[str, Any]:
+    """A :class:`~xabsl_studio.server.protocol.replies.GenerationInfo` (the description only for past generations)."""
+    first = next((e for e in session.ring.snapshot() if e.gen is gen), None)
+    info: dict[str, Any] = {
+        "number": gen.number,
+        "reason": gen.reason,
+        "offset": gen.offset,
+        "seq": first.seq if first is not None else 0,
+        "t": first.t if first is not None else 0,
+        "changed_files": sorted({path for paths in gen.changed.values() for path in paths}),
+    }
+    if session.generation is None or gen.number != session.generation.number:
+        info["structure"] = gen.structure
+        info["scene"] = orjson.loads(gen.scene_bytes)
+    return info
+
+
+def _studio(request: Request) -> Studio:
+    studio: Studio = request.app.state.studio
+    return studio
+
+
+# Handlers are module-level functions that find their Studio through the request: FastAPI caches
+# endpoint callables globally, so closures over a session would keep every session (and its
+# world) alive for the life of the process.
+StudioDep = Annotated[Studio, Depends(_studio)]
+router = APIRouter()
+
+
+@router.websocket("/ws")
+async def websocket(ws: WebSocket) -> None:
+    """The live session (docs/protocol.md): one :class:`~xabsl_studio.server.api.clients.Client` per connection."""
+    studio: Studio = ws.app.state.studio
+    assert studio.hub is not None, "the app's lifespan did not run"
+    await studio.hub.serve(ws, studio.run_command, MAX_CLIENTS)
+
+
+@router.websocket("/lsp")
+async def language_server(ws: WebSocket) -> None:
+    """The XABSL language server for the editor (docs/editors.md): LSP, one message per text frame."""
+    from xabsl_studio.lsp.bridge import serve_connection  # pygls is imported only when an editor connects
+
+    studio: Studio = ws.app.state.studio
+    await ws.accept()
+    await serve_connection(ws.receive_text, ws.send_text, studio.session.example.root)
+
+
+# -- session --------------------------------------------------------------------------------------
+
+
+@router.get("/api/status", tags=["session"], responses=error_responses())
+async def status(studio: StudioDep) -> dict[str, Any]:
+    """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
+    result = await studio.session.status()
+    result["clients"] = studio.hub.stats() if studio.hub is not None else {}
+    result["token_required"] = studio.policy.token is not None
+    result["version"] = VERSION
+    return result
+
+
+@router.get("/api/structure", tags=["session"], responses=error_responses())
+async def structure(studio: StudioDep) -> Response:
+    """The ``structure`` of the current hello (programs JSON and agents)."""
+    gen = studio.session.generation
+    return Response(gen.structure_bytes if gen is not None else b"{}", media_type="application/json")
+
+
+_REPLY = {"$ref": "#/components/schemas/RestReply"}
+_COMMAND_DOC: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/json": {"schema": {"$ref": "#/components/schemas/Command"}}},
+    },
+    "responses": {
+        "200": {"description": "the command's reply", "content": {"application/json": {"schema": _REPLY}}},
+        "400": {
+            "description": "a malformed command (the reply's error says what is wrong)",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+        "409": {
+            "description": "a command that does not fit the session now: no such robot, option or symbol, "
+            "step while running, the simulation stopped",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+        "422": {
+            "description": "reload: a behavior set has errors (the running one is kept)",
+            "content": {"application/json": {"schema": _REPLY}},
+        },
+    },
+}
+
+
+@router.post("/api/command", tags=["session"], responses=error_responses(401, 403, 413), openapi_extra=_COMMAND_DOC)
+async def command(studio: StudioDep, request: Request) -> Response:
+    """A websocket command over REST (``{"op": "pause"}``); answers the reply.
+
+    The body is read and validated by the same parser as the websocket's messages
+    (``xabsl_studio.server.protocol.commands.parse_command``): one rule for both edges. 400: the command is malformed;
+    409: it is well formed but does not fit the session (an unknown robot or option...).
+    """
+    body = await request.body()
+    try:
+        parsed = parse_command(body)
+    except ProtocolError as error:
+        return _reply_response(Reply(id=guess_id(body), ok=False, error=str(error)), 400)
+    answer = await studio.run_command(parsed, None)
+    if answer.ok:
+        return _reply_response(answer, 200)
+    # A reload that compiled (a result) with errors is 422; anything else refused is a conflict.
+    return _reply_response(answer, 422 if isinstance(parsed, Reload) and answer.result is not None else 409)
+
+
+def _reply_response(answer: Reply, status: int) -> Response:
+    # A failed reply also carries the error as ``detail``, as every other REST error does.
+    rest = RestReply(id=answer.id, ok=answer.ok, result=answer.result, error=answer.error, detail=answer.error)
+    return Response(encode(rest), status_code=status, media_type="application/json")
+
+
+@router.get(
+    "/api/log",
+    tags=["session"],
+    response_class=NdjsonResponse,
+    responses={
+        **error_responses(422),
+        200: {
+            "description": "one JSON object per line and tick",
+            "content": {"application/x-ndjson": {"schema": {"type": "string"}}},
+        },
+    },
+)
+async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(2**62)) -> StreamingResponse:
+    """The ring buffer between behavior times t0 and t1 as JSON lines, with names (none when t1 < t0)."""
+    session = studio.session
+    latest = session.ring.latest
+    if latest is None or t1 < t0:
+        return NdjsonResponse(iter(()))
+    encoded = frames.history(session.ring, t0, t1)
+    return NdjsonResponse(_log_lines(encoded, latest.gen))
+
+
+@router.get("/api/generations/{number}/diff", tags=["session"], responses=error_responses(404))
+async def generation_diff(studio: StudioDep, number: int = FastApiPath(ge=0, le=2**62)) -> dict[str, Any]:
+    """What a hot reload (or reset, fork) changed: per behavior file, its unified diff.
+
+    Against generation ``number - 1``, from the sources the session keeps of recent generations.
+    """
+    session = studio.session
+    if isinstance(session, ReplaySession):
+        raise HTTPException(404, "a replay keeps no behavior sources per generation")
+    try:
+        return session.generations.diff(number)
+    except GenerationGone as error:
+        raise HTTPException(404, str(error)) from None
+
+
+# -- files ------------------------------------------------------------------------------------------
+
+
+@router.get("/api/files", tags=["files"], responses=error_responses())
+async def list_files(studio: StudioDep) -> dict[str, Any]:
+    """Every behavior file: path, version, size, the behaviors it belongs to."""
+    listed = await asyncio.to_thread(studio.files.list)
+    for item in listed:
+        item["programs"] = studio.programs_of(item["path"])
+    return {"files": listed}
+
+
+@router.get("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 415))
+async def read_file(studio: StudioDep, path: FilePath) -> JSONResponse:
+    """A file's text and version (also as ETag)."""
+    text, version = await asyncio.to_thread(studio.files.read, path)
+    return JSONResponse({"path": path, "version": version, "text": text}, headers={"ETag": f'"{version}"'})
+
+
+@router.put("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 409, 413, 422, 428))
+async def write_file(
+    studio: StudioDep, path: FilePath, body: FileBody, if_match: str | None = Header(default=None)
+) -> Response:
+    """Replace a file (If-Match: its version); compile; hot-swap when clean, else 422."""
+    expected = _etag(if_match) or body.version
+    async with studio.write_lock:
+        version = await asyncio.to_thread(studio.files.write, path, body.text, expected)
+        return await studio.after_write([path], version, 200)
+
+
+@router.post(
+    "/api/files/{path:path}", tags=["files"], status_code=201, responses=error_responses(400, 404, 409, 413, 422)
+)
+async def create_file(studio: StudioDep, path: FilePath, body: FileBody) -> Response:
+    """Create a file (409 if it exists); compile the behaviors it belongs to."""
+    async with studio.write_lock:
+        version = await asyncio.to_thread(studio.files.create, path, body.text)
+        return await studio.after_write([path], version, 201)
+
+
+@router.patch("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 409, 413, 422))
+async def rename_file(
+    studio: StudioDep, path: FilePath, body: RenameBody, if_match: str | None = Header(default=None)
+) -> Response:
+    """Rename a file to ``body.path`` (409 if that exists)."""
+    async with studio.write_lock:
+        version = await asyncio.to_thread(studio.files.rename, path, body.path, _etag(if_match))
+        return await studio.after_write([path, body.path], version, 200, deleted=path)
+
+
+@router.delete("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 409, 422))
+async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = Header(default=None)) -> Response:
+    """Delete a file; compile the behaviors it belonged to."""
+    async with studio.write_lock:
+        await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
+        return await studio.after_write([path], None, 200, deleted=path)
+
+
+class TestForce(BaseModel):
+    """What the tester forced: an option or basic behavior and its parameters (enums by element name)."""
+
+    kind: str = Field(pattern="^(option|behavior)$")
+    name: str = Field(min_length=1, max_length=200)
+    params: dict[str, JsonValue] = Field(default_factory=dict)
+
+
+class TestHit(BaseModel):
+    """A breakpoint hit to reproduce: breakpoint ``breakpoint`` of behavior ``program`` after tick ``seq``."""
+
+    program: str = Field(min_length=1, max_length=500)
+    breakpoint: int = Field(ge=1, le=2**31)
+    seq: int = Field(ge=0)
+
+
+class TestDraftBody(BaseModel):
+    """Save as test: the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
+
+    name: str = Field(min_length=1, max_length=120)
+    robot: str = Field(min_length=1, max_length=120)
+    force: TestForce | None = None
+    overrides: dict[str, JsonValue] = Field(default_factory=dict)
+    active: list[tuple[str, str]] = Field(default_factory=list, max_length=500)
+    behaviors: list[str] = Field(default_factory=list, max_length=500)
+    duration: float = Field(5.0, gt=0, le=3600)
+    hit: TestHit | None = None
+    save: bool = False
+
+
+@router.post("/api/tests/draft", tags=["files"], responses=error_responses(400, 409, 422))
+async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
+    """A behavior test file reproducing the tester's situation (text; with ``save``, also written).
+
+    The setup comes from the world's latest scene when the world plug-in can turn a scene into a
+    setup (``setup_from_scene``); the file goes to the example folder's ``tests/`` (409 if it exists).
+    With ``hit``, the scene is the hit's tick and the assertions are the breakpoint's (409 when the
+    breakpoint was removed or the tick left the history).
+    """
+    from xabsl_studio.engine.files import write_atomically
+    from xabsl_studio.engine.testing.save import DraftError, draft_file_name, draft_test
+    from xabsl_studio.engine.worlds.loader import world_names
+
+    session = studio.session
+    plugin = session.example
+    latest = session.ring.latest
+    hit = None
+    if body.hit is not None:
+        point = session.breakpoints.get(body.hit.program, {}).get(body.hit.breakpoint)
+        if point is None:
+            raise HTTPException(409, f"no breakpoint {body.hit.breakpoint} in {body.hit.program!r} (removed?)")
+        latest = session.ring.get(body.hit.seq)
+        if latest is None or not latest.scene:  # the ring keeps scenes of its newest ticks only
+            raise HTTPException(409, f"the world at tick {body.hit.seq} is no longer kept; save from a recent hit")
+        hit = (point, body.robot, body.hit.seq, latest.t)
+    scene = orjson.loads(latest.scene) if latest is not None else {}
+    status = orjson.loads(latest.status) if latest is not None else {}
+    gen = session.generation
+    agents = orjson.loads(gen.scene_bytes).get("agents", []) if gen is not None else []
+    names = [str(a.get("name")) for a in agents if isinstance(a, dict)]
+    if body.robot not in names:
+        raise HTTPException(409, f"no robot {body.robot!r} in this session")
+    example = getattr(plugin, "example", plugin)
+    describe = getattr(example, "setup_from_scene", None)
+    setup = describe(scene, status, names) if callable(describe) and scene else None
+    tests = Path(plugin.root) / "tests"
+    where = Path(getattr(plugin, "path", plugin.root))
+    world = getattr(plugin, "world", None)
+    if world is None and not (where / "studio.py").is_file() and plugin.name in world_names():
+        world = plugin.name  # a folder without studio.py served in a named world: name it
+    try:
+        file = draft_file_name(body.name)
+        text = draft_test(
+            name=body.name,
+            robot=body.robot,
+            tests_folder=tests,
+            example_path=where,
+            world=world,
+            options=getattr(plugin, "options", {}),
+            seed=session.seed,
+            setup=setup,
+            force=(body.force.kind, body.force.name, body.force.params) if body.force is not None else None,
+            overrides=body.overrides,
+            active=body.active,
+            behaviors=body.behaviors,
+            duration=body.duration,
+            hit=hit,
+        )
+    except (DraftError, ValueError) as error:
+        raise HTTPException(422, str(error)) from None
+    path = tests / file
+    saved = False
+    if body.save:
+        if path.exists():
+            raise HTTPException(409, f"tests/{file} exists already")
+        tests.mkdir(exist_ok=True)
+        await asyncio.to_thread(write_atomically, path, text.encode("utf-8"))
+        saved = True
+    return {"text": text, "path": f"tests/{file}", "saved": saved}
+
+
+@router.post("/api/compile", tags=["files"], responses=error_responses(400, 404, 413, 422))
+async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
+    """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
+    real = studio.files.resolve(body.path, must_exist=False)
+    keys = studio.programs_of(body.path)
+    diagnostics: list[dict[str, Any]] = []
+    ok = True
+    for key in keys:
+        compilation = await asyncio.to_thread(studio.session.compile, key, {str(real): body.text})
+        ok = ok and compilation.ok
+        diagnostics.extend(dict(d.as_dict(), program=key) for d in compilation.diagnostics)
+    return {"ok": ok, "diagnostics": diagnostics, "programs": keys}
+
+
+# -- graphs ------------------------------------------------------------------------------------------
+
+
+def _running(studio: Studio, key: str) -> Program:
+    shown = studio.session.shown_program(key)
+    if shown is None:
+        raise HTTPException(404, f"no running behavior {key!r}")
+    return shown
+
+
+async def _svg(studio: Studio, request: Request, dot: str) -> Response:
+    try:
+        svg, etag = await asyncio.to_thread(studio.graphs.svg, dot)
+    except GraphvizMissing as error:
+        raise HTTPException(503, str(error)) from None
+    if _etag(request.headers.get("if-none-match")) == etag:
+        return Response(status_code=304, headers={"ETag": f'"{etag}"'})
+    return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
+
+
+_SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
+    **error_responses(404, 422, 503),
+    200: {"description": "the graph", "content": {"image/svg+xml": {"schema": {"type": "string"}}}},
+    304: {"description": "the SVG of the If-None-Match ETag is still current"},
+}
+
+
+@router.get("/api/graph/{program}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
+async def graph(
+    studio: StudioDep, request: Request, program: str, agent: str | None = None, root: str | None = None
+) -> Response:
+    """The option graph below an XABSL agent's root option, or below option ``root`` (a forced root) (SVG)."""
+    try:
+        dot = option_graph_dot(_running(studio, program), agent, root)
+    except GraphError as error:
+        raise HTTPException(404, str(error)) from None
+    return await _svg(studio, request, dot)
+
+
+@router.get("/api/graph/{program}/{option}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
+async def option_graph(studio: StudioDep, request: Request, program: str, option: str) -> Response:
+    """The state machine of one option (SVG)."""
+    try:
+        dot = state_machine_dot(_running(studio, program), option)
+    except GraphError as error:
+        raise HTTPException(404, str(error)) from None
+    return await _svg(studio, request, dot)
+
+
+async def _file_error(request: Request, error: Exception) -> JSONResponse:
+    assert isinstance(error, FileError)
+    return JSONResponse({"detail": error.message, **error.extra}, status_code=error.status)
+
+
+async def _command_error(request: Request, error: Exception) -> JSONResponse:
+    return JSONResponse({"detail": str(error)}, status_code=409)
+
+
+async def _method_not_allowed(request: Request, error: Exception) -> Response:
+    """405 with the methods *every* route of the path allows (one route per method in FastAPI)."""
+    assert isinstance(error, StarletteHTTPException)
+    if error.status_code != 405:
+        return await http_exception_handler(request, error)
+    allowed: set[str] = set()
+    for route in router.routes:  # the API's own routes (the app wraps the included router)
+        if isinstance(route, APIRoute) and route.matches({**request.scope, "method": "GET"})[0] is not Match.NONE:
+            allowed.update(route.methods or ())
+    if "GET" in allowed:
+        allowed.add("HEAD")
+    return JSONResponse(
+        {"detail": "Method Not Allowed"}, status_code=405, headers={"Allow": ", ".join(sorted(allowed))}
+    )
+
+
+async def _no_ui(request: Request) -> HTMLResponse:
+    return HTMLResponse(_NO_UI)
+
+
+@asynccontextmanager
+async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
+    studio: Studio = app.state.studio
+    session = studio.session
+    hub = Hub(session, asyncio.get_running_loop())
+    hub.token_required = studio.policy.token is not None
+    studio.hub = hub
+    session.notify = hub.on_entry
+    session.on_crash = hub.on_crash
+    session.on_breakpoint = hub.on_breakpoint
+    await session.start()
+    try:
+        yield
+    finally:
+        if getattr(app.state, "serves_studios", False):
+            await studio.studios.close_all()
+        await hub.close_all()
+        session.notify = _ignore
+        await session.aclose()
+        studio.hub = None
+
+
+def _ignore(entry: frames.Entry) -> None:
+    return None
+
+
+def create_app(
+    session: Session,
+    policy: SecurityPolicy | None = None,
+    web_dist: Path | None = WEB_DIST,
+    library: RecordingLibrary | None = None,
+    studios: Studios | None = None,
+) -> FastAPI:
+    """The studio app for a session (not started yet: the app's lifespan starts and stops it).
+
+    Args:
+        session: the simulation session to serve.
+        policy: security checks (default: loopback, no token).
+        web_dist: the built web UI, served at ``/`` (a help page when missing).
+        library: the recordings it may open beside itself (default: none but a replay's own file).
+        studios: the replays and forks served beside it: given, this app is one of them (served
+            under a prefix by the main app's); None: this is the main app, which serves them.
+    """
+    policy = policy or SecurityPolicy(token=None)
+    app = FastAPI(
+        title="xabsl studio",
+        version=str(VERSION),
+        description="Live XABSL behavior session: see docs/protocol.md.",
+        openapi_url="/api/openapi.json",
+        docs_url="/api/docs",
+        redoc_url=None,
+        lifespan=_lifespan,
+    )
+    app.state.studio = studio = Studio(session, policy)
+    if library is None:
+        own = [Path(session.recording.path)] if isinstance(session, ReplaySession) else []
+        library = RecordingLibrary(None, own)
+    studio.library = library
+    studio.studios = studios if studios is not None else Studios(policy, web_dist)
+    if studios is None:  # the main app: serves the others under their prefixes, behind its checks
+        studio.studios.library = library
+        app.add_middleware(StudiosMiddleware, studios=studio.studios)
+        app.state.serves_studios = True
+        if not isinstance(session, ReplaySession):
+            plugin = session.example
+            studio.studios.home_example = (Path(getattr(plugin, "path", plugin.root)), getattr(plugin, "world", None))
+    app.add_middleware(SecurityMiddleware, policy=policy)
+    app.add_exception_handler(FileError, _file_error)
+    app.add_exception_handler(CommandError, _command_error)
+    app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
+    app.include_router(router)
+    app.include_router(docs_router)
+    app.include_router(profile_router)
+    app.include_router(fork_router)
+    app.include_router(library_router)
+    _document_messages(app)
+    if web_dist is not None and (web_dist / "index.html").is_file():
+        app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")
+    else:
+        app.add_api_route("/", _no_ui, methods=["GET"], include_in_schema=False)
+    return app
+
+
+def _document_messages(app: FastAPI) -> None:
+    """Add the command and reply schemas of ``server/protocol/`` to the app's OpenAPI components."""
+    base = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        schema = base()
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        if "Command" not in components:
+            components.update(openapi_schemas())
+            components["ErrorBody"] = ErrorBody.model_json_schema()
+        return schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+
+
+def _log_lines(encoded: Iterator[bytes], gen: frames.Generation) -> Iterator[bytes]:
+    """Decoded frames (full first, then deltas) -> one JSON line per tick with names."""
+    state: dict[int, dict[str, dict[str, Any]]] = {}
+    names = _names(gen)
+    robots_info = gen.structure["robots"]
+    for data in encoded:
+        frame = orjson.loads(data)
+        robots = []
+        for robot in frame["robots"]:
+            index = robot["id"]
+            values = state.setdefault(index, {"inputs": {}, "outputs": {}})
+            for kind in ("inputs", "outputs"):
+                values[kind].update(robot.get(kind, {}))
+            table = names.get(index)
+            if table is None:
+                robots.append({"id": index, "name": robots_info[index]["name"], "path": []})
+                continue
+            robots.append(
+                {
+                    "id": index,
+                    "name": robots_info[index]["name"],
+                    "path": [table.node(node) for node in robot["path"]],
+                    "outputs": {table.outputs.get(int(k), k): v for k, v in values["outputs"].items()},
+                    "inputs": {table.inputs.get(int(k), k): v for k, v in values["inputs"].items()},
+                    **{k: robot[k] for k in ("fault", "forced", "overrides") if k in robot},
+                }
+            )
+        yield orjson.dumps({"seq": frame["seq"], "t": frame["t"], "robots": robots}) + b"\n"
+
+
+class _Names:
+    """Id -> name tables of one program, from its program JSON (the hello's structure)."""
+
+    def __init__(self, program: dict[str, Any]) -> None:
+        self.options = {o["id"]: o for o in program["options"]}
+        self.behaviors = {b["id"]: b["name"] for b in program["behaviors"]}
+        self.inputs = {s["id"]: s["name"] for s in program["inputs"]}
+        self.outputs = {s["id"]: s["name"] for s in program["outputs"]}
+
+    def node(self, node: list[Any]) -> dict[str, Any]:
+        """A path node (``xabsl_studio.server.protocol.types.OptionNode`` or ``BehaviorNode``) with names."""
+        depth = node[DEPTH_INDEX]
+        if node[0] == OPTION_NODE:
+            option = self.options[node[ID_INDEX]]
+            states = option["states"]
+            state, option_time, state_time, decided_in, leaf = node[ID_INDEX + 1 : OPTION_PARAMS_INDEX]
+            params = node[OPTION_PARAMS_INDEX]
+            return {
+                "depth": depth,
+                "option": option["name"],
+                "state": states[state]["name"],
+                "option_time": option_time,
+                "state_time": state_time,
+                "decided_in": states[decided_in]["name"] if decided_in >= 0 else None,
+                "leaf": leaf,
+                "params": dict(zip((p["name"] for p in option["params"]), params, strict=False)),
+            }
+        time, params = node[ID_INDEX + 1], node[BEHAVIOR_PARAMS_INDEX]
+        return {"depth": depth, "behavior": self.behaviors[node[ID_INDEX]], "time": time, "params": params}
+
+
+def _names(gen: frames.Generation) -> dict[int, _Names]:
+    tables: dict[str, _Names] = {}
+    result: dict[int, _Names] = {}
+    programs = gen.structure["programs"]
+    for robot in gen.structure["robots"]:
+        key = robot["program"]
+        if key is None:
+            continue
+        if key not in tables:
+            tables[key] = _Names(programs[key])
+        result[robot["id"]] = tables[key]
+    return result

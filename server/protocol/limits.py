@@ -1,0 +1,50 @@
+"""The studio's websocket protocol, version 1: its version, limits and close codes (docs/protocol.md).
+
+The messages themselves are typed in ``commands``, ``replies`` and ``host`` beside it; changing a message's shape means
+bumping :data:`VERSION` (the web UI checks it in every ``hello``).
+"""
+
+from __future__ import annotations
+
+import enum
+
+#: The schema version sent in ``hello``; a client that does not know it must not go on.
+VERSION = 1
+
+#: Largest client message in bytes (uvicorn's ``ws_max_size`` and our own check, close 1009).
+MAX_MESSAGE_BYTES = 64 * 1024
+#: Largest message on the editor's language-server websocket (``/lsp``): an opened or changed file
+#: travels whole, JSON-escaped, and files may be 16 MiB (``xabsl_studio.server.session.files.MAX_FILE_BYTES``). It is
+#: uvicorn's ``ws_max_size``; ``/ws`` keeps its own lower limit.
+MAX_LSP_MESSAGE_BYTES = 40 * 1024 * 1024
+#: Largest REST request body in bytes (413 above).
+MAX_BODY_BYTES = 1024 * 1024
+#: Most websocket clients at once (close 1013 above).
+MAX_CLIENTS = 64
+#: Control messages (replies, events, history chunks) waiting for one client; a client that sends
+#: commands without reading the replies is closed with 1008 when it reaches this.
+MAX_PENDING_CONTROL = 256
+
+#: Frames per second a client may ask for.
+MIN_RATE, MAX_RATE, DEFAULT_RATE = 1.0, 60.0, 30.0
+#: Simulation speed factors the session accepts.
+MIN_SPEED, MAX_SPEED = 0.1, 20.0
+#: At least one full frame per this many ticks in every client's stream (see ``frame.full``).
+FULL_EVERY = 200
+#: Frames per ``history`` message.
+HISTORY_CHUNK = 200
+#: Most ticks one ``step`` command runs.
+MAX_STEP_TICKS = 400
+
+
+class CloseCode(enum.IntEnum):
+    """Websocket close codes the server uses (RFC 6455 section 7.4.1)."""
+
+    NORMAL = 1000
+    GOING_AWAY = 1001
+    UNSUPPORTED_DATA = 1003
+    INVALID_DATA = 1007
+    POLICY_VIOLATION = 1008
+    MESSAGE_TOO_BIG = 1009
+    INTERNAL_ERROR = 1011
+    TRY_AGAIN_LATER = 1013

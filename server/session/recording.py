@@ -1,0 +1,383 @@
+"""The live studio session recorded to a folder, in the server process, from the samples it receives.
+
+:class:`LiveRecorder` turns the simulation's :class:`~xabsl_studio.server.protocol.host.Sample` messages (which the
+server process receives anyway for its frames) into :class:`~xabsl_studio.engine.record.RecordingEncoder`
+operations, so recording costs the simulation process nothing. Files roll: a new one every
+``roll_ticks`` ticks (10 minutes at 40 Hz by default), named ``EXAMPLE-YYYYmmdd-HHMMSS-NNN.mcap``;
+after each roll the oldest files of the folder are deleted while the folder holds more than
+``cap_bytes``. Every file opens on its own (header, program descriptions, static scene).
+
+What a sample carries is what the frames show, so a live recording differs from a headless one
+(``xabsl run --record``) in three ways, written into its header (``"source": "studio"``): values
+are display values (decimals to 3 digits, enum values as element indices, which the header's
+``tables.enums`` names), assignment values are not recorded (the trees have no assignment
+nodes), and a tick whose sample the pipe dropped is missing (ticks are numbered as written).
+
+Generations become recording generations: a reload writes the new description on
+``/xabsl/program`` and a ``reload`` event (with the files the compile read), a reset a ``reset``
+event and the new static scene; commands (pause, step, speed, forcing, overrides, ...) become
+events through :meth:`LiveRecorder.event`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import os
+import re
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import orjson
+
+from xabsl_studio.engine.emit.ic import emit_ic
+from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record import RecordingEncoder
+from xabsl_studio.engine.record import schema as S
+from xabsl_studio.engine.record.encoder import NO_CHANGE
+from xabsl_studio.engine.record.sampler import ProgramTables
+from xabsl_studio.engine.types import Kind
+from xabsl_studio.server.protocol.host import Sample
+from xabsl_studio.server.session.frames import Generation
+
+__all__ = ["DEFAULT_CAP_BYTES", "DEFAULT_ROLL_TICKS", "LiveRecorder", "default_folder", "tables_of"]
+
+log = logging.getLogger("xabsl.server")
+
+#: Commands that become events, by op (resets are written with their generation).
+_EVENT_OF = {
+    "pause": "pause",
+    "resume": "resume",
+    "step": "step",
+    "speed": "speed",
+    "select_agent": "select_agent",
+    "force_option": "force",
+    "force_behavior": "force",
+    "release": "release",
+    "override_input": "override",
+    "release_input": "release_input",
+    "reset_agent": "reset_agent",
+}
+
+#: The folder's size cap by default.
+DEFAULT_CAP_BYTES = 2_000_000_000
+#: Ticks per file by default (10 minutes at 40 Hz).
+DEFAULT_ROLL_TICKS = 24_000
+
+
+def default_folder() -> Path:
+    """``$XDG_CACHE_HOME/xabsl-studio/recordings`` (``~/.cache`` without XDG_CACHE_HOME)."""
+    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(cache) / "xabsl-studio" / "recordings"
+
+
+def tables_of(program: Program) -> ProgramTables:
+    """The tables of ``program`` for display values: enum "host values" are element indices."""
+    inputs = tuple(s for s in program.inputs.values() if not s.params)
+    outputs = tuple(program.outputs.values())
+    return ProgramTables(
+        inputs=tuple(s.name for s in inputs),
+        outputs=tuple(s.name for s in outputs),
+        input_enums=tuple(s.enum if s.kind is Kind.ENUM else None for s in inputs),
+        output_enums=tuple(s.enum if s.kind is Kind.ENUM else None for s in outputs),
+        # display values are rounded already: the encoder keeps them as they are
+        input_decimals=tuple(False for _ in inputs),
+        output_decimals=tuple(False for _ in outputs),
+        enums={name: dict(enumerate(enum.elements)) for name, enum in program.enums.items()},
+        behavior_params={
+            name: tuple((p.name, p.enum if p.kind is Kind.ENUM else None) for p in b.params)
+            for name, b in program.behaviors.items()
+        },
+        assignment_sites=(),
+    )
+
+
+class LiveRecorder:
+    """Records a studio session into rolling files of ``folder`` (see the module docstring)."""
+
+    def __init__(
+        self,
+        folder: str | os.PathLike[str],
+        example: str,
+        behavior_hz: int,
+        physics_hz: int,
+        cap_bytes: int = DEFAULT_CAP_BYTES,
+        roll_ticks: int = DEFAULT_ROLL_TICKS,
+        key_every: int = S.KEY_EVERY,
+    ) -> None:
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.example = example
+        self.behavior_hz = behavior_hz
+        self.physics_hz = physics_hz
+        self.cap_bytes = cap_bytes
+        self.roll_ticks = roll_ticks
+        self.key_every = key_every
+        self.files: list[Path] = []
+        self.ticks = 0
+        self._encoder: RecordingEncoder | None = None
+        self._seq = 0
+        self._gen: Generation | None = None
+        self._programs: dict[str, Program] = {}
+        self._descriptions: dict[str, bytes] = {}
+        self._program_gen: dict[str, int] = {}
+        self._seed = 0
+        self._extras: list[bytes] = []
+        self._failed = False
+        self._t = 0
+        #: seconds spent encoding samples (the server process's cost of recording)
+        self.seconds = 0.0
+
+    # -- from the session ------------------------------------------------------------------------
+
+    def generation(
+        self, gen: Generation, programs: Mapping[str, Program | None], seed: int, changed_files: Mapping[str, list[str]]
+    ) -> None:
+        """A new generation arrived (start, reload, reset): describe it before its first sample."""
+        self._seed = seed
+        previous = self._gen
+        self._gen = gen
+        if self._failed:
+            return
+        try:
+            if self._encoder is None:
+                self._programs = {k: p for k, p in programs.items() if p is not None}
+                self._open()
+                return
+            described = gen.structure["programs"]
+            for key, description in described.items():
+                data = orjson.dumps(description)
+                program = programs.get(key)
+                if data == self._descriptions.get(key) or program is None:
+                    continue
+                self._programs[key] = program
+                self._descriptions[key] = data
+                self._program_gen[key] = self._program_gen.get(key, -1) + 1
+                files = list(changed_files.get(key, ()))
+                self._write_program(key, description, "reload", files, program)
+                self._event(
+                    "reload",
+                    None,
+                    {
+                        "key": key,
+                        "gen": self._program_gen[key],
+                        "changed_files": files,
+                        "tables": tables_of(program).to_json(),
+                    },
+                )
+            # A fork rebuilds the world like a reset (at an earlier tick of the same seed).
+            if gen.reason in ("reset", "fork") or previous is None or gen.scene_bytes != previous.scene_bytes:
+                if gen.reason in ("reset", "fork"):
+                    self._event("reset", None, {"reason": gen.reason, "gen": gen.number, "seed": seed})
+                self._static(gen)
+            self._bind(gen)
+        except Exception:  # a full disk must not stop the studio
+            self._fail()
+
+    def sample(self, sample: Sample) -> None:
+        """One tick of the current generation."""
+        gen = self._gen
+        if gen is None or self._failed:
+            return
+        started = time.perf_counter()
+        try:
+            if self._encoder is None:
+                self._open()
+            encoder = self._encoder
+            assert encoder is not None
+            loads = orjson.loads
+            samples: list[Any] = []
+            extras = self._extras
+            for i, has_engine in enumerate(gen.engines):
+                if not has_engine:
+                    samples.append(None)
+                    continue
+                fault: Any = NO_CHANGE
+                extra = sample.extras[i]
+                if i >= len(extras) or extra != extras[i]:
+                    fault = loads(b"{" + extra[1:] + b"}").get("fault") if extra else None
+                    while len(extras) <= i:
+                        extras.append(b"")
+                    extras[i] = extra
+                roots = NO_CHANGE
+                samples.append(
+                    (sample.seq, loads(sample.paths[i]), (), sample.inputs[i], sample.outputs[i], roots, fault, ())
+                )
+            seq = self._seq
+            status = loads(sample.status) if seq % self.key_every == 0 else None
+            encoder.handle(("tick", seq, sample.t, samples, loads(sample.scene), status))
+            self._t = sample.t
+            self._seq = seq + 1
+            self.ticks += 1
+            if self._seq >= self.roll_ticks:
+                self._close()
+        except Exception:
+            self._fail()
+        self.seconds += time.perf_counter() - started
+
+    def stats(self) -> dict[str, Any]:
+        """For ``/api/status``: where, how much, at what cost per tick."""
+        current = self._encoder.path if self._encoder is not None else None
+        return {
+            "folder": str(self.folder),
+            "file": str(current) if current is not None else None,
+            "files": [str(p) for p in self.files],
+            "ticks": self.ticks,
+            "ms_per_tick": round(1000 * self.seconds / self.ticks, 4) if self.ticks else 0.0,
+            "failed": self._failed,
+        }
+
+    def event(self, kind: str, agent: str | None = None, **data: Any) -> None:
+        """A session event (``xabsl_studio.engine.record.schema.EVENT_KINDS``) before the next tick."""
+        if kind not in S.EVENT_KINDS or self._failed:
+            return
+        try:
+            if self._encoder is None and self._gen is not None:
+                self._open()
+            self._event(kind, agent, data)
+        except Exception:
+            self._fail()
+
+    def command(self, command: Any) -> None:
+        """A command the simulation carried out, as an event (those that change what runs)."""
+        op = getattr(command, "op", None)
+        kind = _EVENT_OF.get(op or "")
+        if kind is None:
+            return
+        data = {k: v for k, v in dataclasses.asdict(command).items() if k not in ("type", "id", "op", "robot")}
+        robot = getattr(command, "robot", None)
+        agent = None
+        if robot is not None and self._gen is not None and 0 <= robot < len(self._gen.structure["robots"]):
+            agent = self._gen.structure["robots"][robot]["name"]
+        self.event(kind, agent, **data)
+
+    def close(self) -> None:
+        """Finish the current file (and keep the folder under its cap)."""
+        if self._encoder is not None:
+            self._close()
+
+    # -- files ------------------------------------------------------------------------------------
+
+    def _open(self) -> None:
+        gen = self._gen
+        assert gen is not None
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        name = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.example).strip("._") or "session"
+        n = 1
+        path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"  # names sort in time order
+        while path.exists() or path.with_name(path.name + ".part").exists():
+            n += 1
+            path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"
+        # Display values are rounded already (decimals=None: written as they come).
+        self._encoder = RecordingEncoder(path, self.behavior_hz, self.key_every, decimals=None)
+        self._seq = 0
+        self._extras = []
+        structure = gen.structure
+        static = orjson.loads(gen.scene_bytes)
+        self._program_gen = {key: 0 for key in structure["programs"]}
+        self._descriptions = {key: orjson.dumps(d) for key, d in structure["programs"].items()}
+        self._message(
+            S.RECORDING,
+            "xabsl.Recording",
+            {
+                "format": S.FORMAT,
+                "version": S.VERSION,
+                "example": self.example,
+                "world": str(static.get("kind", "")),
+                "seed": int(self._seed),
+                "behavior_hz": self.behavior_hz,
+                "physics_hz": self.physics_hz,
+                "key_every": self.key_every,
+                "decimals": 3,
+                "deterministic": False,
+                "agents": [
+                    {
+                        "id": r["id"],
+                        "name": r["name"],
+                        "team": r.get("team"),
+                        "number": r.get("number"),
+                        "program": r["program"],
+                    }
+                    for r in structure["robots"]
+                ],
+                "tables": {
+                    key: tables_of(p).to_json() for key, p in self._programs.items() if key in structure["programs"]
+                },
+            },
+        )
+        for key, description in structure["programs"].items():
+            self._write_program(key, description, "start", [], self._programs.get(key))
+        self._bind(gen)
+        self._static(gen)
+
+    def _close(self) -> None:
+        encoder, self._encoder = self._encoder, None
+        if encoder is None:
+            return
+        path, _, _, _ = encoder.close()
+        self.files.append(Path(path))
+        self._prune()
+
+    def _prune(self) -> None:
+        """Delete the oldest recordings while the folder holds more than the cap."""
+        files = sorted(self.folder.glob("*.mcap"), key=lambda p: p.stat().st_mtime)
+        total = sum(p.stat().st_size for p in files)
+        while files and total > self.cap_bytes:
+            oldest = files.pop(0)
+            total -= oldest.stat().st_size
+            oldest.unlink(missing_ok=True)
+
+    def _fail(self) -> None:
+        log.exception("recording the session failed; the studio goes on without recording")
+        self._failed = True
+        if self._encoder is not None:
+            self._encoder.abort()
+            self._encoder = None
+
+    # -- messages ---------------------------------------------------------------------------------
+
+    def _message(self, topic: str, schema: str, message: dict[str, Any]) -> None:
+        assert self._encoder is not None
+        self._encoder.handle(("msg", topic, schema, self._seq, message))
+
+    def _event(self, kind: str, agent: str | None, data: dict[str, Any]) -> None:
+        self._message(
+            S.EVENTS, "xabsl.Event", {"seq": self._seq, "t": self._t, "kind": kind, "agent": agent, "data": data}
+        )
+
+    def _write_program(
+        self, key: str, description: dict[str, Any], reason: str, files: list[str], program: Program | None
+    ) -> None:
+        ic = {"ic": emit_ic(program)} if program is not None else {}
+        self._message(
+            S.PROGRAM,
+            "xabsl.Program",
+            {
+                "seq": self._seq,
+                "gen": self._program_gen.get(key, 0),
+                "key": key,
+                "reason": reason,
+                "program": description,
+                "changed_files": files,
+                **ic,
+            },
+        )
+
+    def _static(self, gen: Generation) -> None:
+        assert self._encoder is not None
+        static = orjson.loads(gen.scene_bytes)
+        self._encoder.handle(("static", self._seq, static, {}))
+
+    def _bind(self, gen: Generation) -> None:
+        assert self._encoder is not None
+        for robot in gen.structure["robots"]:
+            key = robot["program"]
+            program = self._programs.get(key) if key is not None else None
+            if program is None:
+                continue
+            self._encoder.handle(
+                ("agent", robot["id"], robot["name"], tables_of(program), self._program_gen.get(key, 0))
+            )
+        self._encoder.handle(("key",))

@@ -1,0 +1,1 @@
+"""The simulation process: it runs the world and the engines, carries out commands, samples each tick."""
