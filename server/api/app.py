@@ -725,9 +725,16 @@ def create_app(
         own = [Path(session.recording.path)] if isinstance(session, ReplaySession) else []
         library = RecordingLibrary(None, own)
     studio.library = library
-    studio.studios = studios if studios is not None else Studios(policy, web_dist)
-    if studios is None:  # the main app: serves the others under their prefixes, behind its checks
-        studio.studios.library = library
+    if studios is not None:
+        studio.studios = studios
+    else:  # the main app: serves the others under their prefixes, behind its checks
+        main = studio
+
+        def make_app(served: Session, beside: Studios) -> FastAPI:
+            # the main studio's recordings: its Recordings dialog lists them in every tab
+            return create_app(served, policy, web_dist, library=main.library, studios=beside)
+
+        studio.studios = Studios(make_app)
         app.add_middleware(StudiosMiddleware, studios=studio.studios)
         app.state.serves_studios = True
         if not isinstance(session, ReplaySession):

@@ -21,14 +21,13 @@ import contextlib
 import itertools
 import re
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import orjson
 from starlette.types import ASGIApp, Receive, Scope, Send
-
-from xabsl_studio.server.api.security import SecurityPolicy
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -91,27 +90,25 @@ class Studios:
     """The studios served beside the main one (see the module docstring).
 
     Args:
-        policy: the security policy every studio app applies (the main app's).
-        web_dist: the web build they serve.
+        make_app: the app of a studio served here, for its session (the main app's security
+            policy, web build and recordings).
         limits: the most open at once, per kind.
     """
 
     def __init__(
         self,
-        policy: SecurityPolicy,
-        web_dist: Path | None,
+        make_app: Callable[[Session, Studios], FastAPI],
         limits: dict[Kind, int] | None = None,
     ) -> None:
-        self.policy = policy
-        self.web_dist = web_dist
+        #: builds the app of a studio served here (the main app's ``create_app`` with its policy,
+        #: web build and recordings): given, not imported, so the edge's modules form no circle
+        self.make_app = make_app
         self.limits: dict[Kind, int] = limits or {"replay": MAX_REPLAYS, "fork": MAX_FORKS}
         self.open: dict[int, SubStudio] = {}
         self._ids = itertools.count(1)
         #: the main studio's example (a live one) as ``(path, world)`` for ``load_example``: forks
         #: of a recording of that example run its behaviors
         self.home_example: tuple[Path, str | None] | None = None
-        #: the main studio's recordings (its Recordings dialog lists them in every tab)
-        self.library: Any = None
 
     def get(self, kind: str, ident: int) -> SubStudio | None:
         """The open studio ``/KIND/ID/``, or None."""
@@ -131,11 +128,9 @@ class Studios:
         Raises:
             StudioFull: as many of ``kind`` are open as allowed, and each has clients.
         """
-        from xabsl_studio.server.api.app import create_app
-
         try:
             await self._make_room(kind)
-            app = create_app(session, self.policy, self.web_dist, library=self.library, studios=self)
+            app = self.make_app(session, self)
             stack = contextlib.AsyncExitStack()
             await stack.enter_async_context(app.router.lifespan_context(app))
         except BaseException:

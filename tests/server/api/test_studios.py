@@ -46,7 +46,7 @@ def _serve(folder: Path, policy: SecurityPolicy | None = None, limit: int = 4) -
     """A replay of ``first.mcap`` as the main studio, listing ``folder`` (replays open beside it)."""
     server = LiveServer(ReplaySession(folder / "first.mcap"), policy)
     studio = server.studio
-    studio.library = studio.studios.library = RecordingLibrary(folder)
+    studio.library = RecordingLibrary(folder)
     studio.studios.limits = {"replay": limit, "fork": 1}
     return server
 
@@ -238,7 +238,7 @@ def test_a_live_studio_opens_its_recordings_and_forks_run_its_edited_behavior(fo
     session = Session(load_example(soccer_dir, "soccer", robots=1), seed=1)
     session.paused = True
     server = LiveServer(session)
-    server.studio.library = server.studio.studios.library = RecordingLibrary(folder)
+    server.studio.library = RecordingLibrary(folder)
     with server:
         assert httpx.post(f"{server.url}/api/fork", json={"seq": FORK_AT}).status_code == 409  # live: nothing to fork
         assert [r["name"] for r in httpx.get(f"{server.url}/api/recordings").json()["recordings"]][:2] == [
