@@ -55,7 +55,7 @@ $(RAY_STAMP): $(STAMP)
 run: $(STAMP) system-deps web
 	$(BIN)/xabsl serve examples/soccer
 
-# ruff (lint, docstrings of public names, formatting) and mypy (strict on engine/ and server/).
+# ruff (lint, docstrings of public names, formatting) and mypy (strict on every package).
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .

@@ -20,8 +20,11 @@ them and derive from the stage's class here::
     ├── DynamicsError         xabsl_studio.engine.dynamics: a Dual Dynamics model (ModelError, ExprError)
     ├── PlanningError         xabsl_studio.engine.planning: PDDL and fact rules (UnsupportedPDDLError, FactRuleError)
     ├── HostError             a host or world: an example folder, a team (ExampleError, TeamError)
+    ├── RecordError           xabsl_studio.engine.record: recordings (RecordingError, RecordingFailed)
+    ├── BehaviorTestError     xabsl_studio.engine.testing: test files and selections (AssertionSpecError, ...)
     ├── CommandLineError      the ``xabsl`` command line (UsageError)
-    └── ServerError           the studio server (ProtocolError, FileError, GraphError, ChannelClosed)
+    └── ServerError           the studio server, defined by it (``xabsl_studio.server.protocol.errors``:
+                              ProtocolError, FileError, GraphError, ChannelClosed, StudioFull, ...)
 
 Run-time faults of a running agent are not exceptions that propagate: the engine records them as a
 :class:`xabsl_studio.engine.runtime.fault.Fault` (§2.9).
@@ -30,6 +33,7 @@ Run-time faults of a running agent are not exceptions that propagate: the engine
 from __future__ import annotations
 
 __all__ = [
+    "BehaviorTestError",
     "CommandLineError",
     "CompileError",
     "DebugError",
@@ -42,7 +46,7 @@ __all__ = [
     "LoadError",
     "PlanningError",
     "ReadError",
-    "ServerError",
+    "RecordError",
     "TraceError",
     "ValueConversionError",
     "XabslError",
@@ -117,5 +121,9 @@ class CommandLineError(XabslError):
     """A command line of ``xabsl`` that cannot be carried out."""
 
 
-class ServerError(XabslError):
-    """A request or connection the studio server refuses or loses."""
+class RecordError(XabslError):
+    """A recording that cannot be read, written or re-simulated."""
+
+
+class BehaviorTestError(XabslError):
+    """A behavior test file, selection or draft that cannot be run (``xabsl test``)."""

@@ -36,10 +36,10 @@ def example_folder(name: str) -> Path:
     Raises:
         UsageError: no example of that name.
     """
-    import xabsl_studio.examples
+    import xabsl_studio
     from xabsl_studio.engine.cli import UsageError
 
-    root = Path(xabsl_studio.examples.__file__).parent
+    root = Path(xabsl_studio.__file__).parent / "examples"
     known = sorted(p.name for p in root.iterdir() if (p / "studio.py").is_file() or (p / "agents.xabsl").is_file())
     if name not in known:
         raise UsageError(f"--example: no example {name!r} (installed: {', '.join(known)})")

@@ -6,13 +6,21 @@
   The rule is about the project's owners: the private names of the standard library and of
   third-party packages are outside it (``argparse._SubParsersAction`` is what argparse's typing
   offers); uses of a third party's private attribute are listed in :data:`THIRD_PARTY`.
-* No import cycles among the modules of ``engine/`` (module-level imports, ``TYPE_CHECKING``
-  blocks included: a cycle for the type checker is still a cycle between owners).
+* No import cycles among the project's modules, counting every import: module level,
+  ``TYPE_CHECKING`` blocks (a cycle for the type checker is still a cycle between owners) and
+  imports inside functions (a lazy import that closes a circle only hides it). Lazy imports that
+  close none stay allowed: they keep ``xabsl --help`` and the server process light.
+* Imports point down the layers (:data:`LAYERS`, :data:`ENGINE_LAYERS`): the server's four along
+  its process line, the language server and the examples beside it on the engine, and the
+  engine's own stages.
+* Every exception class derives from ``XabslError`` (engine/errors.py draws the tree).
+* The project is imported by one name of its own, ``xabsl_studio`` (xabsl_studio/__init__.py).
 """
 
 from __future__ import annotations
 
 import ast
+import builtins
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -126,15 +134,20 @@ def test_no_cross_module_underscore_names() -> None:
     assert not found, "cross-module underscore access:\n" + "\n".join(found)
 
 
-def import_graph(package: str) -> dict[str, set[str]]:
-    """Module -> the modules of ``package`` it imports at module level (``TYPE_CHECKING`` too)."""
-    modules = {module_name(path): path for path in python_files(package)}
+def import_graph(*packages: str, local: bool = False) -> dict[str, set[str]]:
+    """Module -> the project modules it imports, over ``packages``.
+
+    Module-level imports and ``TYPE_CHECKING`` blocks always count; ``local`` adds the imports
+    inside functions. An import of ``pkg.mod.name`` counts as an edge to the longest module prefix.
+    """
+    modules = {module_name(path): path for path in python_files(*packages)}
     graph: dict[str, set[str]] = {}
     for module, path in modules.items():
         tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
         is_package = path.name == "__init__.py"
         edges: set[str] = set()
-        for node in module_level(tree.body):
+        nodes = ast.walk(tree) if local else module_level(tree.body)
+        for node in nodes:
             if isinstance(node, ast.Import):
                 targets = [alias.name for alias in node.names]
             elif isinstance(node, ast.ImportFrom):
@@ -143,7 +156,11 @@ def import_graph(package: str) -> dict[str, set[str]]:
                 targets = [f"{source}.{a.name}" if f"{source}.{a.name}" in modules else source for a in node.names]
             else:
                 continue
-            edges.update(t for t in targets if t in modules and t != module)
+            for target in targets:
+                while target and target not in modules:
+                    target = target.rpartition(".")[0]
+                if target and target != module:
+                    edges.add(target)
         graph[module] = edges
     return graph
 
@@ -196,9 +213,135 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
-def test_no_import_cycles_in_engine() -> None:
-    found = cycles(import_graph("engine"))
-    assert not found, "import cycles among engine modules:\n" + "\n".join(" <-> ".join(c) for c in found)
+def test_no_import_cycles_anywhere_counting_imports_inside_functions() -> None:
+    found = cycles(import_graph(*CHECKED, local=True))
+    assert not found, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in found)
+
+
+#: The project's layers and what each may import (its own layer and the ones named). The server's
+#: run along its process line (docs/architecture.md); the engine knows none of them.
+LAYERS: dict[str, frozenset[str]] = {
+    "engine": frozenset(),
+    "examples": frozenset({"engine"}),
+    "lsp": frozenset({"engine"}),
+    "server.protocol": frozenset({"engine"}),
+    "server.simulation": frozenset({"engine", "server.protocol"}),
+    "server.session": frozenset({"engine", "server.protocol", "server.simulation"}),
+    "server.api": frozenset({"engine", "lsp", "server.protocol", "server.simulation", "server.session"}),
+    "server.cli": frozenset({"engine", "lsp", "server.protocol", "server.simulation", "server.session", "server.api"}),
+    "server": frozenset(),
+}
+
+#: The engine's stages, lowest first: a module imports only its own stage's and lower ones.
+ENGINE_LAYERS: tuple[frozenset[str], ...] = (
+    frozenset({"types", "errors", ""}),
+    frozenset({"files", "ir"}),
+    frozenset({"lang", "emit", "codegen", "dynamics", "planning"}),
+    frozenset({"runtime"}),
+    frozenset({"host", "trace"}),
+    frozenset({"record", "docs", "worlds"}),
+    frozenset({"profile", "testing"}),
+    frozenset({"cli"}),
+)
+
+
+def layer(module: str) -> str:
+    """The :data:`LAYERS` key of a project module (``xabsl_studio.server.api.app`` -> ``server.api``)."""
+    parts = module.split(".")[1:]
+    if parts[0] == "server" and len(parts) > 1:
+        return ".".join(parts[:2])
+    return parts[0]
+
+
+def engine_stage(module: str) -> int:
+    parts = module.split(".")
+    name = parts[2] if len(parts) > 2 else ""
+    return next(i for i, stage in enumerate(ENGINE_LAYERS) if name in stage)
+
+
+def layer_violations(graph: dict[str, set[str]]) -> list[str]:
+    found = []
+    for module, targets in sorted(graph.items()):
+        for target in sorted(targets):
+            here, there = layer(module), layer(target)
+            if here != there and there not in LAYERS[here]:
+                found.append(f"{module} -> {target} ({here} may not import {there})")
+            elif here == there == "engine" and engine_stage(target) > engine_stage(module):
+                found.append(f"{module} -> {target} (a lower engine stage imports a higher one)")
+    return found
+
+
+def test_imports_point_down_the_layers() -> None:
+    graph = import_graph(*CHECKED, local=True)
+    assert set(map(layer, graph)) <= set(LAYERS), set(map(layer, graph)) - set(LAYERS)
+    found = layer_violations(graph)
+    assert not found, "imports against the layers:\n" + "\n".join(found)
+
+
+def test_the_layer_rule_catches() -> None:
+    assert layer_violations({"xabsl_studio.engine.ir": {"xabsl_studio.server.api.app"}})
+    assert layer_violations({"xabsl_studio.server.session.live": {"xabsl_studio.server.api.app"}})
+    assert layer_violations({"xabsl_studio.server.api.app": {"xabsl_studio.examples.soccer"}})
+    assert layer_violations({"xabsl_studio.engine.runtime.engine": {"xabsl_studio.engine.record.reader"}})
+    assert not layer_violations({"xabsl_studio.server.api.app": {"xabsl_studio.server.session.live"}})
+
+
+# -- one exception tree ----------------------------------------------------------------------------
+
+#: the builtin exception classes a project class may name as a base
+BUILTIN_EXCEPTIONS = frozenset(
+    name for name, value in vars(builtins).items() if isinstance(value, type) and issubclass(value, BaseException)
+)
+
+
+def exception_classes(paths: list[Path], root: Path = ROOT) -> dict[str, tuple[str, list[str]]]:
+    """Class name -> (where, base names) of every class in ``paths``."""
+    classes: dict[str, tuple[str, list[str]]] = {}
+    for path in paths:
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ClassDef):
+                bases = [
+                    b.id if isinstance(b, ast.Name) else b.attr if isinstance(b, ast.Attribute) else ""
+                    for b in node.bases
+                ]
+                classes[node.name] = (f"{path.resolve().relative_to(root.resolve())}:{node.lineno}", bases)
+    return classes
+
+
+def outside_the_tree(classes: dict[str, tuple[str, list[str]]]) -> list[str]:
+    """The exception classes that do not derive from ``XabslError``."""
+
+    def derives(name: str, goal: str, seen: frozenset[str] = frozenset()) -> bool:
+        if name == goal:
+            return True
+        if name in seen or name not in classes:
+            return False
+        return any(derives(base, goal, seen | {name}) for base in classes[name][1])
+
+    def is_exception(name: str, seen: frozenset[str] = frozenset()) -> bool:
+        if name in BUILTIN_EXCEPTIONS:
+            return True
+        if name in seen or name not in classes:
+            return False
+        return any(is_exception(base, seen | {name}) for base in classes[name][1])
+
+    return sorted(
+        f"{where}: {name}({', '.join(bases)})"
+        for name, (where, bases) in classes.items()
+        if name != "XabslError" and is_exception(name) and not derives(name, "XabslError")
+    )
+
+
+def test_every_exception_class_derives_from_xabsl_error() -> None:
+    found = outside_the_tree(exception_classes(list(python_files(*CHECKED))))
+    assert not found, "exception classes outside the XabslError tree:\n" + "\n".join(found)
+
+
+def test_the_exception_rule_catches(tmp_path: Path) -> None:
+    source = "class XabslError(Exception): ...\nclass A(XabslError): ...\nclass B(ValueError): ...\nclass C(B): ...\n"
+    found = outside_the_tree(exception_classes([write(tmp_path, "m.py", source)], tmp_path))
+    assert [line.split(": ", 1)[1] for line in found] == ["B(ValueError)", "C(B)"]
 
 
 # -- the checks themselves can fail ------------------------------------------------------------------

@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 from xabsl_studio.engine.cli import UsageError
-from xabsl_studio.engine.errors import CommandLineError
+from xabsl_studio.engine.errors import CommandLineError, TraceError
 
 if TYPE_CHECKING:  # the IR is imported when a trace runs, not for `xabsl --help`
     from xabsl_studio.engine.ir.model import Program
@@ -99,7 +99,7 @@ def _load(args: argparse.Namespace) -> Program:
 MAX_INPUT_BYTES = 256 * 1024 * 1024
 
 
-class _BadNumber(ValueError):
+class _BadNumber(TraceError, ValueError):
     """A number in an input line that is not a finite double (NaN, Infinity, 1e999, 10**400)."""
 
 

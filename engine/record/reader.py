@@ -31,6 +31,7 @@ import orjson
 import zstandard
 from mcap.reader import SeekingReader, make_reader
 
+from xabsl_studio.engine.errors import RecordError
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import schema as S
@@ -40,7 +41,7 @@ from xabsl_studio.engine.types import Kind, Value
 __all__ = ["AgentTick", "ProgramView", "Recording", "RecordingError", "TickView"]
 
 
-class RecordingError(Exception):
+class RecordingError(RecordError, ValueError):
     """The file is not a recording this reader understands (or a tick outside it was asked for)."""
 
 

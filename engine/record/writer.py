@@ -29,6 +29,7 @@ from typing import Any
 
 from xabsl_studio.engine.emit.ic import emit_ic
 from xabsl_studio.engine.emit.json import program_to_json
+from xabsl_studio.engine.errors import RecordError
 from xabsl_studio.engine.host import Agent, World
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import schema as S
@@ -51,7 +52,7 @@ __all__ = ["Recorder", "RecorderStats", "RecordingFailed", "engines_of"]
 BATCH = 64
 
 
-class RecordingFailed(Exception):
+class RecordingFailed(RecordError):
     """The writer (in the background process) failed; the message says why."""
 
 

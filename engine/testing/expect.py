@@ -15,6 +15,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from xabsl_studio.engine.errors import BehaviorTestError
 from xabsl_studio.engine.runtime import Engine
 from xabsl_studio.engine.runtime.activation import BehaviorNode, Node, OptionNode
 from xabsl_studio.engine.testing.spec import Expect
@@ -247,7 +248,7 @@ def _symbol(engine: Engine, name: str) -> Any:
         raise AssertionSpecError(f"the behavior has no output or plain input symbol {name}") from None
 
 
-class AssertionSpecError(ValueError):
+class AssertionSpecError(BehaviorTestError, ValueError):
     """An assertion names something the behavior does not have (a symbol, an option)."""
 
 

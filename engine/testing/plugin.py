@@ -17,6 +17,7 @@ from typing import Any
 
 import pytest
 
+from xabsl_studio.engine.errors import BehaviorTestError
 from xabsl_studio.engine.testing.coverage import Coverage
 from xabsl_studio.engine.testing.runner import CaseResult, run_case
 from xabsl_studio.engine.testing.spec import SUFFIX, Case, SpecError, load_suite
@@ -60,7 +61,7 @@ class SuiteFile(pytest.File):
             yield BehaviorTest.from_parent(self, name=case.name, case=case)
 
 
-class BehaviorFailure(Exception):
+class BehaviorFailure(BehaviorTestError):
     """A behavior test failed or could not run (the report is the message)."""
 
 

@@ -13,6 +13,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
+from xabsl_studio.engine.errors import BehaviorTestError
 from xabsl_studio.engine.files import write_atomically
 from xabsl_studio.engine.testing.runner import CaseResult
 
@@ -56,7 +57,7 @@ def write_junit(path: Path, results: Sequence[CaseResult]) -> None:
     write_atomically(path, junit_xml(results).encode("utf-8"))
 
 
-class KeywordError(ValueError):
+class KeywordError(BehaviorTestError, ValueError):
     """A ``-k`` expression that does not parse."""
 
 

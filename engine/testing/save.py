@@ -21,6 +21,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from xabsl_studio.engine.errors import BehaviorTestError
 from xabsl_studio.engine.runtime.breakpoints import Breakpoint
 from xabsl_studio.engine.testing.spec import SUFFIX, parse_suite
 
@@ -36,7 +37,7 @@ _BOOLEAN = re.compile(r"\s*(?P<neg>!?)\s*(?P<symbol>[A-Za-z_][\w.]*)\s*")
 _FAR = 1e300
 
 
-class DraftError(ValueError):
+class DraftError(BehaviorTestError, ValueError):
     """A draft that cannot be written: a bad name or a value TOML cannot hold."""
 
 

@@ -11,14 +11,13 @@ world, and two basic behaviors let the monitor make the host plan and mark opera
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from xabsl_studio.engine.ir.model import Parameter
+from xabsl_studio.engine.planning.monitor import PlanBoard
+from xabsl_studio.engine.planning.strips import Fact
 from xabsl_studio.engine.runtime import BasicBehavior, Bindings
 from xabsl_studio.engine.types import Kind
-
-if TYPE_CHECKING:
-    from xabsl_studio.examples.errands.world import ErrandsWorld
 
 #: Host values of the XABSL enumerations (element order of behavior/symbols.xabsl).
 LOCATIONS = ("a", "b", "c")
@@ -39,13 +38,36 @@ REASONS = (
 PDDL_SCHEMA = {"go_to": "goto", "load": "load", "unload": "unload"}
 
 
+class MonitorHost(Protocol):
+    """What the plan monitor's bindings read and call on the world (the errands world is one)."""
+
+    #: the derived facts of this tick
+    facts: frozenset[Fact]
+    #: the monitor's output symbols, written through (host enum values)
+    out: dict[str, int]
+    #: the plan board the monitor reads
+    board: PlanBoard
+
+    def next_op(self) -> tuple[int, int, int, int]:
+        """The next operator as (schema, from, loc, obj) element indices."""
+        ...
+
+    def plan_from_facts(self, reason: str) -> None:
+        """Plan (again) from the derived facts, for ``reason``."""
+        ...
+
+    def complete_operator(self) -> None:
+        """Mark the running operator done."""
+        ...
+
+
 class PlanFromFacts(BasicBehavior):
     """``plan_from_facts(reason)``: GRAPHPLAN from the derived facts, once per activation."""
 
     name = "plan_from_facts"
     parameters = (Parameter("reason", Kind.ENUM, "plan_reason"),)
 
-    def __init__(self, world: ErrandsWorld) -> None:
+    def __init__(self, world: MonitorHost) -> None:
         super().__init__()
         self.world = world
 
@@ -60,7 +82,7 @@ class CompleteOperator(BasicBehavior):
 
     name = "complete_operator"
 
-    def __init__(self, world: ErrandsWorld) -> None:
+    def __init__(self, world: MonitorHost) -> None:
         super().__init__()
         self.world = world
 
@@ -69,7 +91,7 @@ class CompleteOperator(BasicBehavior):
         self.world.complete_operator()
 
 
-def monitor_bindings(world: ErrandsWorld) -> Bindings:
+def monitor_bindings(world: MonitorHost) -> Bindings:
     """Register the plan monitor's symbols and basic behaviors on ``world``'s state.
 
     Input symbols read the world's derived facts and plan board; output symbols are written

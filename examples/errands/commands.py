@@ -14,19 +14,21 @@ The studio forwards them with the op ``world_command`` (docs/protocol.md) and re
   operators), ``plan_stats`` (the planning-graph table of one version, what ``xabsl plan
   --stats`` prints), ``fact_events`` (the derived facts' changes with their causes), ``model``
   (the Dual Dynamics model: behaviors, actuators, operator couplings).
+
+:class:`StudioErrandsWorld` is the errands world with these commands, as the studio runs it
+(``studio.py``); headless runs take the plain world.
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from xabsl_studio.engine.host import WorldCommandError
+from xabsl_studio.engine.host import Scene, WorldCommandError
 from xabsl_studio.engine.planning.facts import FactEvent
 from xabsl_studio.engine.planning.graphplan import format_stats
-
-if TYPE_CHECKING:
-    from xabsl_studio.examples.errands.world import ErrandsWorld
+from xabsl_studio.examples.errands import model_edit
+from xabsl_studio.examples.errands.world import ErrandsWorld
 
 BEACONS = ("a", "b", "c")
 OBJECTS = ("book", "mug")
@@ -203,8 +205,6 @@ def run(world: ErrandsWorld, name: str, args: dict[str, Any]) -> Any:
     if name == "model":
         return model_json(world)
     if name in ("model_source", "model_check", "model_save"):
-        from xabsl_studio.examples.errands import model_edit
-
         if name == "model_source":
             return model_edit.source(world)
         if name == "model_check":
@@ -301,3 +301,19 @@ def model_json(world: ErrandsWorld) -> dict[str, Any]:
             for schema, o in m.oct.items()
         },
     }
+
+
+class StudioErrandsWorld(ErrandsWorld):
+    """The errands world as the studio runs it: with its world commands (``CommandableWorld``)."""
+
+    def commands(self) -> list[dict[str, Any]]:
+        """The world's commands: perturb, monitor, query (see the module docstring)."""
+        return describe(self)
+
+    def command(self, name: str, args: dict[str, Any]) -> Any:
+        """Carry out one world command between two ticks."""
+        return run(self, name, args)
+
+    def static_scene(self) -> Scene:
+        """The world's scene, with the commands it offers (op ``world_command``)."""
+        return {**super().static_scene(), "commands": self.commands()}

@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import Any
 
 from xabsl_studio.engine.cli import UsageError
 from xabsl_studio.engine.files import write_atomically
@@ -136,7 +137,7 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(world: ErrandsWorld, out: dict[str, object]) -> str:
+def _report(world: ErrandsWorld, out: dict[str, Any]) -> str:
     lines = [
         f"errands robot, seed {world.seed}, {'with' if world.with_plan else 'without'} a plan"
         f" ({AGENTS_PATH.parent.name}/execute_plan.xabsl)"

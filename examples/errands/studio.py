@@ -55,10 +55,11 @@ class ErrandsExample:
 
     def build_world(self, seed: int) -> World:
         """The errands world of §1.5, without a controller until :meth:`make_controller`."""
-        from xabsl_studio.examples.errands.world import MODEL_PATH, ErrandsWorld
+        from xabsl_studio.examples.errands.commands import StudioErrandsWorld
+        from xabsl_studio.examples.errands.world import MODEL_PATH
 
         model = self.root / "model" / "errands_dd.json"  # the served folder's model, if it has one
-        return ErrandsWorld(
+        return StudioErrandsWorld(
             seed,
             plan=self.plan,
             dt=DT,

@@ -467,19 +467,7 @@ class ErrandsWorld:
             it.present and not it.held and (it.x - ax) ** 2 + (it.y - ay) ** 2 <= r2 for it in self.arena.items.values()
         )
 
-    # -- interventions (the studio's world commands, commands.py) ---------------------------------
-
-    def commands(self) -> list[dict[str, Any]]:
-        """The world's commands (``xabsl_studio.engine.host.CommandableWorld``): perturb, monitor, query."""
-        from xabsl_studio.examples.errands.commands import describe
-
-        return describe(self)
-
-    def command(self, name: str, args: dict[str, Any]) -> Any:
-        """Carry out one world command (see :mod:`xabsl_studio.examples.errands.commands`)."""
-        from xabsl_studio.examples.errands.commands import run
-
-        return run(self, name, args)
+    # -- interventions (the studio's world commands are commands.py's, on this state) ----------------
 
     def note_intervention(self, what: str) -> dict[str, Any]:
         """Log an intervention by hand (shown in the plan panel) and return it as a reply."""
@@ -589,7 +577,7 @@ class ErrandsWorld:
             "facts": list(self.task.facts),
             "goal": sorted(self.task.goal),
             # What the studio shows for this world beyond the field (generic panel names, see
-            # docs/studio.md) and the world commands it offers (op world_command).
+            # docs/studio.md); the studio's world adds the commands it offers (commands.py).
             "panels": ["dynamics", "plan", "facts"],
             "dd": {
                 "behaviors": list(self.behaviors),
@@ -597,7 +585,6 @@ class ErrandsWorld:
                 "theta": [round(v, 4) for v in self.dd.model.theta.tolist()],
                 "terms": list(ALPHA_TERMS),
             },
-            "commands": self.commands(),
         }
 
     def dynamic_scene(self) -> Scene:

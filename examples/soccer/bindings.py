@@ -434,7 +434,7 @@ class ActivationRecorder:
         self._states += bytes(engine.active_states())
 
     @property
-    def hash(self) -> hashlib._Hash:
+    def hash(self) -> hashlib.blake2b:
         """BLAKE2b (16 bytes) of the trace: per tick the active flags, then the active states."""
         digest = hashlib.blake2b(digest_size=16)
         n = len(self.option_names)
@@ -470,7 +470,8 @@ class ActivationRecorder:
         ticks = np.bincount(keys[ran], minlength=n * width)
         entries = np.bincount(keys[entered], minlength=n * width)
         return {
-            (self.option_names[k // width], k % width): (int(ticks[k]), int(entries[k])) for k in np.flatnonzero(ticks)
+            (self.option_names[k // width], int(k % width)): (int(ticks[k]), int(entries[k]))
+            for k in np.flatnonzero(ticks)
         }
 
 

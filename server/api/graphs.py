@@ -12,8 +12,8 @@ import threading
 from collections import OrderedDict
 
 from xabsl_studio.engine.emit.dot import option_graph, render_svg, state_machine
-from xabsl_studio.engine.errors import ServerError
 from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.server.protocol.errors import ServerError
 
 
 class GraphError(ServerError, LookupError):

@@ -29,7 +29,7 @@ from urllib.parse import parse_qs, urlsplit
 import orjson
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.server.protocol.errors import ServerError
 from xabsl_studio.server.protocol.limits import MAX_BODY_BYTES
 
 TOKEN_HEADER = "x-xabsl-token"

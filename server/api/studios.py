@@ -29,6 +29,8 @@ from typing import TYPE_CHECKING, Any, Literal
 import orjson
 from starlette.types import ASGIApp, Receive, Scope, Send
 
+from xabsl_studio.server.protocol.errors import ServerError
+
 if TYPE_CHECKING:
     from fastapi import FastAPI
 
@@ -45,7 +47,7 @@ Kind = Literal["replay", "fork"]
 _PREFIX = re.compile(r"^/(replay|fork)/([0-9]+)(/.*)?$")
 
 
-class StudioFull(Exception):
+class StudioFull(ServerError):
     """No room for another studio of a kind: every open one has clients."""
 
 

@@ -24,7 +24,7 @@ import socket
 import struct
 from typing import Generic, TypeVar
 
-from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.server.protocol.errors import ServerError
 
 _HEADER = struct.Struct("<I")
 _READ_SIZE = 1 << 20

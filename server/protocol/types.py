@@ -13,7 +13,7 @@ from typing import Annotated, Literal
 
 from pydantic import BeforeValidator, ConfigDict, Field
 
-from xabsl_studio.engine.errors import ServerError
+from xabsl_studio.server.protocol.errors import ServerError
 
 #: Client messages are strict: a string is not a number, a float is not an integer, a bool is
 #: neither; JSON numbers must be finite; a field the message type does not have is an error (a

@@ -34,8 +34,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from xabsl_studio.engine.errors import ServerError
 from xabsl_studio.engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
+from xabsl_studio.server.protocol.errors import ServerError
 
 SUFFIX = ".xabsl"
 #: The largest behavior file listed or opened (a real option file is a few kilobytes).

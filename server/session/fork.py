@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import xabsl_studio
-from xabsl_studio.engine.errors import ServerError
 from xabsl_studio.engine.worlds.loader import ExampleError, load_example
+from xabsl_studio.server.protocol.errors import ServerError
 from xabsl_studio.server.session.live import Session
 from xabsl_studio.server.simulation.forkstart import ForkStart
 

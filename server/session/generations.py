@@ -18,6 +18,7 @@ import difflib
 from collections.abc import Mapping
 from typing import Any
 
+from xabsl_studio.server.protocol.errors import ServerError
 from xabsl_studio.server.session.frames import Generation, Ring
 
 #: The most generations kept (a reload every second for two minutes stays well inside).
@@ -30,7 +31,7 @@ MAX_DIFF_CHARS = 200_000
 Sources = Mapping[str, Mapping[str, str]]
 
 
-class GenerationGone(LookupError):
+class GenerationGone(ServerError, LookupError):
     """A generation (or the one before it) that is no longer kept."""
 
 

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from xabsl_studio.engine.errors import HostError
 from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.examples.soccer.run import play_match
@@ -46,11 +47,11 @@ def plan(n: int, seed: int, duration_s: float, *, players: int = 5, timeout_s: f
     return [MatchSpec(k, seed + k // 2, k % 2 == 0, duration_s / 2.0, players, timeout_s) for k in range(n)]
 
 
-class MatchTimeout(Exception):
+class MatchTimeout(HostError):
     """A match ran longer (wall clock) than its ``timeout_s``."""
 
 
-class MatchInterrupted(Exception):
+class MatchInterrupted(HostError):
     """The tournament was stopped (Ctrl+C) while this match ran."""
 
 

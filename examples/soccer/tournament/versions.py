@@ -59,10 +59,10 @@ def resolve(spec: str, scratch: Path, cwd: Path | None = None) -> Version:
         raise UsageError(f"{spec}: expected git:REV:PATH, e.g. git:HEAD~1:examples/soccer/behavior")
     top = Path(_git(["rev-parse", "--show-toplevel"], cwd).decode().strip()).resolve()
     try:
-        commit_id = _git(["rev-parse", "--verify", "--quiet", "--end-of-options", f"{rev}^{{commit}}"], cwd)
+        resolved = _git(["rev-parse", "--verify", "--quiet", "--end-of-options", f"{rev}^{{commit}}"], cwd)
     except UsageError as error:
         raise UsageError(f"{spec}: unknown revision {rev!r} in {top}") from error
-    commit_id = commit_id.decode().strip()
+    commit_id = resolved.decode().strip()
     target = (cwd / path).resolve()
     if not target.is_relative_to(top):
         raise UsageError(f"{spec}: {path} is outside the git work tree {top}")
