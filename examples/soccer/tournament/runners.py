@@ -110,6 +110,31 @@ def _code_modules() -> list[str]:
 
 #: Where ``ray start`` notes the address of the cluster it started on this machine.
 RAY_CURRENT_CLUSTER = Path("/tmp/ray/ray_current_cluster")
+#: Where ``ray start --head`` (Ray 2.59 and later) keeps the token of the cluster's authentication.
+RAY_TOKEN_FILE = Path("~/.ray/auth_token")
+
+
+def _ray_token_found(environ: dict[str, str] | os._Environ[str] = os.environ) -> bool:
+    """Whether this machine has a Ray authentication token (Ray's own sources, in its order)."""
+    if environ.get("RAY_AUTH_TOKEN"):
+        return True
+    path = environ.get("RAY_AUTH_TOKEN_PATH")
+    return Path(path).expanduser().is_file() if path else RAY_TOKEN_FILE.expanduser().is_file()
+
+
+def _authenticate_to_ray(environ: dict[str, str] | os._Environ[str] = os.environ) -> bool:
+    """Turn Ray's token authentication on for a driver joining a cluster, when a token is here.
+
+    A head started with ``ray start --head`` (Ray 2.59 and later) requires the token, but a driver
+    that joins it by address sends it only with ``RAY_AUTH_MODE=token``, and is otherwise refused
+    after a minute of retries ("Authentication token is missing or incorrect"). Ray reads the
+    mode when it is imported: call this first. An explicit ``RAY_AUTH_MODE`` (``disabled``
+    included) is the user's and is kept. Returns whether a token is available.
+    """
+    found = _ray_token_found(environ)
+    if found and "RAY_AUTH_MODE" not in environ:
+        environ["RAY_AUTH_MODE"] = "token"
+    return found
 
 
 def _check_reachable(address: str) -> None:
@@ -160,11 +185,12 @@ def run_ray(
         jobs: CPUs of a ``local`` instance (None: all cores); a joined cluster has its own.
         on_result: called with each match's result as it arrives.
     """
-    ray = _import_ray()
-    import logging
-
+    token = False
     if address != "local":
         _check_reachable(address)
+        token = _authenticate_to_ray()  # before Ray is imported: it reads its mode then
+    ray = _import_ray()
+    import logging
 
     if address == "local":
         # address="local": always a new instance, never a cluster an earlier `ray start` left behind
@@ -180,7 +206,13 @@ def run_ray(
                 log_to_driver=False,
             )
         except ConnectionError as error:
-            raise UsageError(f"--ray {address}: {error}") from error
+            hint = (
+                ""
+                if token
+                else " (a cluster with token authentication, the default of `ray start` since Ray 2.59, needs its "
+                "token here: run `ray get-auth-token` on the head and put it in ~/.ray/auth_token or RAY_AUTH_TOKEN)"
+            )
+            raise UsageError(f"--ray {address}: {error}{hint}") from error
     refs: dict[Any, MatchSpec] = {}
     try:
         cpus = int(ray.cluster_resources().get("CPU", 0))
