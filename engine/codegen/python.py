@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 from types import CodeType
 
 from xabsl_studio.engine.codegen.layout import Layout, OptionSlot, default_value, engine_order
+from xabsl_studio.engine.codegen.support import to_int32
 from xabsl_studio.engine.errors import LoadError
 from xabsl_studio.engine.ir.model import (
     ActionDone,
@@ -201,6 +202,9 @@ class _ExpressionWriter:
             case Binary(op="/", left=left, right=right):
                 t = self.temp()
                 return f"({self(left)} / ({t} if ({t} := {self(right)}) != 0 else 1e-07))"
+            case Binary(op="%", left=left, right=Number(value=value) | Constant(value=value)) if to_int32(value):
+                # a constant divisor is truncated once, here, not on every tick (support.modulo_by)
+                return f"_modc({self(left)}, {abs(to_int32(value))})"
             case Binary(op="%", left=left, right=right):
                 return f"_mod({self(left)}, {self(right)})"
             case Binary(op=op, left=left, right=right) if op in ("+", "-", "*"):

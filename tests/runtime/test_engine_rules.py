@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from tests.runtime.helpers import Host, ic
+from xabsl_studio.engine.codegen.support import modulo, modulo_by, to_int32
 from xabsl_studio.engine.runtime import Bindings, Engine
 
 # -- §2.2 decision before action, also on the activation tick -----------------------------------
@@ -371,3 +374,12 @@ def test_one_clock_per_tick_taken_modulo_2_32(now: int) -> None:
     host = Host(ic(TIMES))
     host.tick(now)
     assert host.engine.now == now % 2**32
+
+
+@given(
+    st.floats(allow_nan=True, allow_infinity=True) | st.integers(-(2**33), 2**33).map(float),
+    st.floats(allow_nan=False, allow_infinity=False, min_value=-(2.0**32), max_value=2.0**32).filter(to_int32),
+)
+def test_modulo_by_a_constant_divisor_is_modulo(a: float, b: float) -> None:
+    # the code generator's fast path for `x % 3` (the divisor truncated once) against the general rule
+    assert modulo_by(a, abs(to_int32(b))) == modulo(a, b)
