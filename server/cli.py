@@ -144,8 +144,8 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         metavar="PATH",
         help="the behavior set the hosts run (agents file or folder): the editor, hot reload into the hosts",
     )
-    parser.add_argument("--token", default=None, help="the hosts' token (and this studio's, off loopback)")
-    parser.add_argument("--studio-token", default=None, help="a token for this studio's own web UI (default --token)")
+    parser.add_argument("--token", default=None, help="the token the hosts require (serve_engines(..., token=...))")
+    parser.add_argument("--studio-token", default=None, help="the token of this studio's own web UI (generated off loopback, as xabsl serve does)")
     parser.add_argument("--watch", action="store_true", help="attach without taking control (a command takes it)")
     parser.add_argument("--name", default=None, help="how the hosts show this studio")
     parser.add_argument("--hz", type=int, default=100, help="the hosts' tick rate, for sizing the history (100)")
@@ -181,7 +181,7 @@ def run_attach(args: argparse.Namespace) -> int:
     except ValueError as error:
         raise UsageError(str(error)) from None
     try:
-        policy = SecurityPolicy.for_host(args.host, args.studio_token or args.token, args.allow_origin)
+        policy = SecurityPolicy.for_host(args.host, args.studio_token, args.allow_origin)
     except TokenError as error:
         raise UsageError(f"--token: {error}") from None
     sources: tuple[BehaviorSource, ...] = ()

@@ -442,8 +442,8 @@ class AttachedSession(Session):
             extras.extend(last.extras)
             inputs.extend(last.inputs)
             outputs.extend(last.outputs)
-        if len(paths) != len(gen.input_ids):
-            return  # a host changed its robots: its new generation follows
+        if len(paths) != len(gen.input_ids) or not paths:
+            return  # a host changed its robots (its new generation follows), or none is known yet
         self._seq += 1
         self._t = max(self._t, round((time.monotonic() - self._t0) * 1000))
         status = {"attached": [h.info(h.peer) for h in self.hosts]}
