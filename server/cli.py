@@ -145,7 +145,11 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         help="the behavior set the hosts run (agents file or folder): the editor, hot reload into the hosts",
     )
     parser.add_argument("--token", default=None, help="the token the hosts require (serve_engines(..., token=...))")
-    parser.add_argument("--studio-token", default=None, help="the token of this studio's own web UI (generated off loopback, as xabsl serve does)")
+    parser.add_argument(
+        "--studio-token",
+        default=None,
+        help="the token of this studio's web UI (generated off loopback)",
+    )
     parser.add_argument("--watch", action="store_true", help="attach without taking control (a command takes it)")
     parser.add_argument("--name", default=None, help="how the hosts show this studio")
     parser.add_argument("--hz", type=int, default=100, help="the hosts' tick rate, for sizing the history (100)")
