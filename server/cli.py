@@ -128,6 +128,112 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.set_defaults(func=run)
 
 
+def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``attach`` subcommand to the ``xabsl`` parser (docs/attach.md)."""
+    parser = subparsers.add_parser(
+        "attach",
+        help="open the studio on engines running elsewhere (a robot program, a ROS 2 node): docs/attach.md",
+        description="Attach a studio session to running hosts: programs that run their own XABSL engines "
+        "and serve them with xabsl_studio.attach.serve_engines (docs/attach.md). Several hosts make one "
+        "session (a team of robot processes). The studio is served like xabsl serve's.",
+    )
+    parser.add_argument("addresses", metavar="HOST:PORT", nargs="+", help="a host's address (e.g. 127.0.0.1:7410)")
+    parser.add_argument(
+        "--behavior",
+        default=None,
+        metavar="PATH",
+        help="the behavior set the hosts run (agents file or folder): the editor, hot reload into the hosts",
+    )
+    parser.add_argument("--token", default=None, help="the token the hosts require (serve_engines(..., token=...))")
+    parser.add_argument(
+        "--studio-token",
+        default=None,
+        help="the token of this studio's web UI (generated off loopback)",
+    )
+    parser.add_argument("--watch", action="store_true", help="attach without taking control (a command takes it)")
+    parser.add_argument("--name", default=None, help="how the hosts show this studio")
+    parser.add_argument("--hz", type=int, default=100, help="the hosts' tick rate, for sizing the history (100)")
+    parser.add_argument("--host", default="127.0.0.1", help="address the studio binds (default 127.0.0.1)")
+    parser.add_argument("--port", type=int, default=8000, help="the studio's port (default 8000; 0 picks one)")
+    parser.add_argument("--web-dist", default=None, help="built web UI folder (default web/dist)")
+    parser.add_argument(
+        "--record-dir", default=None, metavar="DIR", help="record the attached session into rolling .mcap files here"
+    )
+    parser.add_argument("--no-record", action="store_true", help="do not record the attached session")
+    parser.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN", help="also accept this Origin")
+    parser.set_defaults(func=run_attach)
+
+
+def run_attach(args: argparse.Namespace) -> int:
+    """Attach to the hosts and serve the studio until interrupted."""
+    import logging  # here, not at the top: `xabsl --help` imports this module
+
+    import uvicorn
+
+    from xabsl_studio.engine.cli import UsageError
+    from xabsl_studio.engine.host import BehaviorSource, ExampleError, behavior_source, common_root
+    from xabsl_studio.server.api.app import WEB_DIST, create_app
+    from xabsl_studio.server.api.library import RecordingLibrary
+    from xabsl_studio.server.api.security import SecurityPolicy, TokenError
+    from xabsl_studio.server.api.transport import WebSocketProtocol
+    from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
+    from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
+    from xabsl_studio.server.session.recording import LiveRecorder, default_folder
+
+    try:
+        addresses = [parse_address(a) for a in args.addresses]
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    try:
+        policy = SecurityPolicy.for_host(args.host, args.studio_token, args.allow_origin)
+    except TokenError as error:
+        raise UsageError(f"--token: {error}") from None
+    sources: tuple[BehaviorSource, ...] = ()
+    if args.behavior is not None:
+        path = Path(args.behavior).expanduser().resolve()
+        agents = path / "agents.xabsl" if path.is_dir() else path
+        try:
+            sources = (behavior_source(agents),)
+        except ExampleError as error:
+            raise UsageError(f"--behavior: {error}") from None
+    root = common_root(sources) if sources else Path.cwd()
+    hosts = ", ".join(args.addresses)
+    example = AttachedExample(f"attached: {hosts}", root, sources, behavior_hz=max(1, args.hz) * len(addresses))
+    session = AttachedSession(addresses, example, args.token, args.name, control=not args.watch)
+    folder = Path(args.record_dir) if args.record_dir else default_folder()
+    recording = None
+    if args.no_record:
+        recording = "off (--no-record)"
+    elif not sources:
+        # The symbol tables of a recording come from the studio's compile of the behavior.
+        recording = "off: recording an attached session needs --behavior PATH"
+    else:
+        session.live_recorder = LiveRecorder(folder, example.name, example.behavior_hz, example.physics_hz)
+    web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
+    app = create_app(session, policy, web_dist, RecordingLibrary(folder, []))
+    config = uvicorn.Config(
+        app,
+        host=args.host,
+        port=args.port,
+        ws=WebSocketProtocol,
+        ws_max_size=MAX_LSP_MESSAGE_BYTES,
+        log_level="warning",
+        lifespan="on",
+    )
+    shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
+    query = f"/?token={policy.token}" if policy.token else "/"
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    print(f"xabsl studio: attached to {hosts}")
+    print(f"  open  http://{shown}:{args.port}{query}")
+    if session.live_recorder is not None:
+        print(f"  recording the session into {session.live_recorder.folder} (--no-record: off)")
+    else:
+        print(f"  recording {recording}")
+    sys.stdout.flush()
+    uvicorn.Server(config).run()
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Load the world plug-in, compile its behaviors, serve the studio until interrupted."""
     import logging  # here, not at the top: `xabsl --help` imports this module

@@ -19,8 +19,6 @@ Threats, and the check for each:
 
 from __future__ import annotations
 
-import ipaddress
-import secrets
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -29,62 +27,16 @@ from urllib.parse import parse_qs, urlsplit
 import orjson
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from xabsl_studio.server.protocol.errors import ServerError
 from xabsl_studio.server.protocol.limits import MAX_BODY_BYTES
+from xabsl_studio.server.protocol.tokens import MIN_TOKEN_CHARS as MIN_TOKEN_CHARS
+from xabsl_studio.server.protocol.tokens import TokenError as TokenError
+from xabsl_studio.server.protocol.tokens import check_token, is_loopback, new_token, token_matches
 
 TOKEN_HEADER = "x-xabsl-token"
 MUTATING = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 #: Paths under /api that need no token (the schema is public documentation).
 PUBLIC_API = frozenset({"/api/openapi.json", "/api/docs", "/api/docs/oauth2-redirect"})
-
-#: The shortest token accepted off loopback (128 bits as URL-safe base64).
-MIN_TOKEN_CHARS = 22
-
-
-class TokenError(ServerError, ValueError):
-    """A token that must not be used: empty, or too short for a server off loopback."""
-
-
 _LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1", "[::1]"})
-
-
-def is_loopback(host: str) -> bool:
-    """True for a loopback host name or address (``127.0.0.1``, ``::1``, ``localhost``)."""
-    name = host.strip("[]").lower()
-    if name == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(name).is_loopback
-    except ValueError:
-        return False
-
-
-def new_token() -> str:
-    """A fresh random token (URL safe, 192 bits)."""
-    return secrets.token_urlsafe(24)
-
-
-def check_token(token: str | None, loopback: bool) -> None:
-    """Refuse a token that would not protect anything.
-
-    An empty token (``--token "$UNSET"``) is refused everywhere; off loopback, where the token is
-    the only guard, one shorter than :data:`MIN_TOKEN_CHARS` is refused too.
-
-    Raises:
-        TokenError: with the message to show the user.
-    """
-    if token is None:
-        return
-    if not token.strip():
-        raise TokenError("the token is empty (an unset shell variable?): give a real one or leave --token out")
-    if not all("!" <= c <= "~" for c in token):
-        raise TokenError("the token must be printable ASCII without spaces (it travels in headers and URLs)")
-    if not loopback and len(token) < MIN_TOKEN_CHARS:
-        raise TokenError(
-            f"the token is {len(token)} characters; off loopback it must have at least {MIN_TOKEN_CHARS} "
-            "(leave --token out to get a generated one, or use python -c 'import secrets; "
-            "print(secrets.token_urlsafe())')"
-        )
 
 
 def _split_host(host_header: str) -> tuple[str, str] | None:
@@ -154,13 +106,7 @@ class SecurityPolicy:
         if TOKEN_HEADER in headers:
             given.append(headers[TOKEN_HEADER])
         given.extend(parse_qs(query).get("token", []))
-        expected = self.token.encode()
-        ok = False
-        for candidate in given:
-            # Every candidate is compared (no early exit); an empty one never matches.
-            same = secrets.compare_digest(candidate.encode("utf-8", "surrogateescape"), expected)
-            ok = ok or (same and bool(candidate))
-        return ok
+        return token_matches(given, self.token)
 
     def host_ok(self, headers: dict[str, str]) -> bool:
         """On a loopback server: the ``Host`` is a loopback name with an optional numeric port."""

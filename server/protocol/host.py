@@ -1,9 +1,11 @@
 """The studio <-> host protocol: what a studio session and the program that runs the engines say.
 
-Today the host is the studio's own simulation process (``xabsl_studio.server.simulation``), and
-these plain slotted dataclasses are pickled over ``xabsl_studio.server.protocol.channel``; the
-per-tick :class:`Sample` is built without any validation (it is the hot path). docs/protocol.md
-("Studio and host") documents them.
+The host is the studio's own simulation process (``xabsl_studio.server.simulation``), where these
+plain slotted dataclasses are pickled over ``xabsl_studio.server.protocol.channel`` and the
+per-tick :class:`Sample` is built without any validation (it is the hot path); or a program that
+runs its engines itself and attaches to studios over the network (docs/attach.md), where the same
+messages travel as JSON (``xabsl_studio.server.protocol.attach``: never a pickle from a network
+peer). docs/protocol.md ("Studio and host") documents them.
 """
 
 from __future__ import annotations
@@ -101,6 +103,20 @@ class Apply:
 
 
 @dataclass(frozen=True, slots=True)
+class LoadIntermediateCode:
+    """Hot-swap behavior set ``key`` from its intermediate code (an attached host: docs/attach.md).
+
+    The studio compiles and emits the IC (``xabsl_studio.engine.emit.ic``); the host reads it
+    (``xabsl_studio.engine.ir.ic_reader``) and reloads its engines between two ticks. The answer's
+    result is None when swapped, else why the running behavior was kept (as for :class:`Apply`).
+    """
+
+    key: str
+    ic: str
+    op: Literal["load_ic"] = "load_ic"
+
+
+@dataclass(frozen=True, slots=True)
 class ReleaseOwner:
     """Release what client ``owner`` forced and overrode (it disconnected); nobody awaits the answer."""
 
@@ -158,6 +174,7 @@ WorkerCommand = (
     | WorldCommand
     | Seek
     | Apply
+    | LoadIntermediateCode
     | ReleaseOwner
     | SetBreakpoints
     | ExplainRecorded

@@ -312,6 +312,14 @@ class Session:
         except ChannelClosed:
             self._ended()
             return
+        self.receive(messages)
+
+    def receive(self, messages: list[FromWorker]) -> None:
+        """Record what the host sent (samples, generations, replies, hits, a crash), then notify.
+
+        The simulation process's messages come through here, and so do an attached session's
+        (``xabsl_studio.server.session.attached``), whose hosts are programs elsewhere.
+        """
         latest: Entry | None = None
         hits: list[Hit] = []
         for message in messages:

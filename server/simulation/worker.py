@@ -54,23 +54,16 @@ from xabsl_studio.engine.host import (
 )
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.runtime import DebugError, Debugger, Engine, EngineError
-from xabsl_studio.engine.runtime.breakpoints import Breakpoint, BreakpointHit, BreakpointSet
+from xabsl_studio.engine.runtime.breakpoints import Breakpoint
 from xabsl_studio.engine.runtime.debug import Unknown, explain_decision, render, show_value
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.server.protocol.channel import Channel, ChannelClosed
 from xabsl_studio.server.protocol.commands import (
     Explain,
-    ForceBehavior,
-    ForceOption,
-    OverrideInput,
     Pause,
-    Release,
-    ReleaseInput,
     Reset,
-    ResetAgent,
     Resume,
     Seek,
-    SelectAgent,
     Speed,
     Status,
     Step,
@@ -82,22 +75,21 @@ from xabsl_studio.server.protocol.host import (
     ExplainRecorded,
     ForkAt,
     FromWorker,
-    Hit,
     NewGeneration,
-    ReleaseOwner,
     Sample,
-    SetBreakpoints,
     ToWorker,
     WorkerCommand,
     WorkerReply,
     WorkerRequest,
 )
 from xabsl_studio.server.protocol.limits import MAX_SPEED, MIN_SPEED
-from xabsl_studio.server.protocol.types import HelloReason, WireValue
+from xabsl_studio.server.protocol.types import HelloReason
+from xabsl_studio.server.simulation.engines import CommandError as CommandError
+from xabsl_studio.server.simulation.engines import EngineSet
 from xabsl_studio.server.simulation.explain import explanation_result, mark_values, tree_result
 from xabsl_studio.server.simulation.forkstart import ForkStart
 from xabsl_studio.server.simulation.runlog import LOGGED_OPS, Programs, RunLog, Switch
-from xabsl_studio.server.simulation.sampling import FrameSampler, ProgramCodec
+from xabsl_studio.server.simulation.sampling import ProgramCodec
 
 #: Simulated seconds a ``fork`` re-simulates at most (from the last reset: about 0.2 ms a tick for
 #: 10 robots, so 30 minutes take some 15 s in which the simulation answers nothing).
@@ -105,10 +97,6 @@ FORK_MAX_SECONDS = 1800.0
 
 #: The channel as the simulation process sees it.
 WorkerChannel = Channel[FromWorker, ToWorker]
-
-
-class CommandError(DebugError, ValueError):
-    """A command that cannot be carried out (bad agent, unknown option, wrong value...)."""
 
 
 @dataclass(slots=True)
@@ -160,7 +148,7 @@ class _Timing:
         return (s1 - s0) / (w1 - w0) if w1 > w0 else 0.0
 
 
-class Simulation:
+class Simulation(EngineSet):
     """A running example without any client: world, engines, samples, commands.
 
     Args:
@@ -168,6 +156,7 @@ class Simulation:
     """
 
     def __init__(self, config: WorkerConfig) -> None:
+        super().__init__()
         self.example = config.example
         self.seed = config.seed
         self.speed = config.speed
@@ -180,26 +169,16 @@ class Simulation:
         self.seq = config.seq
         self.generation_number = config.generation
         self.timing = _Timing()
-        self._owners: dict[tuple[int, str], str] = {}  # (robot, "root" | "input:" name) -> client
         self.world: World
         self.loop: BehaviorLoop
-        self.engines: list[Engine | None] = []
-        self.keys: list[str | None] = []
-        self.samplers: list[FrameSampler | None] = []
         self.reason: HelloReason = config.reason
         #: the channel to the server (its counters show in the status), None in tests
         self.channel: WorkerChannel | None = None
         #: where generation messages and samples produced by commands go: ``emit(message,
         #: droppable) -> sent``; the process loop sends them, tests may collect them
         self.emit: Callable[[FromWorker, bool], bool] = _collect
-        #: the breakpoints checked after every tick while any is enabled (``armed``)
-        self.breakpoints = BreakpointSet()
         for key, points in config.breakpoints.items():
             self.breakpoints.replace(key, points)
-        #: hits of the last tick, sent after its sample (``take_hits``)
-        self.hits: list[Hit] = []
-        #: the codecs of recent generations (``explain_recorded`` of a tick before a reload)
-        self.codecs: dict[int, dict[str, ProgramCodec]] = {}
         #: the run logs whose samples the server's ring may still hold, oldest first (``fork``)
         self.logs: list[RunLog] = []
         self.history_ticks = config.history_ticks
@@ -265,39 +244,9 @@ class Simulation:
         """Start a new generation of ids; returns its message for the server (``fork``: its origin)."""
         self.generation_number += 1
         self.reason = reason
-        codecs: dict[str, ProgramCodec] = {}
-        samplers: list[FrameSampler | None] = []
-        input_ids: list[tuple[int, ...]] = []
-        output_ids: list[tuple[int, ...]] = []
-        robots = []
-        for index, (robot, engine, key) in enumerate(zip(self.world.agents, self.engines, self.keys, strict=True)):
-            # A robot of a behavior that does not compile keeps its key: the studio shows what parsed.
-            shown = key is not None and (engine is not None or key in self.descriptions)
-            robots.append(
-                {
-                    "id": index,
-                    "name": robot.name,
-                    "team": robot.team,
-                    "number": robot.number,
-                    "program": key if shown else None,
-                    "engine": engine is not None,
-                }
-            )
-            if engine is None or key is None:
-                samplers.append(None)
-                input_ids.append(())
-                output_ids.append(())
-                continue
-            codec = codecs.get(key)
-            if codec is None or codec.program is not engine.program:
-                codec = codecs[key] = ProgramCodec.build(key, engine.program, engine)
-            samplers.append(FrameSampler(index, engine, codec))
-            input_ids.append(tuple(i for i, *_ in codec.inputs))
-            output_ids.append(tuple(i for i, *_ in codec.outputs))
-        self.samplers = samplers
-        self.codecs[self.generation_number] = codecs
-        for old in [n for n in self.codecs if n <= self.generation_number - 8]:
-            del self.codecs[old]
+        robots, input_ids, output_ids = self.sampling_tables(
+            self.generation_number, ((r.name, r.team, r.number) for r in self.world.agents)
+        )
         programs = {key: running[1] for key, running in self.programs.items() if running is not None}
         for key, description in self.descriptions.items():
             programs.setdefault(key, description)
@@ -307,8 +256,8 @@ class Simulation:
             self.reason,
             orjson.dumps(structure),
             orjson.dumps(self.world.static_scene()),
-            tuple(input_ids),
-            tuple(output_ids),
+            input_ids,
+            output_ids,
             self.seed,
             dict(self.errors),
             fork,
@@ -323,25 +272,8 @@ class Simulation:
         """The sample of the tick just run (without running one: after a reload or reset too)."""
         started = time.perf_counter()
         self.seq += 1
-        paths: list[bytes] = []
-        extras: list[bytes] = []
-        inputs: list[tuple[WireValue, ...]] = []
-        outputs: list[tuple[WireValue, ...]] = []
+        paths, extras, inputs, outputs = self.robot_samples()
         dumps = orjson.dumps
-        for sampler in self.samplers:
-            if sampler is None:
-                paths.append(b"[]")
-                extras.append(b"")
-                inputs.append(())
-                outputs.append(())
-                continue
-            try:
-                paths.append(dumps(sampler.path()))
-            except Exception:  # a broken tree (e.g. a fault mid-tick) must not stop the simulation
-                paths.append(b"[]")
-            extras.append(sampler.extras())
-            inputs.append(sampler.inputs())
-            outputs.append(sampler.outputs())
         world = self.world
         sample = Sample(
             self.seq,
@@ -350,10 +282,10 @@ class Simulation:
             time.time() * 1000.0,
             self.paused,
             self.speed,
-            tuple(paths),
-            tuple(extras),
-            tuple(inputs),
-            tuple(outputs),
+            paths,
+            extras,
+            inputs,
+            outputs,
             dumps(world.dynamic_scene()),
             dumps(world.status()),
         )
@@ -365,10 +297,10 @@ class Simulation:
         started = time.perf_counter()
         cpu = time.thread_time()
         self.loop.tick()
-        found = self._check_breakpoints() if self.breakpoints.armed else None
+        found = self.check_breakpoints() if self.breakpoints.armed else None
         sample = self.sample()
         if found:
-            self._hits(found, sample)
+            self.record_hits(found, sample.seq, sample.t)
         done = time.perf_counter()
         timing = self.timing
         timing.busy += done - started
@@ -376,26 +308,6 @@ class Simulation:
         timing.ticks += 1
         timing.add(done, self.loop.sim_seconds)
         return sample
-
-    def _check_breakpoints(self) -> list[BreakpointHit]:
-        hits = self.breakpoints.check(
-            (index, key, engine) for index, (key, engine) in enumerate(zip(self.keys, self.engines, strict=True))
-        )
-        if hits:
-            self.paused = True  # before the sample, so that it says so
-        return hits
-
-    def _hits(self, found: list[BreakpointHit], sample: Sample) -> None:
-        for hit in found:
-            key = self.keys[hit.robot] or ""
-            point = self.breakpoints.points.get(key, {}).get(hit.id)
-            description = point.describe() if point is not None else f"breakpoint {hit.id}"
-            self.hits.append(Hit(key, hit.id, hit.robot, sample.seq, sample.t, description))
-
-    def take_hits(self) -> list[Hit]:
-        """The hits of the ticks run since the last call (to send after their samples)."""
-        hits, self.hits = self.hits, []
-        return hits
 
     # -- commands ---------------------------------------------------------------------------------
 
@@ -463,57 +375,6 @@ class Simulation:
         self.emit(self.sample(), False)
         return {"seed": seed}
 
-    def _op_select_agent(self, command: SelectAgent, owner: str | None) -> Any:
-        _, engine, _ = self._robot(command.robot)
-        engine.root_actions.select_agent(command.agent)
-        return None
-
-    def _op_force_option(self, command: ForceOption, owner: str | None) -> Any:
-        index, engine, codec = self._robot(command.robot)
-        option = self._named(command.option, codec.option_ids, "option")
-        engine.root_actions.force_option(option, command.params, by_index=True)
-        self._own(index, "root", owner)
-        return None
-
-    def _op_force_behavior(self, command: ForceBehavior, owner: str | None) -> Any:
-        index, engine, codec = self._robot(command.robot)
-        behavior = self._named(command.behavior, codec.behavior_ids, "basic behavior")
-        engine.root_actions.force_behavior(behavior, command.params, by_index=True)
-        self._own(index, "root", owner)
-        return None
-
-    def _op_release(self, command: Release, owner: str | None) -> Any:
-        index, engine, _ = self._robot(command.robot)
-        engine.root_actions.release()
-        self._owners.pop((index, "root"), None)
-        return None
-
-    def _op_override_input(self, command: OverrideInput, owner: str | None) -> Any:
-        index, engine, codec = self._robot(command.robot)
-        ids = {s.name: s.index for s in codec.program.inputs.values()}
-        name = self._named(command.symbol, ids, "input symbol")
-        engine.root_actions.override_input(name, command.value, by_index=True)
-        self._own(index, "input:" + name, owner)
-        return None
-
-    def _op_release_input(self, command: ReleaseInput, owner: str | None) -> Any:
-        index, engine, codec = self._robot(command.robot)
-        if command.symbol is None:
-            engine.root_actions.release_inputs()
-            for key in [k for k in self._owners if k[0] == index and k[1].startswith("input:")]:
-                del self._owners[key]
-            return None
-        ids = {s.name: s.index for s in codec.program.inputs.values()}
-        name = self._named(command.symbol, ids, "input symbol")
-        engine.root_actions.release_input(name)
-        self._owners.pop((index, "input:" + name), None)
-        return None
-
-    def _op_reset_agent(self, command: ResetAgent, owner: str | None) -> Any:
-        _, engine, _ = self._robot(command.robot)
-        engine.reset()
-        return None
-
     def _op_seek(self, command: Seek, owner: str | None) -> Any:
         raise CommandError("seek needs a replay (xabsl serve --replay FILE.mcap)")
 
@@ -554,11 +415,6 @@ class Simulation:
             results.append(result)
         return results
 
-    def _op_set_breakpoints(self, command: SetBreakpoints, owner: str | None) -> Any:
-        """Internal: the breakpoints of one behavior (all of them, from the server)."""
-        self.breakpoints.replace(command.key, command.points)
-        return None
-
     def _op_status(self, command: Status, owner: str | None) -> Any:
         return self.status()
 
@@ -580,10 +436,6 @@ class Simulation:
     def _op_apply(self, command: Apply, owner: str | None) -> Any:
         """Internal: hot-swap a program the server compiled clean."""
         return self.apply(command.key, command.program, command.program_json)
-
-    def _op_release_owner(self, command: ReleaseOwner, owner: str | None) -> Any:
-        """Internal: release what the client ``owner`` forced and overrode (it disconnected)."""
-        return self.release_owner(str(owner))
 
     # -- fork ----------------------------------------------------------------------------------------
 
@@ -709,56 +561,6 @@ class Simulation:
                 "the run goes on unchanged"
             )
 
-    # -- helpers for commands -----------------------------------------------------------------------
-
-    def _robot(self, index: int) -> tuple[int, Engine, ProgramCodec]:
-        if not 0 <= index < len(self.engines):
-            raise CommandError(f"robot must be a robot id in 0..{len(self.engines) - 1}")
-        engine = self.engines[index]
-        sampler = self.samplers[index]
-        if engine is None or sampler is None:
-            if self.keys[index] in self.descriptions:
-                raise CommandError(f"robot {index} stands: its behavior has errors (it starts when it compiles)")
-            raise CommandError(f"robot {index} runs no XABSL engine")
-        return index, engine, sampler.codec
-
-    @staticmethod
-    def _named(value: int | str, ids: Mapping[str, int], what: str) -> str:
-        if isinstance(value, str):
-            if value not in ids:
-                raise CommandError(f"unknown {what} {value!r}")
-            return value
-        for name, i in ids.items():
-            if i == value:
-                return name
-        raise CommandError(f"unknown {what} id {value}")
-
-    def _own(self, agent: int, what: str, owner: str | None) -> None:
-        if owner is None:
-            self._owners.pop((agent, what), None)
-        else:
-            self._owners[(agent, what)] = owner
-
-    def release_owner(self, owner: str) -> int:
-        """Release every force and override ``owner`` made and nobody changed since."""
-        released = 0
-        for (agent, what), who in list(self._owners.items()):
-            if who != owner:
-                continue
-            del self._owners[(agent, what)]
-            engine = self.engines[agent]
-            if engine is None:
-                continue
-            try:
-                if what == "root":
-                    engine.root_actions.release()
-                else:
-                    engine.root_actions.release_input(what.removeprefix("input:"))
-                released += 1
-            except (DebugError, EngineError):
-                continue
-        return released
-
     # -- hot reload ----------------------------------------------------------------------------------
 
     def apply(self, key: str, program: Program, program_json: dict[str, Any]) -> str | None:
@@ -835,6 +637,16 @@ class Simulation:
             else {},
             "world": self.world.status(),
         }
+
+
+#: ``explain`` and ``explain_recorded`` as the simulation answers them, for every other owner of
+#: engines (the attach host, ``xabsl_studio.server.simulation.host``): they read only what an
+#: :class:`~xabsl_studio.server.simulation.engines.EngineSet` has (``_robot``, ``_named``, ``keys``,
+#: ``codecs``), so a host answers "why" exactly as the studio's own simulation does.
+EXPLAIN_OPS: dict[str, Callable[[Any, Any, str | None], Any]] = {
+    "explain": Simulation._op_explain,
+    "explain_recorded": Simulation._op_explain_recorded,
+}
 
 
 def check_speed(speed: Any) -> float:
