@@ -23,22 +23,37 @@ from xabsl_studio.engine.compare.structure import COMMON, StructuralDiff
 from xabsl_studio.engine.docs.graphs import inline, render_all
 from xabsl_studio.engine.emit.dot import option_graph, quote, state_machine
 
-__all__ = ["MARK_STYLE", "Drawings", "draw", "mark_svg", "option_graph_dot", "share_colour", "state_machine_dot"]
+__all__ = [
+    "MARK_STYLE",
+    "Drawings",
+    "draw",
+    "mark_svg",
+    "option_graph_dot",
+    "share_colour",
+    "share_fills",
+    "state_machine_dot",
+]
 
 #: The marks' colours (also the legend's): added, removed, changed, renamed.
 COLOURS = {"added": "#1a7f37", "removed": "#cf222e", "changed": "#bf8700", "renamed": "#8250df"}
 
+#: The class of a marked SVG's root: its own style applies inside it only, also inlined in a page.
+SVG_CLASS = "xabsl-compare"
+_IN = f"svg.{SVG_CLASS}"
 #: The CSS every marked SVG carries.
 MARK_STYLE = (
     "".join(
-        f"g.{mark} polygon, g.{mark} ellipse, g.{mark} path {{ stroke: {colour}; stroke-width: 2.5px; }} "
-        f"g.{mark} text {{ fill: {colour}; font-weight: bold; }} "
+        f"{_IN} g.{mark} polygon, {_IN} g.{mark} ellipse, {_IN} g.{mark} path "
+        f"{{ stroke: {colour}; stroke-width: 2.5px; }} "
+        f"{_IN} g.{mark} text {{ fill: {colour}; font-weight: bold; }} "
         for mark, colour in COLOURS.items()
     )
-    + "g.edge.removed path, g.node.removed polygon, g.node.removed path { stroke-dasharray: 5 3; } "
+    + f"{_IN} g.removed path, {_IN} g.node.removed polygon {{ stroke-dasharray: 5 3; }} "
 )
 
 _GROUP = re.compile(r'<g id="([^"]+)" class="(node|edge)">')
+#: the first shape of a node group (its outline; Graphviz writes ``fill`` first)
+_SHAPE = re.compile(r'<(path|polygon|ellipse) fill="[^"]*"')
 
 
 def _append(dot: str, lines: Sequence[str]) -> str:
@@ -126,10 +141,19 @@ def option_graph_dot(
         marks[f"removed_{'option' if node.startswith('o:') else 'behavior'}_{_old_index(old, node)}"] = "removed"
     for n in range(len(before - after)):
         marks[f"removed_call_{n}"] = "removed"
-    for name, (delta, tooltip) in (shares or {}).items():
+    for name, (_delta, tooltip) in (shares or {}).items():
         if name in new.options:
-            extra.append(f"{quote('o:' + name)} [fillcolor={quote(share_colour(delta))}, tooltip={quote(tooltip)}];")
+            extra.append(f"{quote('o:' + name)} [tooltip={quote(tooltip)}];")
     return _append(option_graph(new, None), extra), marks
+
+
+def share_fills(program: ir.Program, shares: Mapping[str, tuple[float, str]]) -> dict[str, str]:
+    """The fill of every option node (by element id) whose time share changed by ``shares[name][0]``."""
+    return {
+        f"option_{program.options[name].index}": share_colour(delta)
+        for name, (delta, _tooltip) in shares.items()
+        if name in program.options
+    }
 
 
 def _old_index(old: ir.Program, node: str) -> int:
@@ -203,19 +227,32 @@ def state_machine_dot(diff: StructuralDiff, name: str) -> tuple[str, dict[str, s
     return _append(state_machine(new_option), extra), marks
 
 
-def mark_svg(svg: str, marks: Mapping[str, str]) -> str:
-    """``svg`` with each marked element's class extended and the marks' style inside it."""
+def mark_svg(svg: str, marks: Mapping[str, str], fills: Mapping[str, str] | None = None) -> str:
+    """``svg`` with each marked element's class extended, ``fills`` (by node id) painted, the marks' style inside.
+
+    A fill is an inline style on the node's shape, so it holds against any page's stylesheet.
+    """
 
     def replace(match: re.Match[str]) -> str:
         mark = marks.get(match.group(1))
         return match.group(0) if mark is None else f'<g id="{match.group(1)}" class="{match.group(2)} {mark}">'
 
     marked = _GROUP.sub(replace, svg)
+    for node, colour in (fills or {}).items():
+        start = marked.find(f'<g id="{node}" class="node')
+        if start < 0:
+            continue
+        shape = _SHAPE.search(marked, start)
+        if shape is not None:
+            painted = f'<{shape.group(1)} style="fill:{colour}" fill="{colour}"'
+            marked = marked[: shape.start()] + painted + marked[shape.end() :]
     start = marked.find("<svg")
     close = marked.find(">", start)
     if start < 0 or close < 0:
         return marked
-    return marked[: close + 1] + f"\n<style>{MARK_STYLE}</style>" + marked[close + 1 :]
+    opening = marked[start:close]
+    opening = opening.replace("<svg", f'<svg class="{SVG_CLASS}"', 1) if "class=" not in opening else opening
+    return marked[:start] + opening + ">" + f"\n<style>{MARK_STYLE}</style>" + marked[close + 1 :]
 
 
 @dataclass
@@ -239,11 +276,12 @@ def draw(
         GraphLayoutError: when ``dot`` rejects a graph.
     """
     graph_dot, graph_marks = option_graph_dot(diff, shares)
+    fills = share_fills(diff.new, shares) if shares else None
     names = [n for n in diff.new.options if diff.status(n) == "added"] + diff.changed_options
     names = [n for n in diff.new.options if n in set(names)]
     machines = [state_machine_dot(diff, n) for n in names]
     svgs = render_all([graph_dot, *(dot for dot, _ in machines)], jobs)
-    drawings = Drawings(inline(mark_svg(svgs[0], graph_marks)))
+    drawings = Drawings(inline(mark_svg(svgs[0], graph_marks, fills)))
     for name, (_dot, marks), svg in zip(names, machines, svgs[1:], strict=True):
         drawings.state_machines[name] = inline(mark_svg(svg, marks))
     return drawings
