@@ -87,7 +87,8 @@ class Change:
     """One edit.
 
     ``kind``: ``title``, ``agent``, ``enum``, ``input``, ``output``, ``internal``, ``constant``,
-    ``behavior``, ``option``, ``parameter``, ``state``, ``transition``, ``condition``, ``action``.
+    ``behavior``, ``option``, ``parameter``, ``state``, ``transition``, ``condition``, ``decision``
+    (the order of its transitions), ``action`` (an item, or ``order``: the items' order).
     ``change``: ``added``, ``removed``, ``renamed`` or ``changed``. ``name`` is the part's name in
     the new version (the old one when removed); ``option`` and ``state`` where it is
     (:data:`COMMON` for the common decision and action); ``path`` a transition's decision path.
@@ -725,6 +726,28 @@ class _Differ:
         renames = self.out.option_renames
         before = dict(_numbered((_action_key(x, renames), x) for x in old))
         after = dict(_numbered((_action_key(x, {}), x) for x in new))
+        # the items both have, in another order: they run in the order written (action_done too)
+        kept_before = [k for k in before if k in after]
+        kept_after = [k for k in after if k in before]
+        if kept_before != kept_after:
+            self.add(
+                Change(
+                    "action",
+                    "changed",
+                    "order",
+                    option=option,
+                    state=state,
+                    details=(
+                        Detail(
+                            "order",
+                            ", ".join(_action_label(k[:2]) for k in kept_before),
+                            ", ".join(_action_label(k[:2]) for k in kept_after),
+                        ),
+                    ),
+                    old=Where.of(before[kept_before[0]].span),
+                    new=Where.of(after[kept_after[0]].span),
+                )
+            )
         for key, action in before.items():
             if key not in after:
                 self.add(
@@ -808,6 +831,29 @@ class _Differ:
                     )
                 )
         unmatched_new = [leaf for leaf in new if leaf.key not in matched]
+        # the same paths in another order: the first that holds decides, so the order matters
+        order_old = [leaf for leaf in old if leaf.key in matched]
+        order_new = [leaf for leaf in new if leaf.key in matched]
+        if [leaf.key for leaf in order_old] != [leaf.key for leaf in order_new]:
+            first = next(i for i, (x, y) in enumerate(zip(order_old, order_new, strict=True)) if x.key != y.key)
+            self.add(
+                Change(
+                    "decision",
+                    "changed",
+                    "order",
+                    option=option,
+                    state=state,
+                    details=(
+                        Detail(
+                            "order",
+                            " | ".join(_path_name(leaf.shown) for leaf in order_old),
+                            " | ".join(_path_name(leaf.shown) for leaf in order_new),
+                        ),
+                    ),
+                    old=Where.of(order_old[first].span),
+                    new=Where.of(order_new[first].span),
+                )
+            )
         self.conditions(unmatched_old, unmatched_new, option, state, states)
         for leaf in unmatched_old:
             self.add(

@@ -358,3 +358,40 @@ def test_state_flags(
     files = edited(options__rest_dot_xabsl=edit)
     got = diff(tmp_path, original, files)
     assert [(r[0], r[1], r[2], r[4]) for r in got] == [expected]
+
+
+def test_swapped_branches_are_one_change_of_the_decision_order(tmp_path: Path, original: Program) -> None:
+    first = "      else if (state_time > 4000)\n        goto to_post_b;\n"
+    second = "      else if (battery < 10)\n        goto wait;\n"
+    files = edited(options__patrol_dot_xabsl=(first + second, second + first))
+    assert diff(tmp_path, original, files) == [
+        (
+            "decision",
+            "changed",
+            "patrol/to_post_a",
+            None,
+            (("order", "state_time > 4000 | battery < 10 | else", "battery < 10 | state_time > 4000 | else"),),
+            line(PATROL, "goto to_post_b"),
+            line(PATROL, "goto wait", files),
+        )
+    ]
+
+
+def test_swapped_action_items_are_one_change_of_their_order(tmp_path: Path, original: Program) -> None:
+    files = edited(
+        options__patrol_dot_xabsl=(
+            "      laps = laps + 1;\n      rest(seconds = 5);",
+            "      rest(seconds = 5);\n      laps = laps + 1;",
+        )
+    )
+    assert diff(tmp_path, original, files) == [
+        (
+            "action",
+            "changed",
+            "patrol/wait",
+            None,
+            (("order", "laps = ..., rest()", "rest(), laps = ..."),),
+            line(PATROL, "laps = laps"),
+            line(PATROL, "rest(seconds", files),
+        )
+    ]
