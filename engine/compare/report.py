@@ -45,7 +45,8 @@ def _summary(change: Change) -> str:
     if change.path is not None and change.kind == "transition":
         target = next((d for d in change.details if d.field == "target"), None)
         to = (target.new if change.change != "removed" else target.old) if target is not None else None
-        parts.append(f"[{' && '.join(change.path) or 'always'}]" + (f" -> {to}" if to else ""))
+        shown = f" -> {to}" if to and change.change != "changed" else ""  # a changed one says target: a -> b
+        parts.append(f"[{' && '.join(change.path) or 'always'}]{shown}")
     elif change.kind not in ("option", "state", "condition"):
         parts.append(change.name)  # the where names options and states; conditions say it in their detail
     for detail in change.details:
@@ -67,15 +68,16 @@ def change_line(change: Change) -> str:
     head = f"{SIGNS[change.change]} {change.change} {change.kind}"
     text = " ".join(p for p in (head, where) if p)
     summary = _summary(change)
-    return f"{text}: {summary}" + (f"  ({places})" if places else "")
+    return text + (f": {summary}" if summary else "") + (f"  ({places})" if places else "")
 
 
 def text_lines(diff: StructuralDiff, old_label: str, new_label: str) -> list[str]:
     """The report as text: a header, then one line per change (program level first, option by option)."""
     counts = diff.counts()
+    plural = "" if len(diff.changes) == 1 else "s"
     lines = [
         f"OLD {old_label}  vs  NEW {new_label}",
-        f"{len(diff.changes)} changes: {counts['added']} added, {counts['removed']} removed, "
+        f"{len(diff.changes)} change{plural}: {counts['added']} added, {counts['removed']} removed, "
         f"{counts['renamed']} renamed, {counts['changed']} changed",
     ]
     lines.extend(change_line(c) for c in diff.changes)

@@ -35,7 +35,7 @@ def test_folders_print_one_line_per_change(sets: tuple[Path, Path], capsys: pyte
     code, out, _ = run(capsys, str(sets[0]), str(sets[1]))
     assert code == 0
     assert out.splitlines()[1:] == [
-        "1 changes: 0 added, 0 removed, 0 renamed, 1 changed",
+        "1 change: 0 added, 0 removed, 0 renamed, 1 changed",
         "~ changed condition patrol/to_post_a: condition: battery < 10 -> battery < 20  "
         "(options/patrol.xabsl:13 -> options/patrol.xabsl:13)",
     ]

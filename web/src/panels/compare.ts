@@ -67,7 +67,7 @@ export function changeSummary(c: Change): string {
   if (c.kind === "transition" && c.path) {
     const target = c.details.find((d) => d.field === "target");
     const to = target ? (c.change === "removed" ? target.old : target.new) : null;
-    parts.push(`[${c.path.join(" && ") || "always"}]${to ? ` → ${to}` : ""}`);
+    parts.push(`[${c.path.join(" && ") || "always"}]${to && c.change !== "changed" ? ` → ${to}` : ""}`);
   } else if (!["option", "state", "condition"].includes(c.kind)) parts.push(c.name);
   for (const d of c.details) {
     if (c.kind === "transition" && d.field === "target" && c.change !== "changed") continue;
