@@ -1,7 +1,8 @@
 """The statistics every comparison of two runs uses: Wilson intervals, their difference, the order.
 
-* :func:`wilson`: the Wilson score interval of a binomial proportion (moved here from the
-  tournament's report, which used it for win and loss rates; the same function, unchanged);
+* :func:`wilson`: the Wilson score interval of a binomial proportion: the tournament report's
+  function for win and loss rates, unchanged, so that report can import it from here instead of
+  keeping its own;
 * :func:`difference_interval`: Newcombe's interval for the difference of two proportions, built
   from the two Wilson intervals (Newcombe 1998, method 10: the "hybrid score" interval);
 * :func:`rate_test`: whether two counts over two lengths of time differ in rate (the count of
