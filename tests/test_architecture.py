@@ -240,7 +240,7 @@ ENGINE_LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"runtime"}),
     frozenset({"host", "trace"}),
     frozenset({"record", "docs", "worlds"}),
-    frozenset({"profile", "testing"}),
+    frozenset({"profile", "testing", "compare"}),
     frozenset({"cli"}),
 )
 

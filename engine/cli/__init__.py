@@ -45,6 +45,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.docs",
         "write HTML documentation of a behavior set (option graph, options, symbols, search)",
     ),
+    "diff": (
+        "xabsl_studio.engine.cli.diff",
+        "compare two versions of a behavior set: options, states, transitions, symbols added, removed, changed",
+    ),
     "trace": (
         "xabsl_studio.engine.cli.trace",
         "run a behavior under the conformance host: input trace in, activation trace out",

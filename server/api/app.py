@@ -37,6 +37,7 @@ from xabsl_studio.engine.emit.dot import GraphvizMissing
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.runtime.activation import OPTION_NODE
 from xabsl_studio.server.api.clients import Client, Hub
+from xabsl_studio.server.api.compare import router as compare_router
 from xabsl_studio.server.api.docs import router as docs_router
 from xabsl_studio.server.api.forks import router as fork_router
 from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
@@ -747,6 +748,7 @@ def create_app(
     app.include_router(router)
     app.include_router(docs_router)
     app.include_router(profile_router)
+    app.include_router(compare_router)
     app.include_router(fork_router)
     app.include_router(library_router)
     _document_messages(app)

@@ -20,6 +20,7 @@ import { TesterPanel } from "./panels/tester";
 import { TimelinePanel } from "./panels/timeline";
 import { ForkControls } from "./panels/fork";
 import { forkable, loadReplay, replayOf } from "./replay";
+import { CompareView } from "./panels/compare";
 import { Recordings } from "./recordings";
 import { TopBar } from "./panels/topbar";
 import { DynamicsPanel } from "./panels/dynamics";
@@ -162,6 +163,10 @@ function main(): void {
   // tick in view: in the timeline's toolbar, beside the history they are about.
   const recordings = new Recordings(session);
   timeline.element.querySelector(".toolbar")?.append(recordings.button);
+  // Compare versions (a dialog): beside the recordings; a reload mark's dialog opens it too.
+  const compare = new CompareView(() => [...session.programs.keys()]);
+  timeline.element.querySelector(".toolbar")?.append(compare.button);
+  timeline.changes.onStructure = (gen) => void compare.showGeneration(gen);
   optionView.breakpoints.onHitsChanged = () => {
     timeline.markHits(optionView.breakpoints.hits);
     pending.add("cursor"); // paused: no tick follows that would redraw

@@ -17,6 +17,8 @@ export class ChangesDialog {
   private readonly title: HTMLElement;
   private readonly body: HTMLElement;
   private asked = 0;
+  /// Opens the structural view of a generation (panels/compare.ts) beside the text diff; null: none.
+  onStructure: ((gen: number) => void) | null = null;
 
   constructor(private readonly fetchDiff: (n: number) => Promise<GenerationDiff> = generationDiff) {
     this.title = h("h2");
@@ -48,8 +50,14 @@ export class ChangesDialog {
       this.body.replaceChildren(h("p.muted", {}, "No behavior file changed."));
       return;
     }
+    const structure = this.onStructure;
     this.body.replaceChildren(
-      h("p", {}, `${diff.files.length} file${diff.files.length === 1 ? "" : "s"} changed since generation ${diff.previous}:`),
+      h(
+        "p",
+        {},
+        `${diff.files.length} file${diff.files.length === 1 ? "" : "s"} changed since generation ${diff.previous}:`,
+        ...(structure ? [" ", h("button.structure", { title: "What changed in the options, states and transitions, drawn", onclick: () => structure(mark.gen) }, "Structural view…")] : []),
+      ),
       ...diff.files.map((f) =>
         h(
           "section.changed-file",
