@@ -17,6 +17,7 @@ import pytest
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.lang import Compilation
 from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Debugger, Engine
+from xabsl_studio.engine.runtime.debug import decision_reads
 from xabsl_studio.engine.types import Kind
 
 SOURCES = {
@@ -58,7 +59,7 @@ agent lagging("Lagging", main);
   }
   state run {
     decision {
-      if (action_done && near(x = abs(value = abs(value = clock)), m = mode.now, y = 2) && state_time >= 0)
+      if (action_done && near(x = abs(value = clock), m = mode.now, y = 2) && state_time >= 0)
         goto wait;
       else
         stay;
@@ -108,7 +109,7 @@ class World:
     def lag(self, since: float) -> float:
         return self.clock - since
 
-    def near(self, x: float, y: float, m: int) -> bool:  # registered in another order than declared
+    def near(self, y: float, m: int, x: float) -> bool:
         return m == self.mode and x > y
 
 
@@ -119,7 +120,9 @@ def abs_value(value: float) -> float:
 @pytest.fixture
 def program(compile_sources: Callable[..., Compilation]) -> Program:
     compilation = compile_sources(SOURCES, "agents.xabsl")
-    assert compilation.program is not None, [d.as_dict() for d in compilation.diagnostics if d.severity.value == "error"]
+    assert compilation.program is not None, [
+        d.as_dict() for d in compilation.diagnostics if d.severity.value == "error"
+    ]
     return compilation.program
 
 
@@ -129,9 +132,9 @@ def make(program: Program, record: bool = True) -> tuple[Engine, World]:
     b.enum("mode", ["idle", "go"])
     b.input("clock", Kind.DECIMAL, lambda: world.clock)
     b.input("lag", Kind.DECIMAL, world.lag, params=[("since", Kind.DECIMAL)])
-    b.input(
-        "near", Kind.BOOLEAN, world.near, params=[("x", Kind.DECIMAL), ("y", Kind.DECIMAL), ("m", Kind.ENUM)]
-    )
+    # near is registered in another order than declared (m, x, y), and with a call in its
+    # arguments that makes the generated code set them through its shared parameter storage.
+    b.input("near", Kind.BOOLEAN, world.near, params=[("y", Kind.DECIMAL), ("m", Kind.ENUM), ("x", Kind.DECIMAL)])
     b.input("abs", Kind.DECIMAL, abs_value, params=[("value", Kind.DECIMAL)])
     b.input("mode.now", Kind.ENUM, lambda: world.mode, enum="mode")
     b.output("count", Kind.DECIMAL)
@@ -151,8 +154,9 @@ def test_why_shows_what_the_input_function_returned_in_that_tick_not_now(program
     world.clock = 900.0
     engine.execute(900)  # lag(since = 1000) = -100: main stays in wait
     world.clock = 5000.0  # the world moved on: lag(since = 1000) is 4000 now
+    # && short-circuits: the decision never read clock and count, so they are unknown, not guessed.
     assert conditions(engine, "main") == [
-        (False, False, ["lag(since = 1000) (-100) > 0", "clock (900) > 500", "count (0) < 3"])
+        (False, False, ["lag(since = 1000) (-100) > 0", "clock (?) > 500", "count (?) < 3"])
     ]
     world.clock = 1200.0
     engine.execute(1200)  # lag = 200 > 0, clock > 500, count (1 after the first tick) < 3: to run
@@ -166,17 +170,29 @@ def test_why_shows_what_the_input_function_returned_in_that_tick_not_now(program
 
 def test_why_of_a_decision_reads_its_own_arguments_nested_calls_enums_and_action_done(program: Program) -> None:
     engine, world = make(program)
-    for now in (1200, 1225, 1250, 1275):
-        world.clock = float(now)
-        engine.execute(now)
-    world.clock, world.mode = -1.0, 0  # every host answer would differ now
-    explanation = Debugger(engine).explain("main")
-    assert explanation.decided_in == "run"
-    [(value, branch, shown)] = conditions(engine, "main")
-    assert value is branch is True
-    assert shown == ["near(x = abs(value = abs(value = clock)), m = mode.now, y = 2) (true) == true"] or shown == []
+    world.clock = 1200.0
+    engine.execute(1200)  # main: wait -> run; walk(to = lag(since = 0) = 1200): going -> there
+    world.clock = 0.0
     walk = Debugger(engine).explain("walk")
-    assert [(c.value, c.branch) for c in walk.conditions] == [(False, False)] or walk.decided_in == "there"
+    assert (walk.decided_in, walk.target) == ("going", "there")
+    assert conditions(engine, "walk") == [(True, True, ["@to (1200) > 10", "option_time (0) >= 0"])]
+    world.clock = 1225.0
+    engine.execute(1225)  # main: run -> wait (walk is in its target state; near(...) is true)
+    world.clock, world.mode = -1.0, 0  # asked now, near(...) would be false and action_done too
+    explanation = Debugger(engine).explain("main")
+    assert (explanation.decided_in, explanation.target) == ("run", "wait")
+    assert conditions(engine, "main") == [(True, True, ["state_time (25) >= 0"])]
+    reads = decision_reads(engine.reads(), program.options["main"].index)
+    lag, near, absolute, clock, mode = (program.inputs[n].index for n in ("lag", "near", "abs", "clock", "mode.now"))
+    assert reads == [
+        ("done", True),
+        (clock, 1225.0),  # through the shared storage the engine sets decimals (y, x) first...
+        (absolute, 1225.0, 1225.0),
+        (mode, 1),  # ...then enums (§2.5)
+        (near, 1, 1225.0, 2.0, True),  # arguments as declared (m, x, y), not as registered (y, m, x)
+        ("st", 25.0),
+    ]
+    assert lag not in {r[0] for r in reads}
 
 
 def test_without_recorded_reads_why_shows_unknown_values_not_the_host_now(program: Program) -> None:
@@ -213,4 +229,4 @@ def test_reads_follow_overrides_and_survive_a_reload(program: Program) -> None:
     assert engine.record_reads
     engine.root_actions.release_input("clock")
     engine.execute(1225)
-    assert conditions(engine, "main")[0][2] == ["lag(since = 1000) (200) > 0", "clock (1200) > 500", "count (2) < 3"]
+    assert conditions(engine, "main")[0][2] == ["lag(since = 1000) (200) > 0", "clock (1200) > 500", "count (1) < 3"]
