@@ -92,7 +92,10 @@ def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -
     path as JSON bytes, extras, input and output display values, exactly what
     ``xabsl_studio.server.simulation.worker.Simulation.sample`` does per robot), and the world's ``dynamic_scene()``.
     """
-    from xabsl_studio.server.simulation.sampling import FrameSampler, ProgramCodec  # the studio's side (imports the server)
+    from xabsl_studio.server.simulation.sampling import (
+        FrameSampler,
+        ProgramCodec,
+    )  # the studio's side (imports the server)
 
     world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
     engines = [e for e in engines_of(world) if e is not None]
