@@ -19,6 +19,8 @@ from typing import Any
 
 import orjson
 import pytest
+from mcap.reader import make_reader
+from mcap.writer import Writer
 
 from tests.server.conftest import LiveServer
 from xabsl_studio.engine.host import DEFAULT_BEHAVIOR_HZ, DEFAULT_PHYSICS_HZ, run_headless
@@ -182,10 +184,12 @@ def replay_check(path: Path, rng: random.Random) -> tuple[list[str], int]:
     return problems, explained
 
 
-def test_a_headless_recording_replays_why_exactly(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def headless(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """A 50 s 5 v 5 match recorded headless (what ``xabsl run --record`` writes)."""
     root = Path(__file__).resolve().parents[2] / "examples" / "soccer"
     world = build_world(13, load_team(root / "behavior"), load_team(root / "chase"), players=5)
-    path = tmp_path / "match.mcap"
+    path = tmp_path_factory.mktemp("why") / "match.mcap"
     recorder = Recorder.for_world(
         path,
         world,
@@ -198,6 +202,51 @@ def test_a_headless_recording_replays_why_exactly(tmp_path: Path) -> None:
     recorder.close()
     del world
     gc.collect()
-    problems, explained = replay_check(path, random.Random(29))
+    yield path
+
+
+def test_a_headless_recording_replays_why_exactly(headless: Path) -> None:
+    problems, explained = replay_check(headless, random.Random(29))
     assert explained > 1200
     assert not problems, report(problems, explained)
+
+
+def test_a_recording_without_reads_is_explained_from_what_it_holds(headless: Path, tmp_path: Path) -> None:
+    """Files recorded before the reads: never a contradiction, input functions unknown."""
+    old = tmp_path / "old.mcap"
+    with headless.open("rb") as source, old.open("wb") as target:
+        reader = make_reader(source)
+        writer = Writer(target)
+        writer.start(profile="xabsl", library="an older xabsl-studio")
+        schemas: dict[int, int] = {}
+        channels: dict[int, int] = {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if schema is not None and schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schemas[channel.schema_id]
+                )
+            data = orjson.loads(message.data)
+            data.pop("reads", None)
+            writer.add_message(channels[channel.id], message.log_time, orjson.dumps(data), message.publish_time)
+        writer.finish()
+    session = ReplaySession(old)
+    known = unknown = 0
+    try:
+        with Recording(old) as recording:
+            names = [a["name"] for a in recording.header["agents"]]
+            for seq in sorted(random.Random(31).sample(range(recording.first + 1, recording.end), 25)):
+                view = recording.tick(seq)
+                for robot, name in enumerate(names):
+                    assert view.agents[name].reads is None
+                    for node in decided(view.agents[name].path):
+                        for condition in session.explain_at(robot, node[ID], seq)["conditions"]:
+                            if condition["value"] is None:
+                                unknown += 1
+                            else:
+                                known += 1
+                                assert condition["value"] is condition["branch"], (seq, name, condition)
+    finally:
+        session.stop()
+    assert known > 200 and unknown > 20  # plain inputs and times tell; input functions do not
