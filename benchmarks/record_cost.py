@@ -89,10 +89,11 @@ def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -
 
     Each tick: the project's one sampler for all agents as the recorder calls it
     (``AgentSampler.sample``), as the studio's simulation process calls it (``FrameSampler``:
-    path as JSON bytes, extras, input and output display values, exactly what
+    path as JSON bytes, extras, input and output display values, the decisions' reads as JSON, exactly what
     ``xabsl_studio.server.simulation.worker.Simulation.sample`` does per robot), and the world's ``dynamic_scene()``.
     """
-    from xabsl_studio.server.session.frames import FrameSampler, ProgramCodec  # the studio's side (imports the server)
+    # the studio's side (imports the server: here, not at the top, for the headless parts' start-up)
+    from xabsl_studio.server.simulation.sampling import FrameSampler, ProgramCodec
 
     world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
     engines = [e for e in engines_of(world) if e is not None]
@@ -118,6 +119,7 @@ def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -
             frame.extras()
             frame.inputs()
             frame.outputs()
+            frame.reads()
         framed = clock()
         world.dynamic_scene()
         spent["recorder"] += sampled - started

@@ -153,7 +153,7 @@ def _literal(value: float | bool | int) -> str:
 class _ExpressionWriter:
     """Turns one IR expression into one Python expression in the context of an option/state."""
 
-    def __init__(self, layout: Layout, option: Option, state: State | None) -> None:
+    def __init__(self, layout: Layout, option: Option, state: State | None, reads: Program | None = None) -> None:
         self.layout = layout
         self.option = option
         self.slot: OptionSlot = layout.options[option.name]
@@ -161,6 +161,19 @@ class _ExpressionWriter:
         self.temps = 0
         #: input functions whose arguments are being generated (outermost first)
         self.calling: list[str] = []
+        #: the program whose ids name the reads a decision records (None: nothing is recorded)
+        self.reads = reads
+
+    def read(self, key: str, value: str) -> str:
+        """``value``; when recording, also appended to the tick's reads as ``(key..., value)``.
+
+        ``RA`` is the append of the engine's list of reads (C: about 40 ns); it returns None, so
+        ``or`` yields the value the temporary holds, read once, exactly as without recording.
+        """
+        if self.reads is None:
+            return value
+        t = self.temp()
+        return f"(RA(({key}, ({t} := {value}))) or {t})"
 
     def temp(self) -> str:
         self.temps += 1
@@ -178,22 +191,24 @@ class _ExpressionWriter:
                 return repr(self.layout.enum_values[element])
             case ParameterRef(param=param):
                 position = [p[0] for p in self.slot.params].index(param)
-                return f"PP[{self.slot.offset + position}]"
+                declared = [p.name for p in self.option.params].index(param) if self.reads is not None else 0
+                return self.read(f'"p", {declared}', f"PP[{self.slot.offset + position}]")
             case OutputRef(symbol=symbol):
                 out = self.layout.outputs[symbol]
-                return f"OV[{out.index}]" if out.stored else f"OG{out.index}()"
+                code = -1 - self.reads.outputs[symbol].index if self.reads is not None else 0
+                return self.read(str(code), f"OV[{out.index}]" if out.stored else f"OG{out.index}()")
             case InputRef():
                 return self.input_call(e)
             case StateTime():
-                return "st"
+                return self.read('"st"', "st")
             case OptionTime():
-                return "ot"
+                return self.read('"ot"', "ot")
             case ActionDone():
-                return self.action_done()
+                return self.read('"done"', self.action_done())
             case Conflict():
                 if self.state is None:
                     return "False"
-                return f"CF({self.slot.index}, {self.state.index})"
+                return self.read('"conflict"', f"CF({self.slot.index}, {self.state.index})")
             case Unary(op="-", operand=operand):
                 # The compiler emits unary minus as ``0 - x`` (§3.3), so -(0.0) is +0.0.
                 return f"(0.0 - {self(operand)})"
@@ -243,12 +258,13 @@ class _ExpressionWriter:
 
     def input_call(self, ref: InputRef) -> str:
         slot = self.layout.inputs[ref.symbol]
+        code = str(self.reads.inputs[ref.symbol].index) if self.reads is not None else ""
         if slot.attribute is not None:
-            return f"IA{slot.index}.{slot.attribute}"
+            return self.read(code, f"IA{slot.index}.{slot.attribute}")
         if slot.key is not None:
-            return f"IA{slot.index}[{slot.key!r}]"
+            return self.read(code, f"IA{slot.index}[{slot.key!r}]")
         if not slot.params:
-            return f"I{slot.index}()"
+            return self.read(code, f"I{slot.index}()")
         assigned = {a.param: a for a in ref.args}
         inner = [node for a in ref.args for node in walk(a.value) if isinstance(node, InputRef)]
         nested = any(node.args for node in inner)
@@ -263,6 +279,8 @@ class _ExpressionWriter:
                 # angle_diff(...))``) are allowed when that order is also the engine's, so
                 # they run in the same order either way.
                 values = [self.arg_or_default(assigned.get(name), kind) for name, kind in slot.params]
+                if self.reads is not None:
+                    return self.recorded_call(ref, slot.index, code, values)
                 return f"I{slot.index}({', '.join(values)})"
             # Set the shared parameter storage one parameter at a time in the engine's order,
             # so a nested call of the same symbol clobbers earlier arguments exactly as in the
@@ -273,8 +291,34 @@ class _ExpressionWriter:
             ]
         finally:
             self.calling.pop()
-        parts.append(f"I{slot.index}(*FP{slot.index})")
+        if self.reads is not None:
+            # The call leaves its arguments in the shared storage: record them from there.
+            stored = [f"FP{slot.index}[{i}]" for i in range(len(slot.params))]
+            result = self.temp()
+            call = f"({result} := I{slot.index}(*FP{slot.index}))"
+            parts.append(f"({call}, RA(({code}, {self.declared(ref, stored)}, {result})))[0]")
+        else:
+            parts.append(f"I{slot.index}(*FP{slot.index})")
         return f"({', '.join(parts)})[{len(parts) - 1}]"
+
+    def recorded_call(self, ref: InputRef, index: int, code: str, values: list[str]) -> str:
+        """``I{index}(values...)`` (arguments in registration order), recorded as ``(code, args..., result)``.
+
+        The arguments are evaluated once, in the same order as without recording, into
+        temporaries; the read lists them in the order the symbol declares its parameters (so a
+        reader needs no host table), then the result.
+        """
+        temps = [self.temp() for _ in values]
+        result = self.temp()
+        args = ", ".join(f"({t} := {v})" for t, v in zip(temps, values, strict=True))
+        return f"(({result} := I{index}({args})), RA(({code}, {self.declared(ref, temps)}, {result})))[0]"
+
+    def declared(self, ref: InputRef, registered: list[str]) -> str:
+        """``registered`` (one text per parameter in registration order) in the symbol's declaration order."""
+        assert self.reads is not None
+        slot = self.layout.inputs[ref.symbol]
+        position = {name: i for i, (name, _) in enumerate(slot.params)}
+        return ", ".join(registered[position[p.name]] for p in self.reads.inputs[ref.symbol].params)
 
     def arg_or_default(self, argument: Argument | None, kind: Kind) -> str:
         if argument is None:
@@ -360,7 +404,7 @@ class _Uses:
 class _OptionWriter:
     """Writes the chunk of one option."""
 
-    def __init__(self, program: Program, layout: Layout, option: Option) -> None:
+    def __init__(self, program: Program, layout: Layout, option: Option, reads: bool = False) -> None:
         self.program = program
         self.layout = layout
         self.option = option
@@ -368,6 +412,10 @@ class _OptionWriter:
         self.uses = _Uses.of(option)
         self.lines: list[str] = []
         self.origins: dict[int, Origin] = {}
+        #: decisions record what they read (see :func:`generate`); only options with conditions
+        self.reads: Program | None = (
+            program if reads and any(isinstance(s.decision, If) for s in option.states) else None
+        )
 
     def emit(self, text: str, state: State | None = None, span: Span | None = None, what: str = "") -> None:
         self.lines.append(text)
@@ -408,8 +456,7 @@ class _OptionWriter:
     def decide(self, state: State) -> None:
         i = self.slot.index
         self.emit(f"def D{i}_{state.index}({self.uses.decision_params}):", state, state.span, "decision")
-        writer = _ExpressionWriter(self.layout, self.option, state)
-        self.tree(state, state.decision, writer, "    ", "return ")
+        self.tree(state, state.decision, self.writer(state), "    ", "return ")
         self.emit("")
 
     def tree(
@@ -550,11 +597,13 @@ class _OptionWriter:
             e("        ot = 0.0")
         if uses.decision_st:
             e("        st = 0.0")
+        if self.reads is not None:
+            # The reads of this decision follow the option's id in the tick's list of reads.
+            e(f"    RA({self.option.index})", None, self.option.span, "option")
         if single:
             # A single state can only stay: the decision only picks the leaf to record.
             state = self.option.states[0]
-            writer = _ExpressionWriter(self.layout, self.option, state)
-            self.tree(state, state.decision, writer, "    ", f"LF[{i}] = ")
+            self.tree(state, state.decision, self.writer(state), "    ", f"LF[{i}] = ")
             if uses.decision_st:
                 e(f"    SD[{i}] = st")
             if uses.action_st and not uses.decision_st:
@@ -591,8 +640,8 @@ class _OptionWriter:
             e(f"    ACT{i}[n]({uses.action_params})")
 
     def writer(self, state: State) -> _ExpressionWriter:
-        """A fresh expression writer for ``state``."""
-        return _ExpressionWriter(self.layout, self.option, state)
+        """A fresh expression writer for the decision of ``state`` (recording its reads if asked)."""
+        return _ExpressionWriter(self.layout, self.option, state, self.reads)
 
     def dispatch(self, variable: str, body: Callable[[State], None]) -> None:
         """``if {variable} == 0: body(state 0) elif ... else: body(last state)`` at the prologue's level."""
@@ -626,23 +675,33 @@ def _depth(tree: DecisionTree) -> int:
     return depth
 
 
-_CACHE: dict[tuple[int, tuple[object, ...]], GeneratedProgram] = {}
+_CACHE: dict[tuple[int, tuple[object, ...], bool], GeneratedProgram] = {}
 _CACHE_SIZE = 32
 
 
-def generate(program: Program, layout: Layout) -> GeneratedProgram:
+def generate(program: Program, layout: Layout, reads: bool = False) -> GeneratedProgram:
     """Generate and compile the Python code of ``program`` for ``layout``.
 
     Compiled once: engines that load the same program with equal layouts (a team of agents)
     share the code objects and only bind their own storage.
+
+    With ``reads``, every decision records what it read into the engine's list of reads (the
+    global ``RA`` is its ``append``), for the debugger's "why" (``Engine.record_reads``): the
+    option's IR id before its decision, then per read a tuple ``(key..., value)`` -- an input
+    symbol ``(input id, value)``, an input function ``(input id, args..., result)`` with the
+    arguments in the order the symbol declares its parameters, an output or internal symbol
+    ``(-1 - output id, value)``, a parameter of the option ``("p", declared position, value)``,
+    ``("st", state_time)``, ``("ot", option_time)``, ``("done", action_done)``,
+    ``("conflict", value)``. The behavior computes exactly what it computes without recording
+    (the same reads and calls, in the same order); actions record nothing.
     """
-    key = (id(program), layout.key())
+    key = (id(program), layout.key(), reads)
     cached = _CACHE.get(key)
     if cached is not None and cached.program is program:
         return cached
     options: dict[str, GeneratedOption] = {}
     for option in program.options.values():
-        writer = _OptionWriter(program, layout, option)
+        writer = _OptionWriter(program, layout, option, reads)
         source = writer.write()
         filename = f"<xabsl:{option.name}>"
         try:

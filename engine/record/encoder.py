@@ -18,8 +18,9 @@ already receives the simulation's samples:
 
 Per agent and tick the encoder writes one ``xabsl.AgentTick`` (the path; roots and assignment
 values on key frames and when they changed; all symbol values on key frames every ``key_every``
-ticks, the changed ones in between), and an ``xabsl.Fault`` when the fault changes (repeated on
-key frames while faulted, so a seek from a key frame sees it).
+ticks, the changed ones in between; what the tick's decisions read, exact, every tick), and an
+``xabsl.Fault`` when the fault changes (repeated on key frames while faulted, so a seek from a
+key frame sees it).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ import orjson
 from xabsl_studio.engine.record import foxglove
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record.mcapfile import McapWriter
-from xabsl_studio.engine.record.sampler import ProgramTables
+from xabsl_studio.engine.record.sampler import ProgramTables, reads_json
 from xabsl_studio.engine.types import Value
 
 __all__ = ["CHUNK_SIZE", "DECIMALS", "FOXGLOVE_EVERY", "NO_CHANGE", "RecordingEncoder", "TickSample"]
@@ -56,7 +57,9 @@ FOXGLOVE_EVERY = 4
 NO_CHANGE = 0
 
 #: One agent's tick as the capture side sends it: ``(engine tick, path, assignments, inputs,
-#: outputs, roots as [[kind, name], ...] or NO_CHANGE, fault dict or None or NO_CHANGE, unread)``.
+#: outputs, roots as [[kind, name], ...] or NO_CHANGE, fault dict or None or NO_CHANGE, unread,
+#: reads)``; ``reads`` is what the decisions read (``Engine.reads()``, or that list as JSON bytes),
+#: None when the engine did not record them.
 TickSample = tuple[
     int,
     list[list[Any]],
@@ -66,6 +69,7 @@ TickSample = tuple[
     Any,
     Any,
     tuple[str, ...],
+    tuple[object, ...] | bytes | None,
 ]
 
 
@@ -295,7 +299,7 @@ class RecordingEncoder:
             if sample is None:
                 continue
             agent = agents[index]
-            tick, path, assignments, inputs, outputs, roots, fault, unread = sample
+            tick, path, assignments, inputs, outputs, roots, fault, unread, reads = sample
             key = every or agent.key
             agent.key = False
             message: dict[str, Any] = {"seq": seq, "t": now_ms, "gen": agent.gen, "tick": tick, "path": path}
@@ -311,6 +315,9 @@ class RecordingEncoder:
             message["outputs"] = agent.nest_outputs.encode(outputs, () if key else agent.outputs)
             if unread:
                 message["unread"] = list(unread)
+            if reads is not None:
+                # Exact values every tick (a why at any tick reads one message); JSON bytes as they came.
+                message["reads"] = orjson.Fragment(reads if isinstance(reads, bytes) else reads_json(reads))
             agent.inputs, agent.outputs = inputs, outputs
             write(agent.channel, time_ns, dumps(message), time_ns, seq)
             written += 1

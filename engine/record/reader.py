@@ -72,6 +72,11 @@ class ProgramView:
         """The option JSON with IR id ``option_id``."""
         return self._options[option_id]
 
+    def read_enums(self) -> dict[str, dict[int, str]]:
+        """Enum name -> host value -> element of the raw enum values in ``AgentTick.reads``."""
+        tables = self.tables.get("read_enums") or self.tables.get("enums", {})
+        return {name: {int(v): e for v, e in table.items()} for name, table in tables.items()}
+
     @property
     def _options(self) -> list[dict[str, Any]]:
         return self.description["options"]  # type: ignore[no-any-return]
@@ -91,6 +96,8 @@ class AgentTick:
     inputs: dict[str, Value | None]
     outputs: dict[str, Value | None]
     fault: dict[str, Any] | None = None
+    #: what the tick's decisions read (docs/recordings.md ``reads``), None if the file has none
+    reads: list[Any] | None = None
 
     def tree(self) -> list[OptionNode | BehaviorNode | AssignmentNode]:
         """The activation tree of this tick, as ``Engine.activation()`` built it live."""
@@ -476,6 +483,7 @@ class Recording:
                 state.inputs,
                 state.outputs,
                 state.fault,
+                data.get("reads"),
             )
         if current is not None:
             yield current

@@ -9,7 +9,11 @@ the engine's public per-tick views only and without converting anything:
 * the input symbols without parameters (``Engine.input_sampler``, overrides included) and the
   output/internal symbols (``Engine.output_sampler``), as tuples of raw values (exact floats,
   enums as host integers);
-* the root actions (``Engine.root_actions.roots``) and the fault.
+* the root actions (``Engine.root_actions.roots``) and the fault;
+* what each decision of the tick read (``Engine.reads()``: inputs, input function calls with
+  their arguments and results, outputs, parameters, times, ``action_done``), recorded by the
+  engine's own generated code as the decisions ran (``Engine.record_reads``, which the sampler
+  turns on), so "why" at any tick uses the values the decision saw.
 
 Converting for display (rounding, enum names) and comparing with the previous tick are left to
 the consumer: the recorder's encoder rounds and encodes deltas, the studio's
@@ -24,14 +28,30 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
+import orjson
+
 from xabsl_studio.engine.codegen.layout import assignment_sites
 from xabsl_studio.engine.ir.model import Assignment, Program
 from xabsl_studio.engine.runtime import Engine, Fault, Root
 from xabsl_studio.engine.types import Kind, Value
 
-__all__ = ["AgentSample", "AgentSampler", "ProgramTables"]
+__all__ = ["AgentSample", "AgentSampler", "ProgramTables", "reads_json"]
 
 _new_tuple = tuple.__new__
+
+
+def _unknown(value: object) -> None:
+    """A value JSON cannot hold: written as null (unknown), never a guess."""
+    return None
+
+
+def reads_json(reads: tuple[object, ...]) -> bytes:
+    """``Engine.reads()`` as JSON, in C.
+
+    Floats exact (their shortest round-trip form); NaN, infinities and values of other types
+    null (unknown); numpy scalars as numbers.
+    """
+    return orjson.dumps(reads, default=_unknown, option=orjson.OPT_SERIALIZE_NUMPY)
 
 
 class AgentSample(NamedTuple):
@@ -46,6 +66,8 @@ class AgentSample(NamedTuple):
     fault: Fault | None
     #: names of symbols whose host getter raised (their value is None in ``inputs``/``outputs``)
     unread: tuple[str, ...] = ()
+    #: what the tick's decisions read (``Engine.reads()``; empty unless the sampler records reads)
+    reads: tuple[object, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,7 +159,11 @@ class AgentSampler:
 
     __slots__ = ("_read_inputs", "_read_outputs", "_sites", "engine", "program", "tables")
 
-    def __init__(self, engine: Engine, tables: ProgramTables | None = None, assignments: bool = True) -> None:
+    def __init__(
+        self, engine: Engine, tables: ProgramTables | None = None, assignments: bool = True, reads: bool = True
+    ) -> None:
+        if reads:
+            engine.record_reads = True
         self.engine = engine
         self.program: Program = engine.program
         self.tables = tables if tables is not None else ProgramTables.of(engine)
@@ -191,7 +217,13 @@ class AgentSampler:
         assignments = engine.assignment_values() if self._sites else ()
         roots = engine.root_actions.roots
         # tuple.__new__ directly: the NamedTuple's own __new__ is a Python function (it ran 10 times a tick)
-        return _new_tuple(AgentSample, (engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread))
+        return _new_tuple(
+            AgentSample, (engine.tick, roots, path, assignments, inputs, outputs, engine.fault, unread, engine.reads())
+        )
+
+    def reads(self) -> tuple[object, ...]:
+        """What the decisions of the last tick read (``Engine.reads()``)."""
+        return self.engine.reads()
 
     @staticmethod
     def _one_by_one(

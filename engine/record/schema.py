@@ -125,6 +125,19 @@ _BEHAVIOR_NODE = {
     "minItems": 5,
 }
 
+_READ = {
+    "description": (
+        "one value a decision read: [input id, value], [input id, arguments..., result] (an input function, its"
+        " arguments in declaration order), [-1 - output id, value], ['p', parameter position, value],"
+        " ['st', state_time], ['ot', option_time], ['done', action_done], ['conflict', value]; raw values"
+        " (decimals exact, enums as host values; null: not representable)"
+    ),
+    "type": "array",
+    "minItems": 2,
+    "prefixItems": [{"type": ["integer", "string"]}],
+    "items": _VALUE,
+}
+
 RECORDING_SCHEMA: dict[str, Any] = {
     "$schema": _DRAFT,
     "title": "xabsl.Recording",
@@ -175,6 +188,14 @@ RECORDING_SCHEMA: dict[str, Any] = {
                     "outputs": {"type": "array", "items": {"type": "string"}},
                     "enums": {
                         "description": "enum name -> host value (as a string) -> element name",
+                        "type": "object",
+                        "additionalProperties": {"type": "object", "additionalProperties": {"type": "string"}},
+                    },
+                    "read_enums": {
+                        "description": (
+                            "enum name -> host value (as a string) -> element name of the raw enum values in"
+                            " reads (absent: those of enums; a studio recording's enums name element indices)"
+                        ),
                         "type": "object",
                         "additionalProperties": {"type": "object", "additionalProperties": {"type": "string"}},
                     },
@@ -312,6 +333,14 @@ AGENT_TICK_SCHEMA: dict[str, Any] = {
             "description": "symbols whose host getter raised this tick (their values are absent)",
             "type": "array",
             "items": {"type": "string"},
+        },
+        "reads": {
+            "description": (
+                "what the tick's decisions read, in the order they ran (every tick): an option id starts that"
+                " option's decision, the reads after it (up to the next id) are what it read"
+            ),
+            "type": "array",
+            "items": {"anyOf": [{"type": "integer", "minimum": 0}, _READ]},
         },
     },
 }

@@ -379,7 +379,7 @@ class Recorder:
             if s.fault is not capture.fault:
                 capture.fault = s.fault
                 fault = _fault(s.fault)
-            append((s.tick, s.path, s.assignments, s.inputs, s.outputs, roots, fault, s.unread))
+            append((s.tick, s.path, s.assignments, s.inputs, s.outputs, roots, fault, s.unread, s.reads))
         seq = self.seq
         world = self.world
         status = world.status() if seq % self.key_every == 0 else None

@@ -6,29 +6,31 @@ decision chose its leaf (:meth:`Debugger.explain`); the activation tree is
 ``engine.activation()``. Steering (selecting an agent, forcing roots, overriding inputs) belongs
 to the engine's :class:`~xabsl_studio.engine.runtime.roots.RootActions` (``engine.root_actions``).
 
-:meth:`Debugger.explain` **re-evaluates** the conditions on the path to the recorded leaf after
-the tick, with the option's parameters and the ``state_time``/``option_time`` its decision saw
-(both recorded); inputs are read again (overrides included) and ``action_done`` sees the
-children's state after the tick, so values may differ from the decision's if the world moved
-on. Decisions themselves record only the leaf, to keep ticks cheap.
+"Why" is computed from **the values the decision saw**, never from the host asked again: with
+``Engine.record_reads`` on, every decision records what it read (inputs, input function calls
+with their arguments and results, outputs, parameters, ``state_time``, ``option_time``,
+``action_done``; ``Engine.reads()``), and :meth:`Debugger.explain` walks the decision tree to
+the recorded leaf evaluating each condition from those reads (:class:`ReadValues`). A value the
+decision did not read is unknown (None, ``?``). The same reads, carried in the studio's samples
+and in recordings, explain any past tick and any tick of a replay exactly
+(:func:`decision_reads` picks one decision's part of a tick's reads).
 
 Every condition also lists its **comparisons with the values of both sides**
 (``ball.distance (412.3) < 500``), computed by :func:`evaluate`, a small evaluator of the IR
-with the engine's semantics (``/`` by 0 divides by 1e-7, ``%`` truncates) over a :class:`Values`
-source: :class:`LiveValues` reads an engine now; a host may pass recorded values instead
-(:func:`explain_decision`, what the studio does for a past tick from its ring buffer).
+with the engine's semantics (``/`` by 0 divides by 1e-7, ``%`` truncates, short-circuit ``&&``
+and ``||``, so it asks for exactly the values the engine read) over a :class:`Values` source
+(:func:`explain_decision`).
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from xabsl_studio.engine.codegen.layout import default_value
-from xabsl_studio.engine.codegen.python import expression_source
-from xabsl_studio.engine.codegen.support import MS_MASK, modulo
+from xabsl_studio.engine.codegen.support import modulo
 from xabsl_studio.engine.emit.json import render_expression
 from xabsl_studio.engine.errors import DebugError
 from xabsl_studio.engine.ir.model import (
@@ -50,6 +52,7 @@ from xabsl_studio.engine.ir.model import (
     OptionTime,
     OutputRef,
     ParameterRef,
+    Program,
     State,
     StateTime,
     Transition,
@@ -65,9 +68,10 @@ __all__ = [
     "Condition",
     "Debugger",
     "Explanation",
-    "LiveValues",
+    "ReadValues",
     "Unknown",
     "Values",
+    "decision_reads",
     "decision_tree",
     "evaluate",
     "explain_decision",
@@ -83,8 +87,15 @@ class Unknown(DebugError):
 class Values(Protocol):
     """Where :func:`evaluate` reads symbols, parameters and times (one option's context)."""
 
-    state_time: float
-    option_time: float
+    @property
+    def state_time(self) -> float:
+        """The decided-in state's ``state_time`` (raise :class:`Unknown` when the source cannot tell)."""
+        ...
+
+    @property
+    def option_time(self) -> float:
+        """The option's ``option_time``."""
+        ...
 
     def input(self, name: str, args: Mapping[str, Value]) -> Value:
         """Input symbol ``name`` (``args``: qualified parameter -> value, for parameterized inputs)."""
@@ -140,7 +151,13 @@ def evaluate(expression: Expression, values: Values) -> Value:
         case OutputRef(symbol=symbol):
             return values.output(symbol)
         case InputRef(symbol=symbol, args=args):
-            return values.input(symbol, {a.param: evaluate(a.value, values) for a in args})
+            given = {a.param: evaluate(a.value, values) for a in args}
+            if any(isinstance(n, InputRef) and n.symbol == symbol for a in args for n in walk(a.value)):
+                # §2.5: a call of the same function inside the arguments may overwrite arguments
+                # already set in its shared parameter storage, so the call's own arguments may
+                # not be these: which call of the decision's reads it was is unknown.
+                raise Unknown(f"{symbol} is called inside its own arguments")
+            return values.input(symbol, given)
         case StateTime():
             return values.state_time
         case OptionTime():
@@ -272,51 +289,126 @@ class Explanation:
         return "\n".join(lines)
 
 
-class LiveValues:
-    """An engine's values now, in the context of one option (what :meth:`Debugger.explain` reads)."""
+class _Clash:
+    """Two reads of one key in one decision with different values: neither is the value."""
 
-    def __init__(self, engine: Engine, option: Option, state_time: float, option_time: float) -> None:
-        self.engine = engine
-        self.loaded = engine.loaded
+
+_CLASH = _Clash()
+
+
+def decision_reads(reads: Sequence[Any], option: int) -> list[Sequence[Any]] | None:
+    """The reads of option ``option``'s (IR id) last decision in ``reads`` (``Engine.reads()``).
+
+    None when the option did not decide in that tick (or decided nothing that needed a read).
+    A list from JSON works as well as the engine's tuple: ids are integers, reads arrays.
+    """
+    found: list[Sequence[Any]] | None = None
+    current: list[Sequence[Any]] | None = None
+    for entry in reads:
+        if isinstance(entry, int) and not isinstance(entry, bool):
+            current = [] if entry == option else None
+            if current is not None:
+                found = current
+        elif current is not None and isinstance(entry, list | tuple) and entry:
+            current.append(entry)
+    return found
+
+
+class ReadValues:
+    """What one decision read in one tick, as :class:`Values` for :func:`explain_decision`.
+
+    ``reads`` is the option's part of a tick's reads (:func:`decision_reads`); values are raw
+    (enums as host values, named by ``enums``: enum name -> host value -> qualified element).
+    Nothing is asked of a host: a value the decision did not read (an operand its condition
+    short-circuited, a condition off the path) is :class:`Unknown`, and so is a key read twice
+    with different values. ``ReadValues(program, option, None, enums)`` knows nothing.
+
+    Reads name symbols by the ids of the program the engine ran (its description's ids);
+    ``input_ids``/``output_ids`` give them by name when ``program`` numbers its symbols
+    otherwise (a program rebuilt from intermediate code numbers inputs in the order the IC lists them).
+    """
+
+    def __init__(
+        self,
+        program: Program,
+        option: Option,
+        reads: Sequence[Sequence[Any]] | None,
+        enums: Mapping[str, Mapping[int, str]],
+        input_ids: Mapping[str, int] | None = None,
+        output_ids: Mapping[str, int] | None = None,
+    ) -> None:
+        self.program = program
         self.option = option
-        self.state_time = state_time
-        self.option_time = option_time
+        self.enums = enums
+        self._inputs = input_ids if input_ids is not None else {n: s.index for n, s in program.inputs.items()}
+        self._outputs = output_ids if output_ids is not None else {n: s.index for n, s in program.outputs.items()}
+        self._elements = {element: host for table in enums.values() for host, element in table.items()}
+        found: dict[tuple[Any, ...], Any] = {}
+        for read in reads or ():
+            key, value = tuple(read[:-1]), read[-1]
+            known = found.get(key, value)
+            found[key] = value if known is value or known == value else _CLASH
+        self._found = found
+
+    def _get(self, key: tuple[Any, ...], what: str) -> Value:
+        value = self._found.get(key)
+        if value is None or value is _CLASH:
+            why = "the decision did not read" if value is None else "the decision read different values of"
+            raise Unknown(f"{why} {what}")
+        result: Value = value
+        return result
+
+    @property
+    def state_time(self) -> float:
+        """The decided-in state's time as the decision read it."""
+        return float(self._get(("st",), "state_time"))
+
+    @property
+    def option_time(self) -> float:
+        """The option's time as the decision read it."""
+        return float(self._get(("ot",), "option_time"))
 
     def input(self, name: str, args: Mapping[str, Value]) -> Value:
-        """The host's value now (overrides included)."""
-        slot = self.loaded.layout.inputs[name]
-        read = self.loaded.input_reads[name]
-        value: Value = (
-            read() if not slot.params else read(*(args.get(p, default_value(kind)) for p, kind in slot.params))
-        )
-        return value
+        """The value the decision read (an input function: the call with these arguments)."""
+        symbol = self.program.inputs[name]
+        values = [args.get(p.name, default_value(p.kind)) for p in symbol.params]
+        if name not in self._inputs:
+            raise Unknown(f"{name} is not an input of the recorded program")
+        return self._get((self._inputs[name], *values), name)
 
     def output(self, name: str) -> Value:
-        """The symbol's value now."""
-        return self.engine.output(name)
+        """The symbol's value as the decision read it."""
+        if name not in self._outputs:
+            raise Unknown(f"{name} is not an output of the recorded program")
+        return self._get((-1 - self._outputs[name],), name)
 
     def parameter(self, name: str) -> Value:
-        """The option's parameter value now."""
-        slot = self.loaded.layout.options[self.option.name]
-        position = [p[0] for p in slot.params].index(name)
-        return self.loaded.option_params[slot.offset + position]
+        """The option's parameter as the decision read it."""
+        names = [p.name for p in self.option.params]
+        if name not in names:
+            raise Unknown(f"{self.option.name} has no parameter {name}")
+        return self._get(("p", names.index(name)), f"@{name}")
 
     def element(self, element: str) -> Value:
         """The host value of the element."""
-        return self.loaded.layout.enum_values[element]
+        if element not in self._elements:
+            raise Unknown(f"the host gives {element} no value")
+        return self._elements[element]
 
     def show(self, kind: Kind, enum: str | None, value: Value) -> str:
-        """Enum host values by element name."""
+        """Enum host values by element name (without the enumeration's prefix)."""
         if kind is Kind.ENUM:
-            for name, host in self.loaded.enum_values(enum).elements.items():
-                if host == value:
-                    return name[len(enum) + 1 :] if enum and name.startswith(enum + ".") else name
-            return f"{value}?"
+            element = self.enums.get(enum or "", {}).get(int(value))
+            if element is None:
+                return f"{value}?"
+            return element.removeprefix(f"{enum}.")  # dots inside an element stay
         return show_value(value)
 
     def special(self, expression: Expression) -> Value:
-        """``action_done``/``conflict`` cannot be re-evaluated outside their state's code."""
-        raise Unknown("only the decision's own code can evaluate this")
+        """``action_done`` or ``conflict`` as the decision read it."""
+        if isinstance(expression, ActionDone):
+            return self._get(("done",), "action_done")
+        return self._get(("conflict",), "conflict")
 
 
 def decision_tree(
@@ -355,23 +447,28 @@ def explain_decision(
     state: State,
     leaf: int,
     values: Values,
-    text: Callable[[Expression], str],
+    text: Callable[[Expression], str] | None = None,
 ) -> Explanation:
-    """Why ``option``'s decision in ``state`` took ``leaf``, with every condition evaluated from ``values``."""
+    """Why ``option``'s decision in ``state`` took ``leaf``, with every condition evaluated from ``values``.
+
+    ``text`` gives an operand's source; by default it is cut from the condition's source text
+    where the program has it, else the IR is rendered.
+    """
     conditions = []
     for node, branch in leaf_path(state.decision, leaf):
         try:
             value: Value | None = evaluate(node.condition, values)
         except (Unknown, ArithmeticError, DebugError, ValueError, TypeError):
             value = None
+        cut = text if text is not None else functools.partial(_span_text, node, option.name)
         conditions.append(
             Condition(
                 node.text,
-                text(node.condition),
+                cut(node.condition),
                 value,
                 branch,
                 node.condition.span,
-                comparisons(node.condition, values, text),
+                comparisons(node.condition, values, cut),
             )
         )
     transition = _leaf(state.decision, leaf)
@@ -397,7 +494,11 @@ class Debugger:
         }
 
     def explain(self, option: str) -> Explanation:
-        """The decision option ``option`` took in the last tick it ran (see module docstring).
+        """The decision option ``option`` took in the last tick it ran, from what it read then.
+
+        With ``engine.record_reads`` on, every value is the one the decision read in that tick
+        (:class:`ReadValues`); otherwise, or when the option did not decide in the last tick,
+        the values are unknown (None; ``?`` in comparisons): never the host asked again.
 
         Raises:
             DebugError: unknown option, or it has not decided anything since the last load.
@@ -412,22 +513,21 @@ class Debugger:
         _, leaf, decided = record
         ir_option = loaded.program.options[option]
         state = ir_option.states[decided]
-        namespace = {
-            "st": loaded.decision_state_time[slot.index],
-            "ot": float((self.engine.now - loaded.activated[slot.index]) & MS_MASK),
-            "tick": self.engine.tick,
-        }
-        live = LiveValues(self.engine, ir_option, float(namespace["st"]), float(namespace["ot"]))
-        conditions = []
-        for node, branch in leaf_path(state.decision, leaf):
-            assert isinstance(node, If)
-            source = expression_source(loaded.layout, ir_option, state, node.condition)
-            value = eval(compile(source, f"<xabsl-explain:{option}>", "eval"), loaded.globals, namespace)
-            found = comparisons(node.condition, live, functools.partial(_span_text, node, option))
-            conditions.append(Condition(node.text, source, value, branch, node.condition.span, found))
-        transition = _leaf(state.decision, leaf)
-        target = transition.target or state.name
-        return Explanation(option, state.name, leaf, target, target == state.name, tuple(conditions))
+        # The record of the last decision; its reads only if that decision ran in the last tick.
+        ran = loaded.last_tick[slot.index] == self.engine.tick
+        reads = decision_reads(self.engine.reads(), ir_option.index) if ran else None
+        values = ReadValues(loaded.program, ir_option, reads, self._enums(loaded.program))
+        return explain_decision(ir_option, state, leaf, values)
+
+    def _enums(self, program: Program) -> dict[str, dict[int, str]]:
+        loaded = self.engine.loaded
+        tables: dict[str, dict[int, str]] = {}
+        for name in program.enums:
+            table: dict[int, str] = {}
+            for element, host in loaded.enum_values(name).elements.items():
+                table.setdefault(int(host), element)
+            tables[name] = table
+        return tables
 
 
 def _leaf(tree: If | Transition, leaf: int) -> Transition:

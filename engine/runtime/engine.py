@@ -78,6 +78,9 @@ class Engine:
         self.root_actions = RootActions(policy)
         #: the loaded program has cooperative states (only then a tick clears their bookkeeping)
         self._coop_states = False
+        #: the loaded program's list of reads while decisions record them (``record_reads``), else None
+        self._reads: list[object] | None = None
+        self._record_reads = False
         if program is not None:
             self.load(program)
 
@@ -90,7 +93,7 @@ class Engine:
         linked = link(program, self.bindings, double_execution_is_error=self.policy is Policy.B2, reuse=reuse)
         for agent in program.agents:
             check_root(program, agent.root, self.policy)
-        generated = generate(program, linked.layout)  # CodegenError is a LoadError
+        generated = generate(program, linked.layout, self._record_reads)  # CodegenError is a LoadError
         return LoadedProgram(linked, generated, tick=lambda: self._tick, warnings=self.warnings)
 
     def load(self, program: Program) -> None:
@@ -105,6 +108,7 @@ class Engine:
         self._loaded = loaded
         self._fault = None
         self._coop_states = bool(loaded.coop.states)
+        self._reads = loaded.reads if self._record_reads else None
         self.root_actions.load(loaded)
 
     def reload(self, program: Program) -> None:
@@ -122,6 +126,7 @@ class Engine:
         new.keep(old)
         self._loaded = new
         self._coop_states = bool(new.coop.states)
+        self._reads = new.reads if self._record_reads else None
         self.root_actions.reload(new)
 
     def _require(self) -> LoadedProgram:
@@ -146,6 +151,9 @@ class Engine:
         self._now = now
         if self._coop_states:
             self._loaded.coop.entering_now.clear()
+        reads = self._reads
+        if reads is not None:
+            reads.clear()
         # One handler for the whole tick: a fault is located from its traceback (``_locate``),
         # not from which root was running.
         try:
@@ -184,6 +192,43 @@ class Engine:
         """Every option restarts in its initial state on the next tick; clears a fault (§2.9)."""
         self._require().reset()
         self._fault = None
+
+    # -- what the decisions read -----------------------------------------------------------------
+
+    @property
+    def record_reads(self) -> bool:
+        """Whether each decision records what it read, for the debugger's "why" (default: off).
+
+        While on, the engine runs a variant of the generated code whose decisions append every
+        value they read to a list (see ``xabsl_studio.engine.codegen.python.generate``), read with
+        :meth:`reads` after a tick: the values the decision saw, never asked of the host again.
+        It computes exactly what the plain code computes; off, nothing is recorded and a tick
+        costs what it always did. Set it between ticks; it stays across loads and reloads.
+        """
+        return self._record_reads
+
+    @record_reads.setter
+    def record_reads(self, on: bool) -> None:
+        on = bool(on)
+        if on == self._record_reads:
+            return
+        self._record_reads = on
+        loaded = self._loaded
+        if loaded is None:
+            return
+        loaded.bind(generate(loaded.program, loaded.layout, on))
+        self._reads = loaded.reads if on else None
+        self.root_actions.rebuild()
+
+    def reads(self) -> tuple[object, ...]:
+        """What the decisions of the last tick read (empty unless :attr:`record_reads` is on).
+
+        In the order of the tick: an option's IR id, then the reads of its decision as tuples
+        (the layout of ``xabsl_studio.engine.codegen.python.generate``; ids are the IR's, values
+        raw: enums as host integers), then the next option's id. ``xabsl_studio.engine.runtime.debug``
+        explains decisions from it (``decision_reads``, ``ReadValues``).
+        """
+        return tuple(self._reads) if self._reads is not None else ()
 
     # -- agents ----------------------------------------------------------------------------------
 

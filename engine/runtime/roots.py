@@ -90,16 +90,23 @@ class RootActions:
             return root.name in layout.outputs
         return root.name in (layout.options if root.kind == "option" else layout.behaviors)
 
+    def _chosen(self) -> list[tuple[Root, dict[str, Value]]]:
+        if self._forced is not None:
+            return list(self._forced)
+        if self._agent is not None:
+            return [(Root("option", self._agent.root), {})]
+        return []
+
     def _install(self) -> None:
         loaded = self._require()
-        if self._forced is not None:
-            chosen = list(self._forced)
-        elif self._agent is not None:
-            chosen = [(Root("option", self._agent.root), {})]
-        else:
-            chosen = []
+        chosen = self._chosen()
         self.roots = tuple(root for root, _ in chosen)
         self.actions = [loaded.root_action(root, params) for root, params in chosen]
+
+    def rebuild(self) -> None:
+        """Build what a tick calls again, for the same roots (the program's functions were bound anew)."""
+        loaded = self._require()
+        self.actions = [loaded.root_action(root, params) for root, params in self._chosen()]
 
     # -- reading -------------------------------------------------------------------------------------
 

@@ -87,7 +87,9 @@ class LoadedProgram:
         self.coop.executing = self.executing_coop_states
         g: dict[str, Any] = dict(SUPPORT_GLOBALS)
         g.update((spec.name, self.lists[spec.field]) for spec in STORAGE)
-        g.update(DX=self.double_execution, CC=self.coop.check, CF=self.coop.conflict)
+        #: what the decisions of the last tick read, when the code records reads (``Engine.record_reads``)
+        self.reads: list[object] = []
+        g.update(DX=self.double_execution, CC=self.coop.check, CF=self.coop.conflict, RA=self.reads.append)
         for k, behavior in enumerate(linked.behaviors):
             # Generated basic-behavior calls do the bookkeeping of ``run_behavior`` inline.
             g[f"BB{k}"] = behavior
@@ -105,8 +107,8 @@ class LoadedProgram:
                 g[f"OS{k}"] = out.setter
                 g[f"OG{k}"] = out.getter
         self.globals = g
-        generated.bind(g)
-        self.functions: list[Callable[[int, int], None]] = [g[f"O{i}"] for i in range(len(linked.option_names))]
+        self.functions: list[Callable[[int, int], None]] = []
+        self.bind(generated)
         self.input_reads = {name: g[f"I{slot.index}"] for name, slot in linked.layout.inputs.items()}
         #: input symbols the generated code reads as a constant instead of from the host
         self.overrides: dict[str, Value] = {}
@@ -116,6 +118,16 @@ class LoadedProgram:
         #: what :meth:`Engine.snapshot` copies: the ``snapshot`` lists of STORAGE, in order
         self.snapshot_lists = tuple(self.lists[field] for field in SNAPSHOT_FIELDS)
         self.enums = self._enum_values()
+
+    def bind(self, generated: GeneratedProgram) -> None:
+        """Run ``generated`` on this storage: the same program, with or without recording reads.
+
+        Between ticks only; the root actions must be built again (they hold option functions).
+        """
+        self.generated = generated
+        generated.bind(self.globals)
+        self.functions[:] = [self.globals[f"O{i}"] for i in range(len(self.linked.option_names))]
+        self.reads.clear()
 
     def _start(self, spec: StorageList) -> list[Any]:
         """The list ``spec`` as a load leaves it."""

@@ -10,7 +10,7 @@ peer). docs/protocol.md ("Studio and host") documents them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
 if TYPE_CHECKING:
@@ -36,7 +36,9 @@ class Sample:
 
     Per robot (world order): the path as JSON bytes, the extras (fault, force, overrides:
     ``b',"fault":...'`` or ``b''``), the input and output values aligned with the generation's
-    symbol ids; then the dynamic scene and the world status as JSON bytes.
+    symbol ids; then the dynamic scene and the world status as JSON bytes; last, per robot,
+    what its decisions read in the tick as JSON bytes (``Engine.reads()``, docs/recordings.md
+    ``reads``; ``b''``: none), from which the server's ring explains any past tick.
     """
 
     seq: int
@@ -51,6 +53,7 @@ class Sample:
     outputs: tuple[tuple[WireValue, ...], ...]
     scene: bytes
     status: bytes
+    reads: tuple[bytes, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,6 +73,8 @@ class NewGeneration:
     errors: dict[str, str | None]
     #: a ``fork`` generation: ``(seq forked at, its time, the seq of this generation's first sample)``
     fork: tuple[int, int, int] | None = None
+    #: per behavior set: enum name -> host value -> element (what the raw enum values of ``reads`` mean)
+    enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,8 +142,8 @@ class ExplainRecorded:
     """Internal: explain decisions from recorded values (``explain`` with ``seq``, prepared by the server).
 
     ``ticks`` holds the explained tick first, then the tick of the last transition (if any):
-    ``(seq, t, decided_in, leaf, active state, inputs by id, outputs by id, option params, state_time,
-    option_time)``; values as the ring buffer holds them (display values, enums as element indices).
+    ``(seq, t, decided_in, leaf, active state, reads)``, ``reads`` being what the robot's
+    decisions read in that tick as the ring holds it (the sample's JSON bytes; ``b''``: none).
     """
 
     robot: int

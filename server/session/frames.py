@@ -7,9 +7,10 @@ The simulation process samples each tick into display values
    stores, per robot, a bit mask of the symbols that changed, encodes the tick's delta (and,
    every :data:`KEY_EVERY` ticks, a full frame), then appends an :class:`Entry` to the :class:`Ring`.
 2. **Storage**: the ring keeps the last ``seconds`` of ticks. Old entries keep only their encoded
-   tick delta (bytes) and, once per :data:`KEY_EVERY` ticks, a full frame; values as Python
-   objects are kept only for the most recent :data:`LIVE_ENTRIES` entries, so memory is bounded by
-   about ``seconds x behavior_hz x bytes per delta`` (see :meth:`Ring.nbytes`).
+   tick delta (bytes), once per :data:`KEY_EVERY` ticks a full frame, and per robot what its
+   decisions read (the sample's JSON bytes, for "why" at that tick); values as Python objects
+   are kept only for the most recent :data:`LIVE_ENTRIES` entries, so memory is bounded by about
+   ``seconds x behavior_hz x bytes per tick`` (see :meth:`Ring.nbytes`).
 3. **Encoding for a client** (asyncio loop, :class:`FrameEncoder`): a client that last received
    frame L gets frame K with the values of the symbols whose bit is set in any mask of
    (L, K] -- so a client that skips frames still ends with exact values. Clients with the same L,
@@ -67,6 +68,8 @@ class Generation:
     sources: dict[str, dict[str, str]] = field(default_factory=dict)
     #: per behavior key: the files whose text differs from the previous generation's
     changed: dict[str, list[str]] = field(default_factory=dict)
+    #: per behavior key: enum name -> host value -> element (the raw enum values of an entry's ``reads``)
+    enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
 
     @classmethod
     def from_message(cls, message: NewGeneration) -> Generation:
@@ -81,6 +84,7 @@ class Generation:
             input_ids=message.input_ids,
             output_ids=message.output_ids,
             engines=tuple(r["program"] is not None for r in structure["robots"]),
+            enums=message.enums,
         )
 
 
@@ -106,6 +110,8 @@ class Entry:
     scene: bytes = b"{}"
     status: bytes = b"{}"
     nbytes: int = field(default=0)
+    #: per robot: what its decisions read in the tick (JSON bytes, kept as long as the entry: why at any tick)
+    reads: tuple[bytes, ...] = ()
 
 
 def _head(entry: Entry, full: bool) -> bytes:
@@ -304,6 +310,7 @@ class FrameRecorder:
             outputs=outputs,
             scene=scene,
             status=status,
+            reads=sample.reads,
         )
         if new_gen:
             _place(gen, self.ring.latest, t, self.ring.period_ms)
@@ -315,7 +322,12 @@ class FrameRecorder:
             entry.delta = encode(entry, entry.in_masks, entry.out_masks, None, status_changed)
             if key:
                 entry.full = encode(entry, None, None, None, True)
-        entry.nbytes = len(entry.delta) + (len(entry.full) if entry.full is not None and not new_gen else 0) + 200
+        entry.nbytes = (
+            len(entry.delta)
+            + (len(entry.full) if entry.full is not None and not new_gen else 0)
+            + sum(map(len, sample.reads))
+            + 200
+        )
         self.ring.append(entry)
         self.recorded += 1
         self.record_seconds += time.perf_counter() - started

@@ -869,18 +869,9 @@ def _recorded(
             if entry.seq == seq:
                 return None
             continue
-        tick = (
-            entry.seq,
-            entry.t,
-            node[6],
-            node[7],
-            node[3],
-            state.get("inputs", {}),
-            state.get("outputs", {}),
-            list(node[8]),
-            float(node[5]),
-            float(node[4]),
-        )
+        # What the decisions read in that tick, as the simulation sent it (b"": not recorded).
+        reads = entry.reads[robot] if robot < len(entry.reads) else b""
+        tick = (entry.seq, entry.t, node[6], node[7], node[3], reads)
         if node[6] != node[3]:  # the decision left its state: a transition
             transition = tick
         if entry.seq == seq:

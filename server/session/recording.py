@@ -12,6 +12,9 @@ What a sample carries is what the frames show, so a live recording differs from 
 are display values (decimals to 3 digits, enum values as element indices, which the header's
 ``tables.enums`` names), assignment values are not recorded (the trees have no assignment
 nodes), and a tick whose sample the pipe dropped is missing (ticks are numbered as written).
+What the decisions read (``reads``) is exact as in a headless recording: the simulation sends
+it as the engine recorded it, so a replay explains any tick from the values the decision saw;
+its enum values are the host's, named by the tables' ``read_enums``.
 
 Generations become recording generations: a reload writes the new description on
 ``/xabsl/program`` and a ``reload`` event (with the files the compile read), a reset a ``reset``
@@ -164,7 +167,7 @@ class LiveRecorder:
                         "key": key,
                         "gen": self._program_gen[key],
                         "changed_files": files,
-                        "tables": tables_of(program).to_json(),
+                        "tables": self._tables_json(key, program),
                     },
                 )
             # A fork rebuilds the world like a reset (at an earlier tick of the same seed).
@@ -202,9 +205,10 @@ class LiveRecorder:
                         extras.append(b"")
                     extras[i] = extra
                 roots = NO_CHANGE
-                samples.append(
-                    (sample.seq, loads(sample.paths[i]), (), sample.inputs[i], sample.outputs[i], roots, fault, ())
-                )
+                # What the decisions read, exact, as the simulation encoded it (written as it came).
+                reads = sample.reads[i] if i < len(sample.reads) and sample.reads[i] else None
+                path = loads(sample.paths[i])
+                samples.append((sample.seq, path, (), sample.inputs[i], sample.outputs[i], roots, fault, (), reads))
             seq = self._seq
             status = loads(sample.status) if seq % self.key_every == 0 else None
             encoder.handle(("tick", seq, sample.t, samples, loads(sample.scene), status))
@@ -303,7 +307,7 @@ class LiveRecorder:
                     for r in structure["robots"]
                 ],
                 "tables": {
-                    key: tables_of(p).to_json() for key, p in self._programs.items() if key in structure["programs"]
+                    key: self._tables_json(key, p) for key, p in self._programs.items() if key in structure["programs"]
                 },
             },
         )
@@ -311,6 +315,16 @@ class LiveRecorder:
             self._write_program(key, description, "start", [], self._programs.get(key))
         self._bind(gen)
         self._static(gen)
+
+    def _tables_json(self, key: str, program: Program) -> dict[str, Any]:
+        """The value tables of ``program`` for the header or a reload, with the host's enum values of ``reads``."""
+        tables = tables_of(program).to_json()
+        gen = self._gen
+        if gen is not None and key in gen.enums:
+            tables["read_enums"] = {
+                name: {str(v): e for v, e in table.items()} for name, table in gen.enums[key].items()
+            }
+        return tables
 
     def _close(self) -> None:
         encoder, self._encoder = self._encoder, None

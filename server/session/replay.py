@@ -16,10 +16,13 @@ exactly as it reads a live session.
 ``explain`` works at any tick: :func:`explain` rebuilds the recorded generation from its
 intermediate code and lets the engine's debugger (``xabsl_studio.engine.runtime.debug.explain_decision``, the
 evaluator the live studio uses) walk its decision tree to the recorded leaf, evaluating every
-condition and both operands of every comparison from the recorded values (:class:`TickValues`:
-inputs of the tick; outputs as the decision saw them, the previous tick's updated by the
-assignments that ran before the option in this tick; the option's parameters and times). Values a
-recording does not hold (input functions with parameters, ``action_done``) are ``null``; the
+condition and both operands of every comparison from what the decision read in that tick (the
+tick's ``reads``: inputs, input function calls with their arguments and results, outputs,
+parameters, times, ``action_done``; ``xabsl_studio.engine.runtime.debug.ReadValues``), exactly as
+the live why does. Recordings made before the reads were recorded are explained from what they
+hold (:class:`TickValues`: the tick's plain inputs; outputs as the decision saw them, the
+previous tick's updated by the assignments that ran before the option in this tick; the
+option's parameters and times); there input functions and ``action_done`` are ``null``. The
 branch taken is always the recorded one.
 
 Commands that need a live world (forcing, overrides, resets, world commands) answer an error.
@@ -41,11 +44,19 @@ from typing import Any
 import orjson
 
 from xabsl_studio.engine.host import Agent, AgentController, BehaviorSource, ExampleError, World
-from xabsl_studio.engine.ir.model import Expression, Program
+from xabsl_studio.engine.ir.model import Expression, Option, Program
 from xabsl_studio.engine.record import Recording, RecordingError, TickView
 from xabsl_studio.engine.record.reader import AgentTick, ProgramView
 from xabsl_studio.engine.runtime import AssignmentNode, Engine, OptionNode
-from xabsl_studio.engine.runtime.debug import Unknown, explain_decision, render, show_value
+from xabsl_studio.engine.runtime.debug import (
+    ReadValues,
+    Unknown,
+    Values,
+    decision_reads,
+    explain_decision,
+    render,
+    show_value,
+)
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.server.protocol.commands import (
     BreakpointCommand,
@@ -346,6 +357,8 @@ class ReplaySession(Session):
         self.seeks = 0
         #: per (behavior key, generation): its program rebuilt from the recorded IC (graphs)
         self._programs_shown: dict[tuple[str, int], tuple[Program | None]] = {}
+        #: the ticks ``explain`` read last, by seq (the why pane asks for several options of one tick)
+        self._explained: dict[int, TickView] = {}
         #: behavior times of the first and the last tick (the UI's timeline extent)
         self.t_first = recording.tick(recording.first).t
         self.t_last = recording.tick(recording.end - 1).t
@@ -496,11 +509,12 @@ class ReplaySession(Session):
         if not self.source.first <= at < self.source.end:
             raise CommandError(f"tick {at} is outside the recording ({self.source.first}..{self.source.end - 1})")
         name = robots[robot]["name"]
-        view = self.recording.tick(at)
-        previous = self.recording.tick(at - 1) if at > self.source.first else None
+        view = self._tick_view(at)
         agent = view.agents.get(name)
         if agent is None:
             raise CommandError(f"{name} has no tick {at} in the recording")
+        # Older recordings hold no reads: then the tick before gives the outputs and times the decision saw.
+        previous = self._tick_view(at - 1) if agent.reads is None and at > self.source.first else None
         program = self.recorded_program(robots[robot]["program"], agent.gen)
         if program is None:
             raise CommandError(f"{self.recording.path} holds no intermediate code (an older recording): no why")
@@ -508,6 +522,15 @@ class ReplaySession(Session):
         # Asked without a tick (the page's "live" view: the playback position): shown as live.
         result.update(seq=at if seq is not None else None, t=view.t, recorded=seq is not None)
         return result
+
+    def _tick_view(self, seq: int) -> TickView:
+        """Tick ``seq`` of the recording, read once for the explains of its options (a seek per tick)."""
+        view = self._explained.get(seq)
+        if view is None:
+            if len(self._explained) >= 4:
+                self._explained.pop(next(iter(self._explained)))
+            view = self._explained[seq] = self.recording.tick(seq)
+        return view
 
     # -- history and status ---------------------------------------------------------------------------
 
@@ -591,7 +614,7 @@ def latest_status(entry: Entry | None) -> dict[str, Any]:
 
 
 class TickValues:
-    """What one option's decision read in a recorded tick (``xabsl_studio.engine.runtime.debug.Values``).
+    """What a recording without reads tells of one decision (``xabsl_studio.engine.runtime.debug.Values``).
 
     Enum values are element indices in their enumeration (the reader gives element names;
     unknown names are -1); plain inputs are the tick's,
@@ -728,27 +751,26 @@ def explain(
     node = next((n for n in agent.path if n[0] == 0 and n[2] == ir_option.index), None)
     if node is None:
         raise CommandError(f"option {ir_option.name} did not run in tick {agent.tick} of {agent.name}")
-    state_id, option_time, state_time, decided_in, leaf = node[3], node[4], node[5], node[6], node[7]
+    decided_in, leaf = node[6], node[7]
     if leaf < 0:
         raise CommandError(f"option {ir_option.name} decided nothing in that tick")
     if not 0 <= decided_in < len(ir_option.states):
         raise CommandError(f"option {ir_option.name} has no state {decided_in}")
     decided = ir_option.states[decided_in]
-    # The decision saw the decided-in state's time: after a transition this tick, last tick's + a period.
-    decision_state_time: float | None = float(state_time)
-    if decided_in != state_id:
-        decision_state_time = None
-        if previous is not None and previous_view is not None:
-            before = next((n for n in previous.path if n[0] == 0 and n[2] == ir_option.index), None)
-            if before is not None and before[3] == decided_in:
-                decision_state_time = float(before[5] + (t - previous_view.t))
-    enums = agent.program.tables["enums"]
-    params: dict[str, Any] = {}
-    for p, value in zip(ir_option.params, node[8], strict=False):
-        params[p.name] = enums.get(p.enum, {}).get(str(int(value)), value) if p.enum else value
-    values = TickValues(
-        agent, _decision_outputs(agent, previous, ir_option.index), params, decision_state_time, float(option_time)
-    )
+    values: Values
+    if agent.reads is not None:
+        # What the decision read in that tick, exact (recordings since the reads were recorded).
+        description = agent.program.description
+        values = ReadValues(
+            program,
+            ir_option,
+            decision_reads(agent.reads, ir_option.index),
+            agent.program.read_enums(),
+            {s["name"]: s["id"] for s in description["inputs"]},
+            {s["name"]: s["id"] for s in description["outputs"]},
+        )
+    else:
+        values = _recorded_values(agent, previous, ir_option, node, t, previous_view)
     try:
         explanation = explain_decision(
             ir_option, decided, leaf, values, functools.partial(render, option=ir_option.name)
@@ -761,6 +783,33 @@ def explain(
     _source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
     result.update(recorded=True, tree=tree, last_transition=None)
     return result
+
+
+def _recorded_values(
+    agent: AgentTick,
+    previous: AgentTick | None,
+    ir_option: Option,
+    node: list[Any],
+    t: int,
+    previous_view: TickView | None,
+) -> TickValues:
+    """The values of a recording without reads: the tick's plain inputs, outputs and times (functions unknown)."""
+    state_id, option_time, state_time, decided_in = node[3], node[4], node[5], node[6]
+    # The decision saw the decided-in state's time: after a transition this tick, last tick's + a period.
+    decision_state_time: float | None = float(state_time)
+    if decided_in != state_id:
+        decision_state_time = None
+        if previous is not None and previous_view is not None:
+            before = next((n for n in previous.path if n[0] == 0 and n[2] == ir_option.index), None)
+            if before is not None and before[3] == decided_in:
+                decision_state_time = float(before[5] + (t - previous_view.t))
+    enums = agent.program.tables["enums"]
+    params: dict[str, Any] = {}
+    for p, value in zip(ir_option.params, node[8], strict=False):
+        params[p.name] = enums.get(p.enum, {}).get(str(int(value)), value) if p.enum else value
+    return TickValues(
+        agent, _decision_outputs(agent, previous, ir_option.index), params, decision_state_time, float(option_time)
+    )
 
 
 def _source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[str, Any]) -> None:

@@ -118,9 +118,17 @@ class EngineSet:
     def robot_samples(
         self,
     ) -> tuple[
-        tuple[bytes, ...], tuple[bytes, ...], tuple[tuple[WireValue, ...], ...], tuple[tuple[WireValue, ...], ...]
+        tuple[bytes, ...],
+        tuple[bytes, ...],
+        tuple[tuple[WireValue, ...], ...],
+        tuple[tuple[WireValue, ...], ...],
+        tuple[bytes, ...],
     ]:
-        """Per robot: the path as JSON bytes, the extras, the input and output display values."""
+        """Per robot: path (JSON bytes), extras, input and output display values, the decisions' reads.
+
+        The reads are JSON bytes (``Engine.reads()``), b'' for a robot without an engine.
+        """
+        reads: list[bytes] = []
         paths: list[bytes] = []
         extras: list[bytes] = []
         inputs: list[tuple[WireValue, ...]] = []
@@ -132,6 +140,7 @@ class EngineSet:
                 extras.append(b"")
                 inputs.append(())
                 outputs.append(())
+                reads.append(b"")
                 continue
             try:
                 paths.append(dumps(sampler.path()))
@@ -140,7 +149,8 @@ class EngineSet:
             extras.append(sampler.extras())
             inputs.append(sampler.inputs())
             outputs.append(sampler.outputs())
-        return tuple(paths), tuple(extras), tuple(inputs), tuple(outputs)
+            reads.append(sampler.reads())
+        return tuple(paths), tuple(extras), tuple(inputs), tuple(outputs), tuple(reads)
 
     # -- breakpoints ----------------------------------------------------------------------------------
 

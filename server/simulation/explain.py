@@ -1,8 +1,9 @@
 """The ``explain`` result as the protocol sends it, built from an engine ``Explanation``.
 
-One shape for every way the studio answers "why": the live engine now (``Debugger.explain``), a
-past tick of the ring (``explain_decision`` over the values the server recorded) and a tick of a
-replayed recording (``explain_decision`` over the recording's values and the program rebuilt from
+One shape for every way the studio answers "why", each from what the decision read in its tick
+(``ReadValues`` over ``Engine.reads()``): the live engine's last tick (``Debugger.explain``), a
+past tick of the ring (``explain_decision`` over the reads the ring kept) and a tick of a
+replayed recording (``explain_decision`` over the recording's reads and the program rebuilt from
 its intermediate code). The decisions themselves are evaluated by ``xabsl_studio.engine.runtime.debug``; this
 module only lays the answer out: ids, names, the leaf's span, each condition with its value,
 branch and comparisons, and the decision tree with the path taken.
@@ -80,7 +81,7 @@ def if_text(node: If, option: str) -> str:
 
 
 def mark_values(tree: dict[str, Any], explanation: Explanation) -> None:
-    """Put the explanation's condition values on the taken path of ``tree`` (live: re-evaluated ones)."""
+    """Put the explanation's condition values on the taken path of ``tree`` (live: the last decision's)."""
     node = tree
     for condition in explanation.conditions:
         if "if" not in node:

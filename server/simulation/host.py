@@ -163,10 +163,10 @@ class HostEngines(EngineSet):
     def sample(self, t: int) -> Sample:
         """The sample of the tick just run (clock ``t`` ms)."""
         self.seq += 1
-        paths, extras, inputs, outputs = self.robot_samples()
+        paths, extras, inputs, outputs, reads = self.robot_samples()
         return Sample(
             self.seq, self.generation_number, t, time.time() * 1000.0, self.paused, 1.0,
-            paths, extras, inputs, outputs, b"{}", b"{}",
+            paths, extras, inputs, outputs, b"{}", b"{}", reads,
         )  # fmt: skip
 
     # -- commands -------------------------------------------------------------------------------------

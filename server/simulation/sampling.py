@@ -1,10 +1,12 @@
 """Sampling after a tick (simulation process): one robot's activation path and symbols as display values.
 
 The engine is read through the project's one sampler (``xabsl_studio.engine.record.sampler.AgentSampler``,
-the recorder's too): the compact ``path`` of docs/protocol.md (integer ids) and the input and
-output symbols. This module turns them into the values frames carry (decimals rounded, enums as
-element indices) and builds the id tables of a program (:class:`ProgramCodec`); the tick's
-sample goes to the server process (``xabsl_studio.server.session.frames`` keeps and encodes it).
+the recorder's too): the compact ``path`` of docs/protocol.md (integer ids), the input and
+output symbols, and what the tick's decisions read (exact, as JSON: the server's ring keeps it
+so that "why" at any past tick uses the values the decision saw). This module turns the symbols
+into the values frames carry (decimals rounded, enums as element indices) and builds the id
+tables of a program (:class:`ProgramCodec`); the tick's sample goes to the server process
+(``xabsl_studio.server.session.frames`` keeps and encodes it).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from typing import Any
 import orjson
 
 from xabsl_studio.engine.ir.model import Program
-from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables
+from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables, reads_json
 from xabsl_studio.engine.runtime import Engine
 from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.engine.types import Kind, Value
@@ -167,6 +169,10 @@ class FrameSampler:
         """The display values of the output and internal symbols."""
         values, unread = self.reader.outputs()
         return _display(self._output_converters, values, unread)
+
+    def reads(self) -> bytes:
+        """What the robot's decisions read in the tick, exact, as JSON (docs/recordings.md ``reads``)."""
+        return reads_json(self.reader.reads())
 
     def extras(self) -> bytes:
         """``,"fault":...,"forced":...,"overrides":...`` for the robot's object, or b''."""

@@ -28,7 +28,6 @@ second behind (a slow machine at 20x), the backlog is dropped instead of burst t
 
 from __future__ import annotations
 
-import functools
 import os
 import select
 import signal
@@ -36,13 +35,12 @@ import socket
 import sys
 import time
 import traceback
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import orjson
 
-from xabsl_studio.engine.codegen.layout import default_value
 from xabsl_studio.engine.host import (
     DEFAULT_BEHAVIOR_HZ,
     DEFAULT_PHYSICS_HZ,
@@ -55,8 +53,7 @@ from xabsl_studio.engine.host import (
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.runtime import DebugError, Debugger, Engine, EngineError
 from xabsl_studio.engine.runtime.breakpoints import Breakpoint
-from xabsl_studio.engine.runtime.debug import Unknown, explain_decision, render, show_value
-from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.engine.runtime.debug import ReadValues, decision_reads, explain_decision
 from xabsl_studio.server.protocol.channel import Channel, ChannelClosed
 from xabsl_studio.server.protocol.commands import (
     Explain,
@@ -89,7 +86,6 @@ from xabsl_studio.server.simulation.engines import EngineSet
 from xabsl_studio.server.simulation.explain import explanation_result, mark_values, tree_result
 from xabsl_studio.server.simulation.forkstart import ForkStart
 from xabsl_studio.server.simulation.runlog import LOGGED_OPS, Programs, RunLog, Switch
-from xabsl_studio.server.simulation.sampling import ProgramCodec
 
 #: Simulated seconds a ``fork`` re-simulates at most (from the last reset: about 0.2 ms a tick for
 #: 10 robots, so 30 minutes take some 15 s in which the simulation answers nothing).
@@ -261,6 +257,7 @@ class Simulation(EngineSet):
             self.seed,
             dict(self.errors),
             fork,
+            {key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
         )
 
     def _tick_time(self) -> int:
@@ -272,7 +269,7 @@ class Simulation(EngineSet):
         """The sample of the tick just run (without running one: after a reload or reset too)."""
         started = time.perf_counter()
         self.seq += 1
-        paths, extras, inputs, outputs = self.robot_samples()
+        paths, extras, inputs, outputs, reads = self.robot_samples()
         dumps = orjson.dumps
         world = self.world
         sample = Sample(
@@ -288,6 +285,7 @@ class Simulation(EngineSet):
             outputs,
             dumps(world.dynamic_scene()),
             dumps(world.status()),
+            tuple(reads),
         )
         self.timing.sample += time.perf_counter() - started
         return sample
@@ -392,8 +390,8 @@ class Simulation(EngineSet):
         return result
 
     def _op_explain_recorded(self, command: ExplainRecorded, owner: str | None) -> Any:
-        """Internal: explain decisions from values the server recorded (``explain`` with ``seq``)."""
-        index, engine, _ = self._robot(command.robot)
+        """Internal: explain decisions of past ticks from what they read (``explain`` with ``seq``)."""
+        index, _, _ = self._robot(command.robot)
         key = self.keys[index] or ""
         codec = self.codecs.get(command.generation, {}).get(key)
         if codec is None:
@@ -401,13 +399,15 @@ class Simulation(EngineSet):
         option = self._named(command.option, codec.option_ids, "option")
         ir_option = codec.program.options[option]
         results = []
-        for seq, t, decided, leaf, _, inputs, outputs, params, state_time, option_time in command.ticks:
+        for seq, t, decided, leaf, _, reads in command.ticks:
             if not 0 <= decided < len(ir_option.states):
                 raise CommandError(f"option {option} has no state {decided}")
             state = ir_option.states[decided]
-            values = RecordedValues(engine, codec, ir_option, inputs, outputs, params, state_time, option_time)
+            # The values the decision read in that tick, as the ring kept them: nothing is asked of the world now.
+            read = decision_reads(orjson.loads(reads), ir_option.index) if reads else None
+            values = ReadValues(codec.program, ir_option, read, codec.tables.enums)
             try:
-                explanation = explain_decision(ir_option, state, leaf, values, functools.partial(render, option=option))
+                explanation = explain_decision(ir_option, state, leaf, values)
             except KeyError:
                 raise CommandError(f"state {option}.{state.name} has no leaf {leaf}") from None
             result = explanation_result(ir_option, explanation)
@@ -667,96 +667,6 @@ def _changed_run(command: Any, result: Any) -> bool:
     if command.op == "apply":
         return result is None
     return True
-
-
-class RecordedValues:
-    """Values of a tick as the ring buffer recorded them (``debug.Values`` for ``explain_recorded``).
-
-    Plain inputs and outputs come from the recording (display values: decimals rounded to 3
-    digits, enums as element indices); an input with parameters (``abs(value = ...)``) is computed
-    by calling the host's function with recorded arguments.
-    """
-
-    def __init__(
-        self,
-        engine: Engine,
-        codec: ProgramCodec,
-        option: Any,
-        inputs: Mapping[str, Any],
-        outputs: Mapping[str, Any],
-        params: list[Any],
-        state_time: float,
-        option_time: float,
-    ) -> None:
-        self.engine = engine
-        self.codec = codec
-        self.option = option
-        self.inputs = inputs
-        self.outputs = outputs
-        self.params = params
-        self.state_time = float(state_time)
-        self.option_time = float(option_time)
-
-    def input(self, name: str, args: Mapping[str, Value]) -> Value:
-        """The recorded value; parameterized inputs through the host function."""
-        symbol = self.codec.program.inputs[name]
-        if not symbol.params:
-            recorded = self.inputs.get(str(symbol.index))
-            if recorded is None:
-                raise Unknown(f"{name} was not recorded")
-            return recorded  # type: ignore[no-any-return]
-        loaded = self.engine.loaded
-        slot = loaded.layout.inputs.get(name)
-        if slot is None:
-            raise Unknown(f"{name} is not bound now")
-        host = {p: self._host(kind, p, args) for p, kind in slot.params}
-        value: Value = loaded.input_reads[name](*host.values())
-        if symbol.kind is Kind.ENUM:
-            return self.codec.enum_index.get(symbol.enum or "", {}).get(int(value), -1)
-        return value
-
-    def _host(self, kind: Kind, param: str, args: Mapping[str, Value]) -> Value:
-        value = args.get(param, default_value(kind))
-        if kind is Kind.ENUM:  # recorded enums are element indices; the host wants its values
-            for element, index in self._element_indices().items():
-                if index == value:
-                    return self.engine.loaded.layout.enum_values.get(element, 0)
-        return value
-
-    def _element_indices(self) -> dict[str, int]:
-        return {e: i for enum in self.codec.program.enums.values() for i, e in enumerate(enum.elements)}
-
-    def output(self, name: str) -> Value:
-        """The recorded value."""
-        symbol = self.codec.program.outputs[name]
-        value = self.outputs.get(str(symbol.index))
-        if value is None:
-            raise Unknown(f"{name} was not recorded")
-        return value  # type: ignore[no-any-return]
-
-    def parameter(self, name: str) -> Value:
-        """The recorded parameter value."""
-        names = [p.name for p in self.option.params]
-        if name not in names or names.index(name) >= len(self.params):
-            raise Unknown(f"parameter {name} was not recorded")
-        return self.params[names.index(name)]  # type: ignore[no-any-return]
-
-    def element(self, element: str) -> Value:
-        """The element's index in its enumeration (how the recording holds enums)."""
-        return self._element_indices().get(element, -1)
-
-    def show(self, kind: Kind, enum: str | None, value: Value) -> str:
-        """Enum indices by element name."""
-        if kind is Kind.ENUM:
-            elements = self.codec.program.enums[enum].elements if enum in self.codec.program.enums else ()
-            if isinstance(value, int) and 0 <= value < len(elements):
-                return elements[value].removeprefix(f"{enum}.")  # dots inside an element stay
-            return f"{value}?"
-        return show_value(value)
-
-    def special(self, expression: Any) -> Value:
-        """``action_done`` and ``conflict`` are not recorded."""
-        raise Unknown("not recorded")
 
 
 # -- the process ------------------------------------------------------------------------------------

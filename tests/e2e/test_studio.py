@@ -91,7 +91,7 @@ def test_click_an_option_and_see_its_state_machine(page: Any) -> None:
         page.select_option(".option-panel select", "")
     wait_until(page, "() => document.querySelectorAll('.option-panel g.node.active').length === 1")
     wait_until(page, "() => document.querySelector('.why').textContent.includes('Decision of this tick')")
-    wait_until(page, "() => document.querySelector('.why').textContent.includes('re-evaluated')")
+    wait_until(page, "() => document.querySelector('.why').textContent.includes('the decision read in the last tick')")
     screenshot(page, "option")
 
 

@@ -69,6 +69,7 @@ def test_override_input_and_release() -> None:
 
 def test_explain_gives_the_conditions_on_the_path_to_the_leaf() -> None:
     host = Host(ic(PROGRAM))
+    host.engine.record_reads = True  # why from what the decisions read (else: unknown values)
     host.tick(0, x=3.0, hold=True)
     explanation = Debugger(host.engine).explain("main")
     print(explanation)

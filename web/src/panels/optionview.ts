@@ -1,6 +1,7 @@
 /// The option view: the state machine of one option (server SVG) with the active state and the
 /// transition that fired last highlighted, and "why": the decision leaf of this tick with the
-/// conditions on its path, their branch, and their values re-evaluated by the server (`explain`).
+/// conditions on its path, their branch, and the values the decision read then (`explain`; `?`:
+/// a value the decision did not read, e.g. an operand after `&&` decided).
 import { graphSvg } from "../api";
 import type { Connection } from "../connection";
 import { type DescriptionIndex, leafPath, type Option, rangeText } from "../description";
@@ -284,14 +285,14 @@ export class OptionView {
         : ex
           ? h("div.muted.small", {}, "No transition of this option in the buffered history up to this tick.")
           : null,
-      h("div.muted.small", {}, ex ? (ex.recorded ? `Values recorded at t = ${formatClock(ex.t ?? 0)} (decimals to 3 digits).` : "Values re-evaluated by the engine just now.") : "Asking the server for values…"),
+      h("div.muted.small", {}, ex ? (ex.recorded ? `Values recorded at t = ${formatClock(ex.t ?? 0)}: what the decision read then.` : "Values the decision read in the last tick.") : "Asking the server for values…"),
     ];
     this.why.replaceChildren(...parts.filter((p): p is Node => p !== null));
     void index;
   }
 
   private conditionRow(text: string, taken: boolean, values: WhyCondition | undefined, doc: string | null): HTMLElement {
-    const value = values ? formatValue(typeof values.value === "string" ? null : values.value) : "";
+    const value = values ? (values.value === null ? "?" : formatValue(typeof values.value === "string" ? null : values.value)) : "";
     const comparisons = values?.comparisons ?? [];
     return h(
       "li",
