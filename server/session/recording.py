@@ -229,7 +229,7 @@ class LiveRecorder:
             "failed": self._failed,
         }
 
-    def event(self, kind: str, agent: str | None = None, **data: Any) -> None:
+    def event(self, kind: str, agent: str | None = None, /, **data: Any) -> None:
         """A session event (``xabsl_studio.engine.record.schema.EVENT_KINDS``) before the next tick."""
         if kind not in S.EVENT_KINDS or self._failed:
             return
@@ -247,6 +247,10 @@ class LiveRecorder:
         if kind is None:
             return
         data = {k: v for k, v in dataclasses.asdict(command).items() if k not in ("type", "id", "op", "robot")}
+        if "agent" in data:
+            # the event's own ``agent`` is the robot; the XABSL agent it now runs is ``name``
+            # (docs/recordings.md), so the two never collide
+            data["name"] = data.pop("agent")
         robot = getattr(command, "robot", None)
         agent = None
         if robot is not None and self._gen is not None and 0 <= robot < len(self._gen.structure["robots"]):
