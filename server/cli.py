@@ -227,6 +227,10 @@ def run(args: argparse.Namespace) -> int:
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
+    # The language server behind /lsp (pygls) logs every message it sends or receives at INFO:
+    # a few keystrokes made 112 KB of console. Its warnings and errors still show.
+    for name in ("pygls", "lsprotocol", "xabsl_studio.lsp"):
+        logging.getLogger(name).setLevel(logging.WARNING)
     where = "a recording, paused" if args.replay is not None else "simulation in its own process"
     print(f"xabsl studio: {name}, speed {session.speed:g}x ({where})")
     print(f"  open  http://{shown}:{args.port}{query}")

@@ -105,3 +105,22 @@ def test_the_why_after_a_breakpoint_hit_shows_values(page: Any, studio: StudioSe
         clear_breakpoints(studio)
         studio.command("speed", speed=1)
         studio.command("resume")
+
+
+def test_the_server_console_stays_quiet_while_the_editor_talks_to_the_language_server(
+    page: Any, studio: StudioServer
+) -> None:
+    """A few keystrokes wrote 112 KB of the language server's debug lines to the console."""
+    open_file(page, "behavior/options/face_ball.xabsl", "face_ball")
+    before = studio.log.stat().st_size
+    page.locator(".editor-host .cm-content").click()
+    page.keyboard.press("Control+End")
+    for _ in range(3):
+        page.keyboard.type("/* x */")
+        page.wait_for_timeout(400)
+    page.keyboard.press("Control+z")
+    page.wait_for_timeout(1000)
+    grown = studio.log.read_bytes()[before:].decode(errors="replace")
+    assert len(grown) < 500, grown[:2000]
+    page.keyboard.press("Control+z")
+    page.keyboard.press("Control+z")
