@@ -124,3 +124,53 @@ def test_the_server_console_stays_quiet_while_the_editor_talks_to_the_language_s
     assert len(grown) < 500, grown[:2000]
     page.keyboard.press("Control+z")
     page.keyboard.press("Control+z")
+
+
+def test_the_editor_does_not_stay_scrolled_sideways_after_typing_at_a_line_end(page: Any, studio: StudioServer) -> None:
+    """Typing at the end of a line longer than the pane scrolled the view sideways, and moving to a
+    short line left it so: every line's start hidden."""
+    open_file(page, "behavior/options/face_ball.xabsl", "face_ball")
+    scroller = "document.querySelector('.editor-host .cm-scroller')"
+    page.locator(".editor-host .cm-content").click()
+    page.keyboard.press("Control+Home")
+    page.keyboard.press("End")  # line 1, the doc comment: longer than the pane is wide
+    page.keyboard.type(" x")
+    page.wait_for_timeout(300)
+    scrolled = page.evaluate(f"() => [{scroller}.scrollLeft, {scroller}.clientWidth, {scroller}.scrollWidth]")
+    assert scrolled[0] > 0, scrolled  # following the cursor past the right edge
+    page.keyboard.press("Backspace")
+    page.keyboard.press("Backspace")
+    page.keyboard.press("ArrowDown")  # `option face_ball {`: short
+    page.wait_for_timeout(300)
+    assert page.evaluate(f"() => {scroller}.scrollLeft") == 0
+
+
+def test_a_completion_opened_by_a_digit_closes_when_the_file_is_saved(page: Any, studio: StudioServer) -> None:
+    path = "behavior/options/face_ball.xabsl"
+    original = (studio.example / path).read_text()
+    open_file(page, path, "face_ball")
+    line = next(n for n, text in enumerate(original.split("\n")) if "< 10)" in text)
+    page.locator(".editor-host .cm-content").click()
+    page.keyboard.press("Control+Home")
+    for _ in range(line):
+        page.keyboard.press("ArrowDown")
+    page.keyboard.press("End")
+    page.keyboard.press("ArrowLeft")  # after the 10
+    try:
+        page.keyboard.type("5")  # `< 105`: a number names nothing to complete
+        popup = page.locator(".cm-tooltip-autocomplete")
+        page.wait_for_timeout(1000)
+        assert popup.count() == 0, "typing a digit opened the completion popup"
+        page.keyboard.press("Control+Space")  # asked for, it opens
+        popup.wait_for(timeout=15000)
+        page.keyboard.press("Control+s")
+        page.locator(".editor-status", has_text="hot reloaded").wait_for(timeout=15000)
+        assert (studio.example / path).read_text() == original.replace("< 10)", "< 105)")
+        page.wait_for_timeout(300)
+        assert popup.count() == 0, "the completion popup stayed open after the save"
+    finally:
+        page.keyboard.press("Escape")
+        page.keyboard.press("Backspace")
+        page.keyboard.press("Control+s")
+        page.wait_for_function("() => !document.querySelector('.file-title').textContent.includes('●')", timeout=15000)
+    assert (studio.example / path).read_text() == original

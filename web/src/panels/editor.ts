@@ -9,7 +9,7 @@
 /// or CRLF line ends opens unmodified and a save writes exactly the edited text. `doc.toString()`
 /// (always "\n", one unit per line break, like document positions) stays what the language
 /// features and the as-you-type linter read.
-import { autocompletion, closeBrackets, closeBracketsKeymap, completionKeymap } from "@codemirror/autocomplete";
+import { autocompletion, closeBrackets, closeBracketsKeymap, closeCompletion, completionKeymap } from "@codemirror/autocomplete";
 import { defaultKeymap, history, historyKeymap, indentWithTab } from "@codemirror/commands";
 import { bracketMatching, HighlightStyle, indentOnInput, syntaxHighlighting } from "@codemirror/language";
 import { lintGutter, lintKeymap } from "@codemirror/lint";
@@ -62,6 +62,27 @@ interface Buffer {
   saved: string;
   conflict: { version: string } | null;
 }
+
+/// Scroll back to the left edge once the cursor would be in view there. CodeMirror scrolls
+/// sideways to follow a cursor past the right edge (typing at the end of a long line) but never
+/// back, so after moving to a short line the view stayed scrolled, every line's start hidden.
+const scrollBackLeft = EditorView.updateListener.of((u) => {
+  if (!u.selectionSet && !u.docChanged) return;
+  const view = u.view;
+  const scroller = view.scrollDOM;
+  if (scroller.scrollLeft === 0) return;
+  view.requestMeasure({
+    read: () => {
+      const at = view.coordsAtPos(view.state.selection.main.head);
+      if (!at) return false;
+      const x = at.right - scroller.getBoundingClientRect().left + scroller.scrollLeft; // in the unscrolled content
+      return x + 24 <= scroller.clientWidth; // in view, with a margin, at the left edge
+    },
+    write: (fits) => {
+      if (fits) scroller.scrollLeft = 0;
+    },
+  });
+});
 
 export class EditorPanel {
   readonly element: HTMLElement;
@@ -126,6 +147,7 @@ export class EditorPanel {
         closeBrackets(),
         highlightActiveLine(),
         highlightSelectionMatches(),
+        scrollBackLeft,
         autocompletion({ activateOnTyping: true }),
         xabsl(),
         syntaxHighlighting(highlight),
@@ -344,6 +366,8 @@ export class EditorPanel {
   async save(overwrite = false): Promise<void> {
     const b = this.current;
     if (!b) return;
+    // A completion popup left open would go on offering names for text that is saved now.
+    closeCompletion(this.view);
     const text = this.view.state.sliceDoc(); // joined with the file's own line separator
     const version = overwrite && b.conflict ? b.conflict.version : b.version;
     try {
