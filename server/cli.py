@@ -113,7 +113,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--record-dir",
         default=None,
         metavar="DIR",
-        help="record the live session into rolling .mcap files here (default $XDG_CACHE_HOME/xabsl-studio/recordings)",
+        help=(
+            "record the live session into rolling .mcap files here (default: the behavior set's own "
+            "sub-folder of $XDG_CACHE_HOME/xabsl-studio/recordings)"
+        ),
     )
     parser.add_argument("--no-record", action="store_true", help="do not record the live session")
     parser.add_argument(
@@ -179,7 +182,8 @@ def run(args: argparse.Namespace) -> int:
             if not args.no_record:
                 from xabsl_studio.server.session.recording import LiveRecorder, default_folder
 
-                folder = Path(args.record_dir) if args.record_dir else default_folder()
+                agents = [source.agents_file for source in example.sources]
+                folder = Path(args.record_dir) if args.record_dir else default_folder(agents)
                 cap = int(args.record_cap_mb * 1e6)
                 session.live_recorder = LiveRecorder(
                     folder, example.name, example.behavior_hz, example.physics_hz, cap_bytes=cap
@@ -204,13 +208,19 @@ def run(args: argparse.Namespace) -> int:
                 print("  " + diagnostic.format(), file=sys.stderr)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
     from xabsl_studio.server.api.library import RecordingLibrary
-    from xabsl_studio.server.session.recording import default_folder
+    from xabsl_studio.server.session.recording import cache_folder, default_folder
 
-    # The recordings the studio lists and opens: its record folder, and a file named here.
-    library = RecordingLibrary(
-        Path(args.record_dir) if args.record_dir else default_folder(),
-        [Path(args.replay)] if args.replay is not None else [],
-    )
+    # The recordings the studio lists and opens: its record folder (a behavior set's own, see
+    # default_folder; a replay's the folder its file is in when that is one of the cache's),
+    # and a file named here.
+    if args.record_dir:
+        folder: Path | None = Path(args.record_dir)
+    elif args.replay is not None:
+        parent = Path(args.replay).expanduser().resolve().parent
+        folder = parent if parent.is_relative_to(cache_folder().expanduser().resolve()) else None
+    else:
+        folder = default_folder([source.agents_file for source in session.example.sources])
+    library = RecordingLibrary(folder, [Path(args.replay)] if args.replay is not None else [])
     app = create_app(session, policy, web_dist, library)
 
     config = uvicorn.Config(

@@ -22,11 +22,12 @@ events through :meth:`LiveRecorder.event`.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
 import os
 import re
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -67,10 +68,26 @@ DEFAULT_CAP_BYTES = 2_000_000_000
 DEFAULT_ROLL_TICKS = 24_000
 
 
-def default_folder() -> Path:
+def cache_folder() -> Path:
     """``$XDG_CACHE_HOME/xabsl-studio/recordings`` (``~/.cache`` without XDG_CACHE_HOME)."""
     cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(cache) / "xabsl-studio" / "recordings"
+
+
+def default_folder(agents_files: Iterable[Path] = ()) -> Path:
+    """The record folder of the behavior sets of ``agents_files``: their own sub-folder of the cache.
+
+    One folder shared by every behavior set made each studio list every other set's recordings.
+    The sub-folder is keyed by the resolved paths of the agents files (a hash: stable, whatever
+    the names hold), with the first one's folder name in front for people looking at the cache:
+    ``~/.cache/xabsl-studio/recordings/behavior-3f2a9c01b7d4``. Without agents files: the cache.
+    """
+    paths = sorted(str(Path(p).expanduser().resolve()) for p in agents_files)
+    if not paths:
+        return cache_folder()
+    digest = hashlib.sha256("\n".join(paths).encode("utf-8", "surrogateescape")).hexdigest()[:12]
+    label = re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(paths[0]).parent.name).strip("._")[:40] or "set"
+    return cache_folder() / f"{label}-{digest}"
 
 
 def tables_of(program: Program) -> ProgramTables:
