@@ -213,14 +213,15 @@ def run(args: argparse.Namespace) -> int:
     # The recordings the studio lists and opens: its record folder (a behavior set's own, see
     # default_folder; a replay's the folder its file is in when that is one of the cache's),
     # and a file named here.
+    listed: Path | None
     if args.record_dir:
-        folder: Path | None = Path(args.record_dir)
+        listed = Path(args.record_dir)
     elif args.replay is not None:
         parent = Path(args.replay).expanduser().resolve().parent
-        folder = parent if parent.is_relative_to(cache_folder().expanduser().resolve()) else None
+        listed = parent if parent.is_relative_to(cache_folder().expanduser().resolve()) else None
     else:
-        folder = default_folder([source.agents_file for source in session.example.sources])
-    library = RecordingLibrary(folder, [Path(args.replay)] if args.replay is not None else [])
+        listed = default_folder([source.agents_file for source in session.example.sources])
+    library = RecordingLibrary(listed, [Path(args.replay)] if args.replay is not None else [])
     app = create_app(session, policy, web_dist, library)
 
     config = uvicorn.Config(
