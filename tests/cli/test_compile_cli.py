@@ -125,7 +125,8 @@ def noisy_team(root: Path) -> Path:
         "  state never {\n    decision {\n      stay;\n    }\n    action {\n    }\n  }\n}\n"
     )
     (root / "Options" / "kick_ball.xabsl").write_text(
-        "option kick {\n  initial state s {\n    decision {\n      stay;\n    }\n    action {\n      go_to();\n    }\n  }\n}\n"
+        "option kick {\n  initial state s {\n    decision {\n      stay;\n    }\n"
+        "    action {\n      go_to();\n    }\n  }\n}\n"
     )
     agents = root / "agents.xabsl"
     agents.write_text(
@@ -155,7 +156,8 @@ def test_no_warning_asks_for_a_name_the_language_cannot_express(
     assert main(["compile", str(agents)]) == 0
     naming = [line for line in capsys.readouterr().out.splitlines() if "[naming]" in line]
     assert naming == [
-        f"{tmp_path / 'Options' / 'kick_ball.xabsl'}:1:8: warning: option 'kick' should be named like its file 'kick_ball' [naming]"
+        f"{tmp_path / 'Options' / 'kick_ball.xabsl'}:1:8: warning: "
+        "option 'kick' should be named like its file 'kick_ball' [naming]"
     ]
 
 
