@@ -9,9 +9,13 @@ import json
 import re
 import subprocess
 import sys
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
-from tests.e2e.conftest import REPO, StudioServer
+import pytest
+
+from tests.e2e.conftest import REPO, StudioServer, serving, studio_tab
 
 
 def wait_until(page: Any, expression: str, timeout: float = 20000) -> Any:
@@ -24,11 +28,11 @@ def open_file(page: Any, path: str, needle: str) -> None:
     wait_until(page, f"() => document.querySelector('.editor-host .cm-content').textContent.includes({needle!r})")
 
 
-def cli_count(studio: StudioServer, agents: str) -> tuple[int, int]:
-    """(errors, warnings) that ``xabsl compile`` prints for ``agents`` (relative to the example)."""
+def cli_count(folder: Path, agents: str) -> tuple[int, int]:
+    """(errors, warnings) that ``xabsl compile`` prints for ``agents`` (relative to ``folder``)."""
     done = subprocess.run(
         [sys.executable, "-m", "xabsl_studio.engine.cli", "compile", agents],
-        cwd=studio.example,
+        cwd=folder,
         capture_output=True,
         text=True,
         env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"},
@@ -47,7 +51,7 @@ def status_warnings(page: Any) -> int:
 
 def test_the_editor_counts_the_diagnostics_the_cli_prints(page: Any, studio: StudioServer) -> None:
     """The chase set reads the team's symbol files: their warnings are chase's too (CLI: 16)."""
-    errors, warnings = cli_count(studio, "chase/agents.xabsl")
+    errors, warnings = cli_count(studio.example, "chase/agents.xabsl")
     assert (errors, warnings) == (0, 16)
     open_file(page, "chase/chase_ball.xabsl", "chase_ball")
     wait_until(page, "() => /warning/.test(document.querySelector('.editor-status').innerText)")
@@ -56,8 +60,58 @@ def test_the_editor_counts_the_diagnostics_the_cli_prints(page: Any, studio: Stu
     # the team's own set has none, and its editor says so whatever chase found in shared files
     open_file(page, "behavior/options/face_ball.xabsl", "face_ball")
     page.wait_for_timeout(1500)
-    assert cli_count(studio, "behavior/agents.xabsl") == (0, 0)
+    assert cli_count(studio.example, "behavior/agents.xabsl") == (0, 0)
     assert status_warnings(page) == 0
+
+
+TEAM = {
+    "skills.xabsl": 'namespace skills("S") {\n  behavior walk {\n    float speed;\n    float turn;\n  }\n}\n',
+    "symbols.xabsl": (
+        'namespace symbols("Symbols") {\n  float input ball.x;\n  float input ball.y;\n  float input spare;\n'
+        "  float output kick_power;\n}\n"
+    ),
+    "chase.xabsl": (
+        "option chase {\n  initial state go {\n    decision {\n      if (ball.x > 100)\n        goto near;\n"
+        "      else\n        stay;\n    }\n    action {\n      walk(speed = ball.x);\n    }\n  }\n"
+        "  state near {\n    decision {\n      stay;\n    }\n    action {\n      kick_power = 1;\n    }\n  }\n}\n"
+    ),
+    "play.xabsl": (
+        "option play {\n  initial state run {\n    decision {\n      stay;\n    }\n    action {\n      chase();\n"
+        "    }\n  }\n  state lost {\n    decision {\n      stay;\n    }\n    action {\n    }\n  }\n}\n"
+    ),
+    # the team's agents file, which the studio serves, and beside it a test agent for one option
+    "team.xabsl": (
+        'include "skills.xabsl";\ninclude "symbols.xabsl";\ninclude "chase.xabsl";\ninclude "play.xabsl";\n'
+        'agent team("Team", play);\n'
+    ),
+    "agents.xabsl": (
+        'include "skills.xabsl";\ninclude "symbols.xabsl";\ninclude "chase.xabsl";\nagent test("Test", chase);\n'
+    ),
+}
+
+
+@pytest.fixture(scope="module")
+def team_studio(tmp_path_factory: pytest.TempPathFactory) -> Iterator[StudioServer]:
+    root = tmp_path_factory.mktemp("team")
+    folder = root / "team"
+    folder.mkdir()
+    for name, text in TEAM.items():
+        (folder / name).write_text(text)
+    with serving(folder / "team.xabsl", root) as server:
+        yield server
+
+
+def test_the_studio_counts_what_the_cli_counts_for_the_set_it_serves(browser: Any, team_studio: StudioServer) -> None:
+    """The studio said 116 where `xabsl compile` said 137: it counted another agents file's set."""
+    folder = team_studio.example.parent
+    errors, warnings = cli_count(folder, "team.xabsl")
+    assert errors == 0 and warnings >= 4
+    with studio_tab(browser, team_studio, live=False) as page:
+        page.wait_for_function(f"() => {STUDIO} && {STUDIO}.session.hello", timeout=30000)
+        open_file(page, "chase.xabsl", "option chase")
+        wait_until(page, "() => /warning/.test(document.querySelector('.editor-status').innerText)")
+        page.wait_for_timeout(1500)
+        assert status_warnings(page) == warnings, page.locator(".editor-status").inner_text()
 
 
 STUDIO = "window.xabslStudio"
@@ -174,3 +228,55 @@ def test_a_completion_opened_by_a_digit_closes_when_the_file_is_saved(page: Any,
         page.keyboard.press("Control+s")
         page.wait_for_function("() => !document.querySelector('.file-title').textContent.includes('●')", timeout=15000)
     assert (studio.example / path).read_text() == original
+
+
+def cli_no_lint_count(folder: Path, agents: str) -> int:
+    done = subprocess.run(
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "compile", agents, "--no-lint"],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"},
+    )
+    found = re.search(r"(\d+) warnings?", done.stdout.strip().splitlines()[-1])
+    assert found, done.stdout
+    return int(found.group(1))
+
+
+def test_lint_warnings_can_be_hidden_per_code_and_stay_hidden_for_the_set(
+    browser: Any, team_studio: StudioServer
+) -> None:
+    folder = team_studio.example.parent
+    _, warnings = cli_count(folder, "team.xabsl")
+    squiggles = ".editor-host .cm-lintRange-warning"
+    with studio_tab(browser, team_studio, live=False) as page:
+        page.wait_for_function(f"() => {STUDIO} && {STUDIO}.session.hello", timeout=30000)
+        open_file(page, "chase.xabsl", "option chase")
+        wait_until(page, f"() => document.querySelector('.editor-status').innerText.includes('{warnings} warnings')")
+        page.locator(squiggles).first.wait_for(timeout=15000)  # walk(speed = ...) leaves out turn
+        page.click("#lint-filter")
+        dialog = page.locator("dialog.lint-filter")
+        dialog.wait_for(state="visible")
+        missing = dialog.locator("input[data-code='parameter-missing']")
+        assert missing.is_checked()
+        missing.uncheck()
+        wait_until(page, "() => document.querySelector('.editor-status').innerText.includes('(1 hidden)')")
+        assert status_warnings(page) == warnings - 1
+        wait_until(page, f"() => !document.querySelector({squiggles!r})")
+        dialog.locator("button", has_text="Close").click()
+    # remembered for this behavior set, in this browser
+    with studio_tab(browser, team_studio, live=False) as page:
+        page.wait_for_function(f"() => {STUDIO} && {STUDIO}.session.hello", timeout=30000)
+        open_file(page, "chase.xabsl", "option chase")
+        wait_until(page, "() => document.querySelector('.editor-status').innerText.includes('(1 hidden)')")
+        page.wait_for_timeout(1500)  # the language server's squiggles have come, and stay hidden
+        assert page.locator(squiggles).count() == 0
+        # the twin of --no-lint: what the original compiler prints
+        page.click("#lint-filter")
+        page.click("#lint-original")
+        wait_until(page, f"() => document.querySelector('.editor-status').innerText.includes('({warnings} hidden)')")
+        assert status_warnings(page) == cli_no_lint_count(folder, "team.xabsl") == 0
+        page.click("#lint-all")
+        wait_until(page, "() => !document.querySelector('.editor-status').innerText.includes('hidden')")
+        assert status_warnings(page) == warnings
+        page.locator("dialog.lint-filter button", has_text="Close").click()
