@@ -6,16 +6,18 @@ Every test here failed before its fix. They share one server (module scope, see 
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
 import sys
+import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.e2e.conftest import REPO, StudioServer, serving, studio_tab
+from tests.e2e.conftest import REPO, StudioServer, screenshot, serving, studio_tab
 
 
 def wait_until(page: Any, expression: str, timeout: float = 20000) -> Any:
@@ -280,3 +282,67 @@ def test_lint_warnings_can_be_hidden_per_code_and_stay_hidden_for_the_set(
         wait_until(page, "() => !document.querySelector('.editor-status').innerText.includes('hidden')")
         assert status_warnings(page) == warnings
         page.locator("dialog.lint-filter button", has_text="Close").click()
+
+
+def external_write(path: Path, text: str) -> None:
+    """Write as `git checkout` does: a new file renamed over the old one."""
+    temporary = path.with_name(f".{path.name}.tmp")
+    temporary.write_text(text)
+    os.replace(temporary, path)
+
+
+def editor_text(page: Any) -> str:
+    return str(page.evaluate(f"() => {STUDIO}.editor.editorView.state.sliceDoc()"))
+
+
+def test_a_file_changed_on_disk_reaches_the_running_team_and_the_editor(page: Any, studio: StudioServer) -> None:
+    """After `git checkout` of an option file neither the team nor the editor changed, and the
+    next save was refused as a conflict."""
+    path = "behavior/options/face_ball.xabsl"
+    original = (studio.example / path).read_text()
+    open_file(page, path, "face_ball")
+    generation = page.evaluate(f"() => {STUDIO}.session.hello.generation")
+    checked_out = original.replace("< 10)", "< 12)")
+    assert checked_out != original
+    try:
+        external_write(studio.example / path, checked_out)
+        # hot reloaded, as a save from the studio is, and the clean buffer shows the new text
+        wait_until(page, f"() => {STUDIO}.session.hello.generation > {generation}", timeout=5000)
+        wait_until(page, f"() => {STUDIO}.editor.editorView.state.sliceDoc().includes('< 12)')", timeout=5000)
+        assert editor_text(page) == checked_out
+        assert "●" not in page.locator(".file-title").inner_text()
+        new_gen = page.evaluate(f"() => {STUDIO}.session.hello.generation")
+        with urllib.request.urlopen(f"{studio.url}api/generations/{new_gen}/diff", timeout=10) as response:
+            diff = json.loads(response.read())
+        assert [f["path"] for f in diff["files"]] == [path] and "+      if (abs(value = ball.angle) < 12)" in diff[
+            "files"
+        ][0]["diff"]
+
+        # unsaved edits, then another checkout: the choice, with the diff between the two
+        page.locator(".editor-host .cm-content").click()
+        page.keyboard.press("Control+End")
+        page.keyboard.type("\n/* mine */")
+        theirs = checked_out.replace("< 12)", "< 14)")
+        external_write(studio.example / path, theirs)
+        banner = page.locator(".banner", has_text="changed on disk")
+        banner.wait_for(timeout=5000)
+        diff_text = banner.locator("pre.diff").inner_text(timeout=5000)
+        assert "- /* mine */" in diff_text and "+       if (abs(value = ball.angle) < 14)" in diff_text, diff_text
+        assert "/* mine */" in editor_text(page)  # nothing of mine is lost meanwhile
+        screenshot(page, "changed-on-disk")
+        banner.locator("button", has_text="Take theirs").click()
+        wait_until(page, f"() => {STUDIO}.editor.editorView.state.sliceDoc().includes('< 14)')", timeout=5000)
+        assert editor_text(page) == theirs and page.locator(".banner").is_hidden()
+
+        # keep mine: my text is saved over theirs (no conflict refusal)
+        page.locator(".editor-host .cm-content").click()
+        page.keyboard.press("Control+End")
+        page.keyboard.type("\n/* mine again */")
+        external_write(studio.example / path, original)
+        banner.wait_for(timeout=5000)
+        banner.locator("button", has_text="Keep mine").click()
+        page.locator(".toast.ok", has_text=f"Saved {path}").wait_for(timeout=10000)
+        assert (studio.example / path).read_text() == theirs + "\n/* mine again */"
+    finally:
+        external_write(studio.example / path, original)
+    wait_until(page, f"() => {STUDIO}.editor.editorView.state.sliceDoc() === {json.dumps(original)}", timeout=5000)

@@ -22,6 +22,7 @@ import { diagnosticsFor, homeProgram, type SetDiagnostic } from "../behaviorsets
 import type { Span } from "../description";
 import type { CompileEvent, FileEvent } from "../protocol";
 import type { Session, SessionEvent } from "../session";
+import { lineDiff } from "../linediff";
 import { h, toast } from "../ui";
 import { toPosition, xabslCompletion } from "../xabsl/complete";
 import { xabsl } from "../xabsl/language";
@@ -61,7 +62,9 @@ interface Buffer {
   state: EditorState;
   version: string;
   saved: string;
-  conflict: { version: string } | null;
+  /// the file changed on disk while this buffer has unsaved edits: its version there, and its
+  /// text once read (for the diff of the choice)
+  conflict: { version: string; theirs?: string } | null;
 }
 
 /// Scroll back to the left edge once the cursor would be in view there. CodeMirror scrolls
@@ -192,6 +195,7 @@ export class EditorPanel {
         }),
         EditorView.updateListener.of((u) => {
           if (u.docChanged) {
+            this.statusNote = "";
             this.markDirty();
             this.scheduleCounts();
           }
@@ -265,6 +269,7 @@ export class EditorPanel {
     }
     this.current = buffer;
     this.view.setState(buffer.state);
+    this.statusNote = "";
     this.showBanner();
     void this.refreshCounts();
     for (const el of this.tree.querySelectorAll<HTMLElement>("[data-path]")) el.classList.toggle("open", el.dataset.path === path);
@@ -417,7 +422,13 @@ export class EditorPanel {
     this.view.dispatch(setDiagnostics(this.view.state, lspToCodeMirror(own, this.view.state.doc)));
   }
 
-  private renderStatus(extra?: string): void {
+  /// What the last save said ("hot reloaded behavior"): kept while the counts are redrawn, until
+  /// the next edit.
+  private statusNote = "";
+
+  private renderStatus(note?: string): void {
+    if (note !== undefined) this.statusNote = note;
+    const extra = this.statusNote;
     const path = this.current?.path ?? "";
     const set = this.setKey(path);
     const result = this.lastDiagnostics.filter((d) => !this.lintFilter.hides(set, d));
@@ -445,19 +456,43 @@ export class EditorPanel {
     this.status.replaceChildren(...items);
   }
 
+  /// The choice for a buffer with unsaved edits whose file changed on disk (outside the studio or
+  /// by another client): keep mine (save it over theirs) or take theirs, with the diff between.
   private showBanner(): void {
     const b = this.current;
-    if (!b?.conflict) {
+    const conflict = b?.conflict;
+    if (!b || !conflict) {
       this.banner.hidden = true;
       return;
     }
     this.banner.hidden = false;
+    const diff =
+      conflict.theirs === undefined
+        ? h("div.muted", {}, "Reading the file on disk…")
+        : h(
+            "details.conflict-diff",
+            { open: true },
+            h("summary", {}, "What taking theirs changes: − yours, + theirs"),
+            h("pre.diff", {}, ...lineDiff(this.view.state.sliceDoc(), conflict.theirs).map((l) => h(`span.${l.kind === "+" ? "add" : l.kind === "-" ? "del" : "same"}`, {}, `${l.kind} ${l.text}\n`))),
+          );
     this.banner.replaceChildren(
       h("strong", {}, "Conflict: "),
-      `${b.path} was changed on disk by someone else since you opened it. Your text is still here, unsaved.`,
-      h("button", { onclick: () => void this.reloadFromDisk() }, "Discard mine, load theirs"),
-      h("button.danger", { onclick: () => void this.save(true) }, "Overwrite theirs with mine"),
+      `${b.path} changed on disk (outside the studio, or by another client) while you have unsaved edits. Your text is still here, unsaved.`,
+      h("button#keep-mine.danger", { title: "Save your text over the file on disk", onclick: () => void this.save(true) }, "Keep mine (save over theirs)"),
+      h("button#take-theirs", { title: "Load the file on disk; your unsaved edits are dropped", onclick: () => void this.reloadFromDisk() }, "Take theirs (drop my edits)"),
+      diff,
     );
+    if (conflict.theirs === undefined) {
+      void readFile(b.path).then(
+        (file) => {
+          if (b.conflict !== conflict) return;
+          conflict.theirs = file.text;
+          conflict.version = file.version;
+          if (b === this.current) this.showBanner();
+        },
+        () => undefined, // deleted meanwhile: the file event says so
+      );
+    }
   }
 
   private async reloadFromDisk(): Promise<void> {
@@ -603,7 +638,9 @@ export class EditorPanel {
   }
 
 
-  /// React to other clients' writes: reload a clean buffer, flag a dirty one.
+  /// React to a file written by another client or changed on disk (`by: "disk"`: a checkout,
+  /// another editor): a buffer without unsaved edits takes the new text, one with edits asks
+  /// which to keep (showBanner).
   fileEvent(event: FileEvent): void {
     void this.refreshFiles();
     const b = this.buffers.get(event.path);
@@ -612,16 +649,21 @@ export class EditorPanel {
       toast(`${event.path} was deleted on disk.`, "error");
       return;
     }
+    const where = event.by === "disk" ? "on disk" : "by another client";
     if (!this.isDirty(b)) {
       void readFile(b.path).then((file) => {
         b.version = file.version;
         b.saved = file.text;
+        b.conflict = null;
         this.replaceText(b, file.text);
         this.markDirty();
+        if (b === this.current) this.showBanner();
+        toast(`${b.path} changed ${where}: the editor shows the new text.`, "info");
       });
     } else {
       b.conflict = { version: event.version ?? "" };
       if (b === this.current) this.showBanner();
+      toast(`${b.path} changed ${where} while you have unsaved edits: keep yours or take theirs.`, "error");
     }
   }
 
