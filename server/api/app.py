@@ -728,7 +728,9 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     session.on_breakpoint = hub.on_breakpoint
     await session.start()
     watching = None
-    if not isinstance(session, ReplaySession):  # a recording has no files to watch
+    # The main studio watches (a recording has no files; a fork beside it runs what it was
+    # started with, and its own saves reload it)
+    if getattr(app.state, "serves_studios", False) and not isinstance(session, ReplaySession):
         studio.watcher.watch(studio.watched_paths())
         watching = asyncio.create_task(studio.watch_files())
     try:
