@@ -113,7 +113,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--record-dir",
         default=None,
         metavar="DIR",
-        help="record the live session into rolling .mcap files here (default $XDG_CACHE_HOME/xabsl-studio/recordings)",
+        help=(
+            "record the live session into rolling .mcap files here (default: the behavior set's own "
+            "sub-folder of $XDG_CACHE_HOME/xabsl-studio/recordings)"
+        ),
     )
     parser.add_argument("--no-record", action="store_true", help="do not record the live session")
     parser.add_argument(
@@ -285,7 +288,8 @@ def run(args: argparse.Namespace) -> int:
             if not args.no_record:
                 from xabsl_studio.server.session.recording import LiveRecorder, default_folder
 
-                folder = Path(args.record_dir) if args.record_dir else default_folder()
+                agents = [source.agents_file for source in example.sources]
+                folder = Path(args.record_dir) if args.record_dir else default_folder(agents)
                 cap = int(args.record_cap_mb * 1e6)
                 session.live_recorder = LiveRecorder(
                     folder, example.name, example.behavior_hz, example.physics_hz, cap_bytes=cap
@@ -310,13 +314,20 @@ def run(args: argparse.Namespace) -> int:
                 print("  " + diagnostic.format(), file=sys.stderr)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
     from xabsl_studio.server.api.library import RecordingLibrary
-    from xabsl_studio.server.session.recording import default_folder
+    from xabsl_studio.server.session.recording import cache_folder, default_folder
 
-    # The recordings the studio lists and opens: its record folder, and a file named here.
-    library = RecordingLibrary(
-        Path(args.record_dir) if args.record_dir else default_folder(),
-        [Path(args.replay)] if args.replay is not None else [],
-    )
+    # The recordings the studio lists and opens: its record folder (a behavior set's own, see
+    # default_folder; a replay's the folder its file is in when that is one of the cache's),
+    # and a file named here.
+    listed: Path | None
+    if args.record_dir:
+        listed = Path(args.record_dir)
+    elif args.replay is not None:
+        parent = Path(args.replay).expanduser().resolve().parent
+        listed = parent if parent.is_relative_to(cache_folder().expanduser().resolve()) else None
+    else:
+        listed = default_folder([source.agents_file for source in session.example.sources])
+    library = RecordingLibrary(listed, [Path(args.replay)] if args.replay is not None else [])
     app = create_app(session, policy, web_dist, library)
 
     config = uvicorn.Config(
@@ -333,6 +344,10 @@ def run(args: argparse.Namespace) -> int:
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
+    # The language server behind /lsp (pygls) logs every message it sends or receives at INFO:
+    # a few keystrokes made 112 KB of console. Its warnings and errors still show.
+    for name in ("pygls", "lsprotocol", "xabsl_studio.lsp"):
+        logging.getLogger(name).setLevel(logging.WARNING)
     where = "a recording, paused" if args.replay is not None else "simulation in its own process"
     print(f"xabsl studio: {name}, speed {session.speed:g}x ({where})")
     print(f"  open  http://{shown}:{args.port}{query}")

@@ -15,9 +15,6 @@ import time
 
 from xabsl_studio.engine.cli import UsageError
 
-#: Diagnostic codes of the whole-program lint that ``--no-lint`` silences.
-LINT_CODES = frozenset({"unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"})
-
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``compile`` subcommand to the ``xabsl`` parser."""
@@ -35,7 +32,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.add_argument("--format", choices=("text", "json"), default="text", help="diagnostics format")
     parser.add_argument("--werror", action="store_true", help="treat warnings as errors")
     parser.add_argument(
-        "--no-lint", action="store_true", help="omit the lint warnings (unreachable and unused declarations)"
+        "--no-lint",
+        action="store_true",
+        help=(
+            "omit the warnings the original compiler does not print (naming, missing parameters, "
+            "unreachable and unused declarations)"
+        ),
     )
     parser.set_defaults(func=run, exit_at_once=True)
 
@@ -55,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"no such file: {args.agents_file}")
     started = time.perf_counter()
     compilation = compile_file(args.agents_file)
-    diagnostics = [d for d in compilation.diagnostics if not (args.no_lint and d.code in LINT_CODES)]
+    diagnostics = [d for d in compilation.diagnostics if not (args.no_lint and d.is_lint)]
     errors = sum(d.is_error for d in diagnostics)
     warnings = len(diagnostics) - errors
     failed = errors > 0 or (args.werror and warnings > 0)
@@ -99,8 +101,19 @@ def run(args: argparse.Namespace) -> int:
         for diagnostic in diagnostics:
             print(diagnostic.format())
         verdict = "failed" if failed else "ok"
-        print(
-            f"{verdict}: {summary['files']} files, {summary['options']} options, "
-            f"{errors} errors, {warnings} warnings in {summary['milliseconds']} ms"
+        counts = ", ".join(
+            _count(n, noun)
+            for n, noun in (
+                (summary["files"], "file"),
+                (summary["options"], "option"),
+                (errors, "error"),
+                (warnings, "warning"),
+            )
         )
+        print(f"{verdict}: {counts} in {summary['milliseconds']} ms")
     return 1 if failed else 0
+
+
+def _count(n: object, noun: str) -> str:
+    """``1 warning``, ``2 warnings``, ``0 warnings``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"

@@ -79,6 +79,17 @@ CODES: dict[str, tuple[Severity, str, str]] = {
 }
 
 
+#: Warnings the original compiler never prints: ``naming`` and ``parameter-missing`` it defines
+#: but suppresses, the rest are whole-program lint of our own. ``xabsl compile --no-lint`` and
+#: the studio's "as the original compiler" leave out exactly these, so what remains is what the
+#: original prints (errors, and the warnings it shows).
+LINT_CODES = frozenset(
+    {"naming", "parameter-missing", "unreachable-option", "unreachable-state", "unused-symbol", "unused-behavior"}
+)
+if not all(CODES[code][0] is Severity.WARNING for code in LINT_CODES):  # pragma: no cover - a table edit
+    raise AssertionError("lint is warnings only: an error can never be hidden")
+
+
 @dataclass(frozen=True, slots=True)
 class Diagnostic:
     """One finding about a behavior: where, how bad, which rule, what to do."""
@@ -94,6 +105,11 @@ class Diagnostic:
     def is_error(self) -> bool:
         """Whether this is an error."""
         return self.severity is Severity.ERROR
+
+    @property
+    def is_lint(self) -> bool:
+        """Whether the original compiler would not print this (see :data:`LINT_CODES`)."""
+        return self.code in LINT_CODES
 
     @property
     def original_code(self) -> str:
@@ -112,6 +128,7 @@ class Diagnostic:
             "severity": self.severity.value,
             "code": self.code,
             "original_code": self.original_code,
+            "lint": self.is_lint,
             "message": self.message,
             "file": self.file,
             "span": self.span.as_dict() if self.span else None,

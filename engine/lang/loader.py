@@ -6,7 +6,7 @@ joined path strings, files are identified by their resolved real path, so a file
 an error, as in the original.
 
 Display names (what diagnostics print) are paths relative to a base folder (the behavior root
-or the working directory) when the file lies below it.
+or the working directory), ``../`` included for a file beside it (see :func:`display_path`).
 """
 
 from __future__ import annotations
@@ -30,9 +30,20 @@ class LoadedProgram:
 
 
 def display_path(real: str, base: str) -> str:
-    """How diagnostics name the file ``real``: relative to ``base`` when below it."""
-    relative = os.path.relpath(real, base)
-    return real if relative.startswith("..") else relative
+    """How diagnostics name the file ``real``: relative to ``base``, as the user who named it writes it.
+
+    A file beside the named folder is ``../common/symbols.xabsl`` (it printed absolute, unlike
+    the files inside); only a file that meets ``base`` at the filesystem's root (``/usr/...``
+    against ``/home/...``), or on another drive, is named by its absolute path.
+    """
+    try:
+        relative = os.path.relpath(real, base)
+        meets = os.path.commonpath([os.path.abspath(real), os.path.abspath(base)])
+    except ValueError:  # another drive
+        return real
+    if relative.startswith("..") and os.path.dirname(meets) == meets:  # only at the root
+        return real
+    return relative
 
 
 def load(

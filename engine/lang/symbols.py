@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from xabsl_studio.engine import ir
 from xabsl_studio.engine.lang import ast
 from xabsl_studio.engine.lang.diagnostics import Diagnostics
+from xabsl_studio.engine.lang.tokens import is_identifier
 from xabsl_studio.engine.types import Kind, Span
 
 #: Symbol classes an identifier in an expression may name, in the original's search order.
@@ -193,7 +194,9 @@ class Declarations:
         assert namespace is not None
         name = namespace.name.text
         stem = os.path.splitext(os.path.basename(source.path))[0]
-        if name != stem:
+        # a file name that is no identifier (basic-behaviors.xabsl) asks for nothing: a namespace
+        # named so would be a syntax error
+        if name != stem and is_identifier(stem):
             self.diagnostics.add(
                 "naming", f"namespace '{name}' should be named like its file '{stem}'", namespace.name.span
             )
@@ -271,7 +274,7 @@ class Declarations:
         decl = source.option
         assert decl is not None
         stem = os.path.splitext(os.path.basename(source.path))[0]
-        if decl.name.text != stem:
+        if decl.name.text != stem and is_identifier(stem):  # as for namespaces
             self.diagnostics.add(
                 "naming", f"option '{decl.name.text}' should be named like its file '{stem}'", decl.name.span
             )

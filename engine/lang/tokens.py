@@ -156,6 +156,15 @@ _KIND = {
 _MULTILINE = frozenset({"string", "range"})
 
 
+#: What a declared name (a namespace, an option) may be: one word that is no keyword.
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*")
+
+
+def is_identifier(text: str) -> bool:
+    """Whether ``text`` lexes as one identifier (``basic_behaviors``; not ``basic-behaviors``, not ``option``)."""
+    return _NAME.fullmatch(text) is not None and text not in KEYWORDS
+
+
 def tokenize(text: str, file: str, diagnostics: Diagnostics) -> list[Token]:
     """Split ``text`` into tokens; lexical errors go to ``diagnostics``.
 

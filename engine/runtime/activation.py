@@ -11,7 +11,11 @@ Recording is two-stage so that ticks stay cheap (§2.12, architecture "Engine"):
 
 An option node appears when the option ran in the snapshot's tick; its children are the calls
 of its active state in action order (common-action items first, §2.4) that ran. With policy B1 an
-option executed twice shows its final values twice.
+option executed twice shows its final values twice; a basic behavior called more than once in a
+tick (which B2 rejects at load time) keeps each call's own parameter values: the storage holds
+only the last call's, so under B1 the engine also records every call's values
+(``Snapshot.behavior_calls``, ``LoadedProgram.calls_of_tick``), and the n-th node of a behavior in
+the walk (pre-order is the order the calls ran) shows the n-th call's values.
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ __all__ = [
     "OPTION_NODE",
     "PATH_FIELDS",
     "AssignmentNode",
+    "BehaviorCalls",
     "BehaviorNode",
     "Node",
     "OptionNode",
@@ -48,6 +53,10 @@ class Root:
 
     kind: str
     name: str
+
+
+#: Per basic-behavior slot that ran more than once in a tick: each call's parameter values, in order.
+BehaviorCalls = dict[int, tuple[tuple[Value, ...], ...]]
 
 
 class Snapshot(NamedTuple):
@@ -78,6 +87,9 @@ class Snapshot(NamedTuple):
     behavior_activated: tuple[Ms, ...]
     assignments: tuple[Value | None, ...]
     outputs: tuple[Value, ...]
+    #: not a STORAGE list: under B1, per basic-behavior slot called more than once in the tick,
+    #: each call's parameter values in call order (None under B2, where no behavior runs twice)
+    behavior_calls: BehaviorCalls | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,6 +144,9 @@ def build_tree(
     """The activation tree of ``snapshot`` (see the module docstring)."""
     tick = snapshot.tick
     options = list(program.options.values())
+    calls = snapshot.behavior_calls
+    #: per behavior slot: how many of its nodes the walk has made so far (B1 double calls)
+    made: dict[int, int] = {}
 
     def option_node(name: str) -> OptionNode | None:
         slot = layout.options[name]
@@ -174,7 +189,10 @@ def build_tree(
         if snapshot.behavior_last_tick[slot.index] != tick:
             return None
         declared = behavior_params[name]
-        params = {p.name: snapshot.behavior_params[slot.offset + k] for k, p in enumerate(declared)}
+        values: Any = snapshot.behavior_params[slot.offset : slot.offset + len(declared)]
+        if calls is not None and slot.index in calls:
+            values = _nth_call(calls[slot.index], made, slot.index, values)
+        params = {p.name: values[k] for k, p in enumerate(declared)}
         enums = {p.name: p.enum for p in declared if p.enum is not None}
         time = (snapshot.now - snapshot.behavior_activated[slot.index]) & MS_MASK
         return BehaviorNode(name, params, time, enums)
@@ -190,6 +208,17 @@ def build_tree(
         if node is not None:
             tree.append(node)
     return tree
+
+
+def _nth_call(recorded: tuple[tuple[Value, ...], ...], made: dict[int, int], slot: int, last: Any) -> Any:
+    """The values of the next node of behavior ``slot``: its next recorded call (else ``last``).
+
+    More nodes than calls happen only when B1 shows an option executed twice with its final
+    state twice; those extra nodes show what the storage holds, as the option nodes do.
+    """
+    n = made.get(slot, 0)
+    made[slot] = n + 1
+    return recorded[n] if n < len(recorded) else last
 
 
 def _output_enum(program: Program, action: Assignment) -> str | None:
@@ -285,6 +314,7 @@ def compact_path(
     tick: int,
     now: Ms,
     storage: PathStorage,
+    behavior_calls: BehaviorCalls | None = None,
 ) -> list[list[Any]]:
     """The activation path of the last tick as flat lists, read straight from engine storage.
 
@@ -293,8 +323,9 @@ def compact_path(
         [0, depth, option, active state, option_time, state_time, decided-in state, leaf, [params]]
         [1, depth, basic behavior, time of execution, [params]]
 
-    Parameter values are raw (enum values as host integers), in declaration order. This is the
-    per-tick recording path of the studio: no snapshot copy, no node objects.
+    Parameter values are raw (enum values as host integers), in declaration order; ``behavior_calls``
+    (B1, see the module docstring) gives the values of behaviors that ran more than once. This is
+    the per-tick recording path of the studio: no snapshot copy, no node objects.
     """
     last_tick, states, activated, entered, decisions, option_params, behavior_params, b_last, b_activated = storage
     options, behaviors = plan.options, plan.behaviors
@@ -307,6 +338,7 @@ def compact_path(
     depth = 0
     stack: list[tuple[Any, int]] = []
     push, pop = stack.append, stack.pop
+    made: dict[int, int] = {}
     while True:
         for is_option, i in calls:
             if is_option:
@@ -336,15 +368,10 @@ def compact_path(
                     break
             elif b_last[i] == tick:
                 index, offset, count = behaviors[i]
-                append(
-                    [
-                        BEHAVIOR_NODE,
-                        depth,
-                        index,
-                        (now - b_activated[i]) & MS_MASK,
-                        behavior_params[offset : offset + count],
-                    ]
-                )
+                values = behavior_params[offset : offset + count]
+                if behavior_calls is not None and i in behavior_calls:
+                    values = list(_nth_call(behavior_calls[i], made, i, values))
+                append([BEHAVIOR_NODE, depth, index, (now - b_activated[i]) & MS_MASK, values])
         else:  # these calls are done: back to the option above
             if not stack:
                 return out

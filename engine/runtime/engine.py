@@ -320,10 +320,12 @@ class Engine:
 
     def snapshot(self) -> Snapshot:
         """The storage after the last tick, copied (cheap); build the tree later."""
-        lists = self._require().snapshot_lists  # the snapshot lists of STORAGE, in Snapshot order
+        loaded = self._require()
+        lists = loaded.snapshot_lists  # the snapshot lists of STORAGE, in Snapshot order
+        calls = loaded.calls_of_tick(self._tick)  # B1's double calls; None under B2
         # tuple.__new__ directly: the NamedTuple's own __new__ is a Python function that parses
         # 15 arguments; this is half the cost, and recorders snapshot every tick.
-        return _new_tuple(Snapshot, (self._now, self._tick, self.root_actions.roots, *map(tuple, lists)))
+        return _new_tuple(Snapshot, (self._now, self._tick, self.root_actions.roots, *map(tuple, lists), calls))
 
     def assignment_values(self) -> tuple[Value | None, ...]:
         """The values the last tick's output assignments wrote, per site: ``snapshot().assignments`` alone.
@@ -342,7 +344,8 @@ class Engine:
         plan = loaded.path_plan
         if plan is None:
             plan = loaded.path_plan = PathPlan.of(loaded.program, loaded.layout)
-        return compact_path(plan, self.root_actions.roots, self._tick, self._now, loaded.path_storage)
+        calls = loaded.calls_of_tick(self._tick)  # B1's double calls; None under B2
+        return compact_path(plan, self.root_actions.roots, self._tick, self._now, loaded.path_storage, calls)
 
     def activation(self, snapshot: Snapshot | None = None) -> list[Node]:
         """The activation tree of the last tick (or of ``snapshot``)."""

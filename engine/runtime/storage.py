@@ -21,7 +21,7 @@ from xabsl_studio.engine.codegen.python import GeneratedProgram
 from xabsl_studio.engine.codegen.support import MS_MASK, SUPPORT_GLOBALS
 from xabsl_studio.engine.errors import DoubleExecutionError
 from xabsl_studio.engine.ir.model import Parameter
-from xabsl_studio.engine.runtime.activation import PATH_FIELDS, PathPlan, PathStorage, Root, Snapshot
+from xabsl_studio.engine.runtime.activation import PATH_FIELDS, BehaviorCalls, PathPlan, PathStorage, Root, Snapshot
 from xabsl_studio.engine.runtime.coop import CoopStates
 from xabsl_studio.engine.runtime.linker import Linked
 from xabsl_studio.engine.runtime.values import EnumValues
@@ -32,10 +32,11 @@ __all__ = ["LoadedProgram", "RootAction"]
 #: One root action: called with ``(now, tick)`` once per tick.
 RootAction = Callable[[int, int], None]
 
-#: The storage lists a snapshot copies, in :class:`Snapshot` field order.
+#: The storage lists a snapshot copies, in :class:`Snapshot` field order (after ``now``, ``tick``,
+#: ``roots``; before ``behavior_calls``, which is the B1 call record, not a storage list).
 SNAPSHOT_FIELDS = tuple(spec.field for spec in STORAGE if spec.snapshot)
-if Snapshot._fields[3:] != SNAPSHOT_FIELDS:  # pragma: no cover - a schema edit that forgot Snapshot
-    raise AssertionError(f"Snapshot fields {Snapshot._fields[3:]} do not follow STORAGE {SNAPSHOT_FIELDS}")
+if Snapshot._fields[3:-1] != SNAPSHOT_FIELDS:  # pragma: no cover - a schema edit that forgot Snapshot
+    raise AssertionError(f"Snapshot fields {Snapshot._fields[3:-1]} do not follow STORAGE {SNAPSHOT_FIELDS}")
 
 
 class LoadedProgram:
@@ -90,10 +91,18 @@ class LoadedProgram:
         #: what the decisions of the last tick read, when the code records reads (``Engine.record_reads``)
         self.reads: list[object] = []
         g.update(DX=self.double_execution, CC=self.coop.check, CF=self.coop.conflict, RA=self.reads.append)
+        #: B1 only (B2 rejects a behavior that could run twice in a tick): per behavior slot, the
+        #: tick of its recorded calls and each call's parameter values (``calls_of_tick``)
+        self.call_tick: list[int] = []
+        self.calls: list[list[tuple[Value, ...]]] = []
+        record = not linked.layout.double_execution_is_error
+        if record:
+            self.call_tick = [NEVER] * len(linked.behaviors)
+            self.calls = [[] for _ in linked.behaviors]
         for k, behavior in enumerate(linked.behaviors):
             # Generated basic-behavior calls do the bookkeeping of ``run_behavior`` inline.
             g[f"BB{k}"] = behavior
-            g[f"BE{k}"] = behavior.execute
+            g[f"BE{k}"] = self._recording_call(k, behavior.execute) if record else behavior.execute
         for k, binding in enumerate(linked.inputs):
             g[f"I{k}"] = binding.read
             if binding.attribute is not None or binding.key is not None:
@@ -205,6 +214,35 @@ class LoadedProgram:
             self.behavior_activated[k] = now
         behavior.time_of_execution = (now - self.behavior_activated[k]) & MS_MASK
         behavior.execute()
+
+    def _recording_call(self, k: int, execute: Callable[[], None]) -> Callable[[], None]:
+        """``execute`` of behavior slot ``k``, first noting the parameter values of this call (B1).
+
+        The generated call has set the parameters and the tick stamp (``BLT``) just before; the
+        storage keeps only the last call's values, so each call's are copied here.
+        """
+        bslot = next(b for b in self.layout.behaviors.values() if b.index == k)
+        start, end = bslot.offset, bslot.offset + len(bslot.params)
+        params, stamps, call_tick, calls = self.behavior_params, self.behavior_last_tick, self.call_tick, self.calls
+
+        def call() -> None:
+            tick = stamps[k]
+            values = tuple(params[start:end])
+            if call_tick[k] != tick:
+                call_tick[k] = tick
+                calls[k] = [values]
+            else:
+                calls[k].append(values)
+            execute()
+
+        return call
+
+    def calls_of_tick(self, tick: int) -> BehaviorCalls | None:
+        """The behaviors that ran more than once in ``tick``, each call's values (B1; None under B2)."""
+        if not self.calls:
+            return None
+        stamps = self.call_tick
+        return {k: tuple(c) for k, c in enumerate(self.calls) if stamps[k] == tick and len(c) > 1}
 
     def executing_coop_states(self) -> list[tuple[int, int]]:
         """The ``(option, state)`` of every cooperative state that ran in the current tick."""

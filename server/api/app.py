@@ -9,12 +9,16 @@ engine work in the simulation process (``Session.request``), Graphviz in a worke
 
 Writing a behavior file compiles every behavior the file belongs to (here, in the server process)
 and hot-swaps clean ones into the simulation (``Session.apply``); one asyncio lock serialises
-write + compile + swap so two saves cannot interleave their reloads.
+write + compile + swap so two saves cannot interleave their reloads. A file of a behavior set
+changed outside the studio is picked up the same way (``Studio.watch_files``, polling with
+``xabsl_studio.server.session.watch``): under that lock, so a save of the studio's own is never
+taken for an external change.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 from collections.abc import AsyncIterator, Iterator
 from contextlib import asynccontextmanager
@@ -63,6 +67,7 @@ from xabsl_studio.server.session.frames import Generation
 from xabsl_studio.server.session.generations import GenerationGone
 from xabsl_studio.server.session.live import CommandError, Session
 from xabsl_studio.server.session.replay import ReplaySession
+from xabsl_studio.server.session.watch import POLL_SECONDS, FileWatcher
 
 log = logging.getLogger("xabsl.server")
 
@@ -143,6 +148,8 @@ class Studio:
         self.graphs = GraphCache()
         self.hub: Hub | None = None
         self.write_lock = asyncio.Lock()
+        #: the include closures' files as last seen, to notice changes made outside the studio
+        self.watcher = FileWatcher(self.files.root)
         #: the recordings it may open, and the replays and forks served beside it (``create_app``)
         self.library: RecordingLibrary
         self.studios: Studios
@@ -237,6 +244,8 @@ class Studio:
         self, paths: list[str], version: str | None, status: int, deleted: str | None = None
     ) -> Response:
         """Recompile the behavior sets ``paths`` belong to, tell the clients, answer the write."""
+        for path in paths:
+            self.watcher.note(path)  # the studio's own write: never reported back as external
         keys: list[str] = []
         for path in paths:
             keys.extend(k for k in self.programs_of(path) if k not in keys)
@@ -260,6 +269,46 @@ class Studio:
             body["detail"] = "saved, but " + "; ".join(errors)
             return JSONResponse(body, status_code=422)
         return JSONResponse(body, status_code=status)
+
+    # -- files changed outside the studio --------------------------------------------------------------
+
+    def watched_paths(self) -> list[str]:
+        """The API paths of every behavior set's include closure: what its last compile read, its agents file."""
+        paths: set[str] = set()
+        for state in self.session.programs.values():
+            if state.compilation is not None:
+                paths.update(state.compilation.files)
+            agents = state.source.agents_file
+            if agents.resolve().is_relative_to(self.files.root):
+                paths.add(self.files.api_path(agents.resolve()))
+        return sorted(paths)
+
+    async def check_files(self) -> None:
+        """One look at the watched files: each external change is told and compiled like a save."""
+        async with self.write_lock:
+            self.watcher.watch(self.watched_paths())
+            changes = await asyncio.to_thread(self.watcher.scan)
+            if not changes:
+                return
+            if self.hub is not None:
+                for change in changes:
+                    gone = change.version is None
+                    self.hub.broadcast(FileEvent(path=change.path, version=change.version, deleted=gone, by="disk"))
+            keys: list[str] = []
+            for change in changes:
+                keys.extend(k for k in self.programs_of(change.path) if k not in keys)
+            await self.recompile(keys)
+            # a new include brings its file into the closure: watched from now on, as it is now
+            self.watcher.watch(self.watched_paths())
+
+    async def watch_files(self) -> None:
+        """Look at the watched files every POLL_SECONDS until cancelled (the app's lifespan)."""
+        while True:
+            await asyncio.sleep(POLL_SECONDS)
+            try:
+                await self.check_files()
+            except Exception:  # one bad pass (a file vanishing mid-read) must not end the watching
+                log.exception("watching the behavior files")
 
 
 def _generation_info(session: Session, gen: Generation) -> dict[str, Any]:
@@ -679,9 +728,19 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     session.on_crash = hub.on_crash
     session.on_breakpoint = hub.on_breakpoint
     await session.start()
+    watching = None
+    # The main studio watches (a recording has no files; a fork beside it runs what it was
+    # started with, and its own saves reload it)
+    if getattr(app.state, "serves_studios", False) and not isinstance(session, ReplaySession):
+        studio.watcher.watch(studio.watched_paths())
+        watching = asyncio.create_task(studio.watch_files())
     try:
         yield
     finally:
+        if watching is not None:
+            watching.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await watching
         if getattr(app.state, "serves_studios", False):
             await studio.studios.close_all()
         await hub.close_all()

@@ -46,13 +46,18 @@ class RestReply(Reply):
 @with_config(SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class FileEvent:
-    """A behavior file was written, created, renamed or deleted (by any client)."""
+    """A behavior file was written, created, renamed or deleted: by a client of the studio, or on disk.
+
+    ``by`` is ``"studio"`` for a save through the file API (any client's), ``"disk"`` for a change
+    made outside the studio (a ``git checkout``, another editor) that the file watcher noticed.
+    """
 
     type: Literal["event"] = "event"
     event: Literal["file"] = "file"
     path: str
     version: str | None
     deleted: bool
+    by: Literal["studio", "disk"] = "studio"
 
 
 @with_config(SCHEMA)

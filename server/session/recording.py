@@ -25,11 +25,12 @@ events through :meth:`LiveRecorder.event`.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
 import os
 import re
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -70,10 +71,26 @@ DEFAULT_CAP_BYTES = 2_000_000_000
 DEFAULT_ROLL_TICKS = 24_000
 
 
-def default_folder() -> Path:
+def cache_folder() -> Path:
     """``$XDG_CACHE_HOME/xabsl-studio/recordings`` (``~/.cache`` without XDG_CACHE_HOME)."""
     cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(cache) / "xabsl-studio" / "recordings"
+
+
+def default_folder(agents_files: Iterable[Path] = ()) -> Path:
+    """The record folder of the behavior sets of ``agents_files``: their own sub-folder of the cache.
+
+    One folder shared by every behavior set made each studio list every other set's recordings.
+    The sub-folder is keyed by the resolved paths of the agents files (a hash: stable, whatever
+    the names hold), with the first one's folder name in front for people looking at the cache:
+    ``~/.cache/xabsl-studio/recordings/behavior-3f2a9c01b7d4``. Without agents files: the cache.
+    """
+    paths = sorted(str(Path(p).expanduser().resolve()) for p in agents_files)
+    if not paths:
+        return cache_folder()
+    digest = hashlib.sha256("\n".join(paths).encode("utf-8", "surrogateescape")).hexdigest()[:12]
+    label = re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(paths[0]).parent.name).strip("._")[:40] or "set"
+    return cache_folder() / f"{label}-{digest}"
 
 
 def tables_of(program: Program) -> ProgramTables:
@@ -233,7 +250,7 @@ class LiveRecorder:
             "failed": self._failed,
         }
 
-    def event(self, kind: str, agent: str | None = None, **data: Any) -> None:
+    def event(self, kind: str, agent: str | None = None, /, **data: Any) -> None:
         """A session event (``xabsl_studio.engine.record.schema.EVENT_KINDS``) before the next tick."""
         if kind not in S.EVENT_KINDS or self._failed:
             return
@@ -251,6 +268,10 @@ class LiveRecorder:
         if kind is None:
             return
         data = {k: v for k, v in dataclasses.asdict(command).items() if k not in ("type", "id", "op", "robot")}
+        if "agent" in data:
+            # the event's own ``agent`` is the robot; the XABSL agent it now runs is ``name``
+            # (docs/recordings.md), so the two never collide
+            data["name"] = data.pop("agent")
         robot = getattr(command, "robot", None)
         agent = None
         if robot is not None and self._gen is not None and 0 <= robot < len(self._gen.structure["robots"]):

@@ -28,7 +28,7 @@ def test_clean_compile_writes_ic_and_json(tmp_path: Path, capsys: pytest.Capture
     assert (decision["if"], decision["else"]["if"]) == ("robot.fallen", "ball.distance < @stop_at")
     assert decision["else"]["then"] == {**decision["else"]["then"], "to": "arrived", "leaf": transition["leaf"]}
     summary = capsys.readouterr().out.strip().splitlines()[-1]
-    assert summary.startswith("ok: 4 files, 1 options, 0 errors, 0 warnings in ")
+    assert summary.startswith("ok: 4 files, 1 option, 0 errors, 0 warnings in ")
 
 
 def test_errors_exit_1_and_write_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -102,3 +102,70 @@ def test_a_deep_decision_tree_writes_its_json(tmp_path: Path) -> None:
     while "if" in tree:
         tree, depth = tree["else"], depth + 1
     assert depth == levels and tree["stay"] is True
+
+
+def noisy_team(root: Path) -> Path:
+    """A small behavior set with every kind of warning a team's set had in numbers (issue 23).
+
+    The original compiler prints none of them: ``naming`` and ``parameter-missing`` it defines but
+    never prints, the rest are lint of our own. File names with ``-`` are common in team sets.
+    """
+    (root / "Options").mkdir()
+    (root / "basic-behaviors.xabsl").write_text(
+        'namespace basic_behaviors("Skills") {\n  behavior walk {\n    float speed;\n    float turn;\n  }\n'
+        "  behavior spare {\n  }\n}\n"
+    )
+    (root / "symbols.xabsl").write_text(
+        'namespace symbols("S") {\n  float input x;\n  float input never_read;\n  float output o;\n}\n'
+    )
+    (root / "Options" / "go-to.xabsl").write_text(
+        "option go_to {\n  initial state walking {\n    decision {\n      if (x > 1)\n        goto done;\n"
+        "      else\n        stay;\n    }\n    action {\n      walk(speed = 1);\n    }\n  }\n"
+        "  target state done {\n    decision {\n      stay;\n    }\n    action {\n      o = 1;\n    }\n  }\n"
+        "  state never {\n    decision {\n      stay;\n    }\n    action {\n    }\n  }\n}\n"
+    )
+    (root / "Options" / "kick_ball.xabsl").write_text(
+        "option kick {\n  initial state s {\n    decision {\n      stay;\n    }\n"
+        "    action {\n      go_to();\n    }\n  }\n}\n"
+    )
+    agents = root / "agents.xabsl"
+    agents.write_text(
+        'include "basic-behaviors.xabsl";\ninclude "symbols.xabsl";\ninclude "Options/go-to.xabsl";\n'
+        'include "Options/kick_ball.xabsl";\nagent team("Team", kick);\n'
+    )
+    return agents
+
+
+def test_no_lint_leaves_what_the_original_compiler_prints(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    agents = noisy_team(tmp_path)
+    assert main(["compile", str(agents), "--format", "json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    codes = sorted(d["code"] for d in report["diagnostics"])
+    assert codes == ["naming", "parameter-missing", "unreachable-state", "unused-behavior", "unused-symbol"]
+    assert all(d["lint"] for d in report["diagnostics"])  # none of them is the original compiler's
+    assert main(["compile", str(agents), "--no-lint"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert out == [out[-1]] and out[-1].startswith("ok: 5 files, 2 options, 0 errors, 0 warnings in ")
+
+
+def test_no_warning_asks_for_a_name_the_language_cannot_express(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`basic-behaviors.xabsl` asked for a namespace `basic-behaviors`: a syntax error."""
+    agents = noisy_team(tmp_path)
+    assert main(["compile", str(agents)]) == 0
+    naming = [line for line in capsys.readouterr().out.splitlines() if "[naming]" in line]
+    assert naming == [
+        f"{tmp_path / 'Options' / 'kick_ball.xabsl'}:1:8: warning: "
+        "option 'kick' should be named like its file 'kick_ball' [naming]"
+    ]
+
+
+def test_the_summary_counts_in_the_singular_too(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = tmp_path / "agents.xabsl"
+    (tmp_path / "s.xabsl").write_text('namespace s("S") { float input unused_input; float output o; }\n')
+    (tmp_path / "main.xabsl").write_text("option main { initial state s { action { o = 1; } } }\n")
+    source.write_text('include "s.xabsl"; include "main.xabsl"; agent a("A", main);\n')
+    assert main(["compile", str(source)]) == 0
+    summary = capsys.readouterr().out.strip().splitlines()[-1]
+    assert summary.startswith("ok: 3 files, 1 option, 0 errors, 1 warning in "), summary

@@ -66,10 +66,16 @@ def test_unreadable_inputs_exit_2_with_one_line(agents_ic: Path, capsys: pytest.
     assert status == 2 and str(inputs) in err and len(err.strip().splitlines()) == 1, err
 
 
-def test_a_computed_infinity_is_a_fault_naming_the_tick_not_invalid_json(
+def test_a_computed_infinity_is_written_as_the_kit_writes_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """Finite inputs whose sums and products overflow: the behavior's arithmetic, not bad input.
+
+    The original engine and the kit's expected traces write ``Infinity``/``-Infinity``/``NaN``
+    (issue 23: this used to exit 1).
+    """
     import json
+    import math
 
     folder = KIT / "arithmetic"
     lines = (folder / "in.jsonl").read_text().splitlines()
@@ -82,5 +88,7 @@ def test_a_computed_infinity_is_a_fault_naming_the_tick_not_invalid_json(
     out = tmp_path / "out.jsonl"
     status = main(["trace", str(folder / "expected.ic"), "--inputs", str(inputs), "--out", str(out)])
     err = capsys.readouterr().err
-    assert status == 1 and f"{inputs}:1: tick 1:" in err and "non-finite" in err, err
-    assert not out.exists()
+    assert status == 0, err
+    outputs = json.loads(out.read_text())["outputs"]
+    assert any(isinstance(v, float) and not math.isfinite(v) for v in outputs.values()), outputs
+    assert "Infinity" in out.read_text()

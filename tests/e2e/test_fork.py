@@ -59,3 +59,16 @@ def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page
     )
     assert page.locator(".fork-original-path").inner_text() == own
     screenshot(page, "fork")
+    # At 1600 px the toolbar with the fork's badge stays one row above the timeline: it wrapped
+    # onto the timeline, and a click meant for the timeline opened Recordings… (issue 23).
+    bar = page.locator(".timeline-panel > .toolbar").bounding_box()
+    row = page.locator(".timeline-panel > .toolbar #run-from-here").bounding_box()
+    box = canvas.bounding_box()
+    assert bar is not None and row is not None and box is not None
+    assert bar["height"] <= row["height"] + 14, (bar, row)  # one row of buttons
+    assert bar["y"] + bar["height"] <= box["y"] + 1, (bar, box)
+    for fraction in (0.05, 0.5, 0.95):
+        x, y = box["x"] + box["width"] * fraction, box["y"] + 4
+        hit = page.evaluate(f"() => document.elementFromPoint({x}, {y}).className")
+        assert hit == "timeline-canvas", (fraction, hit)
+    assert page.evaluate("() => document.querySelector('dialog.recordings')?.open ?? false") is False

@@ -106,3 +106,35 @@ def test_why_at_a_past_tick_shows_operand_values(tab: Any, recording: Path) -> N
     shown = float(comparison.split("(")[1].split(")")[0])
     assert abs(shown - distance) < 0.01
     screenshot(tab, "replay-why")
+
+
+def test_a_replay_does_not_contradict_itself(tab: Any, recording: Path) -> None:
+    """The top bar said "0 : 0 · initial · 0.000 s · live · paused" while t = 14 s was shown, and
+    the why said "No transition of this option in the buffered history" beside the info's
+    "last transition ready → set" (issue 23)."""
+    with Recording(recording) as file:
+        ticks = len(file)
+        seq = int(ticks * 0.7)
+        view = file.tick(seq)
+    loaded(tab, ticks)
+    tab.evaluate(f"() => {STUDIO}.session.selectRobot(0)")
+    tab.evaluate(
+        f"""() => {{
+        const s = {STUDIO}.session;
+        s.setCursor(s.buffer.bySeq({seq}).x);
+        s.openOptionById(s.indexOf(s.selectedRobot).optionByName.get("play_soccer").id);
+    }}"""
+    )
+    tab.keyboard.press("o")
+    tab.wait_for_selector(".option-panel svg g[id^='state_']", timeout=20000)
+    tab.wait_for_function(f"() => {STUDIO}.session.view.seq === {seq}")
+    clock = tab.locator(".clock").inner_text()
+    assert f"{view.t / 1000:.3f} s" in clock, clock  # the tick in view, not the server's position
+    assert str(view.status["game_state"]) in clock, (clock, view.status)
+    assert "live" not in tab.locator(".link-text").inner_text()
+    tab.wait_for_selector(".why .muted:has-text('Values recorded at')", timeout=20000)
+    info = tab.locator(".option-info").inner_text()
+    why = tab.locator(".why").inner_text()
+    assert "last transition" in info  # init → ready → set → playing happened before 14 s
+    assert "No transition of this option" not in why, (info, why)
+    assert "Last transition:" in why, why

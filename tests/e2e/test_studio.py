@@ -182,7 +182,7 @@ def test_a_conflicting_save_is_shown_never_overwritten_silently(page: Any, studi
     page.keyboard.press("Control+s")
     page.locator(".banner", has_text="Conflict").wait_for()
     assert (studio.example / CLEAR).read_text() == theirs
-    page.locator(".banner button", has_text="Overwrite theirs with mine").click()
+    page.locator(".banner button", has_text="Keep mine").click()
     page.locator(".toast.ok", has_text="Saved behavior/options/clear_ball.xabsl").wait_for()
     assert (studio.example / CLEAR).read_text() == mine
     assert page.locator(".banner").is_hidden()

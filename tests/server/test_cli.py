@@ -8,8 +8,10 @@ import time
 from pathlib import Path
 
 import httpx2 as httpx
+import pytest
 
 from tests.server.conftest import free_port
+from xabsl_studio.server.session.recording import cache_folder, default_folder
 
 
 def test_serve_is_registered() -> None:
@@ -64,3 +66,39 @@ def test_serve_refuses_a_bad_example(tmp_path: Path) -> None:
         text=True,
     )
     assert result.returncode == 2 and "no such folder" in result.stderr
+
+
+def test_each_behavior_set_records_into_and_lists_its_own_cache_folder(
+    demo_dir: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One shared cache folder made Recordings… list every other behavior set's recordings."""
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("XDG_CACHE_HOME", str(cache))
+    shared = cache_folder()
+    own = default_folder([demo_dir / "agents.xabsl"])
+    assert own.parent == shared and own != default_folder([tmp_path / "other" / "agents.xabsl"])
+    (shared / "someone-else").mkdir(parents=True)
+    (shared / "stray.mcap").write_bytes(b"from before: the folder every set shared")
+    (shared / "someone-else" / "theirs.mcap").write_bytes(b"another behavior set's")
+    own.mkdir()
+    (own / "earlier.mcap").write_bytes(b"this set's, from an earlier session")
+    port = free_port()
+    command = [sys.executable, "-m", "xabsl_studio.engine.cli", "serve", str(demo_dir), "--port", str(port)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                status = httpx.get(f"http://127.0.0.1:{port}/api/status").json()
+                if status["recording"] and status["recording"]["file"]:
+                    break
+            except httpx.TransportError:
+                assert process.poll() is None, process.stderr.read() if process.stderr else ""
+            assert time.monotonic() < deadline, "the server did not come up and record"
+            time.sleep(0.2)
+        assert Path(status["recording"]["file"]).parent == own.resolve()
+        listed = [r["name"] for r in httpx.get(f"http://127.0.0.1:{port}/api/recordings").json()["recordings"]]
+        assert listed == ["earlier.mcap"]
+    finally:
+        process.terminate()
+        process.communicate(timeout=20)

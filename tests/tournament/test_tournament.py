@@ -192,3 +192,43 @@ def test_a_version_against_itself_is_exactly_even(capsys):
     assert all(row["difference"] == 0.0 for row in summary["activations"] + summary["states"])
     first, second = summary["matches"]
     assert first["score"] == {"home": second["score"]["away"], "away": second["score"]["home"]}
+
+
+def _result(index: int, activations: dict[str, dict[str, int]]) -> dict:
+    return {
+        "index": index,
+        "ok": True,
+        "seed": index + 1,
+        "home_colour": "blue",
+        "score": {"home": 1, "away": 0},
+        "cpu_seconds": 1.0,
+        "sim_seconds": 10.0,
+        "teams": {side: dict.fromkeys(report.TEAM_STATS, 0) for side in ("home", "away")},
+        "robot_ticks": {"home": 1000, "away": 1000},
+        "activations": activations,
+        "states": {side: {f"{o}/s": [n, 1] for o, n in activations[side].items()} for side in ("home", "away")},
+        "faults": [],
+        "trace_hash": "0",
+    }
+
+
+def test_the_biggest_difference_leads_the_terminal_and_the_html_report(capsys):
+    """An option only one version runs (15.8 % vs 0 %) was last, below the +0.00 rows, and cut
+    from the terminal's top rows (issue 23): it leads both, in one order."""
+    common = {f"shared_{k:02d}": 500 + k for k in range(report.TOP + 3)}
+    home = {**common, "shared_07": 530, "new_skill": 158}
+    results = [_result(0, {"home": home, "away": dict(common)})]
+    summary = report.summarize(results, home="a", away="b", planned=1, wall_seconds=1.0, jobs=1, backend="local pool")
+    order = [row["option"] for row in summary["activations"]]
+    assert order[:2] == ["new_skill", "shared_07"]
+    assert summary["activations"][0]["home"] == 0.158 and summary["activations"][0]["away"] == 0.0
+    report.print_report(summary)
+    terminal = capsys.readouterr().out
+    assert "new_skill (only HOME)" in terminal
+    page = report.html_report(summary)
+    shown = [name for name in order if f"<td>{name}" in page]
+    assert sorted(shown, key=page.index) == order  # the HTML rows in the summary's order
+    printed = [name for name in order[: report.TOP] if name in terminal]
+    assert sorted(printed, key=terminal.index) == order[: report.TOP]
+    states = [f"{row['option']}/{row['state']}" for row in summary["states"]]
+    assert states[0] == "new_skill/s"

@@ -127,3 +127,20 @@ def test_behavior_with_errors_exits_1(tmp_path: Path, capsys: pytest.CaptureFixt
     status, _, err = run(capsys, "trace", str(tmp_path / "agents.xabsl"), "--inputs", str(tmp_path / "in.jsonl"))
     print(err)
     assert status == 1 and "error" in err
+
+
+def test_trace_writes_a_computed_infinity_as_the_kit_does(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The kit's arithmetic set computes -Infinity at tick 93 from finite inputs (issue 23).
+
+    The original engine writes it as ``-Infinity``; a computed infinity is the behavior's
+    arithmetic, not bad input, so the trace carries it rather than exiting 1.
+    """
+    folder = KIT / "arithmetic"
+    out = tmp_path / "out.jsonl"
+    status, _, err = run(
+        capsys, "trace", str(folder / "agents.xabsl"), "--inputs", str(folder / "in.jsonl"), "--out", str(out)
+    )
+    assert status == 0, err
+    assert lines(out) == lines(folder / "expected.out.jsonl")
+    written = out.read_text().splitlines()
+    assert '"r.paren":-Infinity' in written[92] and '"r.paren":-Infinity' not in written[91]

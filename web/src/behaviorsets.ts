@@ -25,17 +25,18 @@ export function homeProgram(path: string, programs: readonly string[]): string |
 
 /// The diagnostics an editor of `path` shows: every error, and the warnings and hints of the
 /// file's home set (all of them when the file has none); the same finding reported by two sets
-/// is shown once.
+/// is shown once. Within one set nothing is dropped, so the home set's count is what
+/// `xabsl compile` prints for it.
 export function diagnosticsFor(path: string, diagnostics: readonly SetDiagnostic[], programs: readonly string[]): SetDiagnostic[] {
   const home = homeProgram(path, programs);
-  const seen = new Set<string>();
+  const seen = new Map<string, string | undefined>();
   const out: SetDiagnostic[] = [];
   for (const d of diagnostics) {
     if (d.severity !== "error" && home !== null && d.program !== undefined && d.program !== home) continue;
     const span = d.span;
     const key = `${d.severity}|${d.code}|${span?.file ?? d.file}|${span?.line}|${span?.col}|${d.message}`;
-    if (seen.has(key)) continue;
-    seen.add(key);
+    if (seen.has(key) && seen.get(key) !== d.program) continue; // another set's report of it
+    seen.set(key, d.program);
     out.push(d);
   }
   return out;

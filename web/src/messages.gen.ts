@@ -136,13 +136,19 @@ export interface Fault {
   state: string | null;
 }
 
-/** A behavior file was written, created, renamed or deleted (by any client). */
+/**
+ * A behavior file was written, created, renamed or deleted: by a client of the studio, or on disk.
+ *
+ * `by` is `"studio"` for a save through the file API (any client's), `"disk"` for a change
+ * made outside the studio (a `git checkout`, another editor) that the file watcher noticed.
+ */
 export interface FileEvent {
   type: "event";
   event: "file";
   path: string;
   version: string | null;
   deleted: boolean;
+  by?: "studio" | "disk";
 }
 
 /** Replace the root of `robot`'s engine by the basic behavior `behavior` with `params`. */

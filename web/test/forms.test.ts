@@ -72,6 +72,10 @@ describe("behavior sets of a file", () => {
     const shown = diagnosticsFor("behavior/basic_behaviors.xabsl", all, ["behavior", "chase"]).map((d) => d.message);
     expect(shown).toEqual(["own warning", "broken for chase", "broken"]);
   });
+  it("drops nothing within one set: its count is what xabsl compile prints", () => {
+    const twice = [diagnostic("behavior", "warning", "same", 9), diagnostic("behavior", "warning", "same", 9)];
+    expect(diagnosticsFor("behavior/basic_behaviors.xabsl", twice, ["behavior", "chase"])).toHaveLength(2);
+  });
   it("keeps everything for a file of no set", () => {
     const all = [diagnostic("chase", "warning", "w1"), diagnostic("behavior", "warning", "w2", 8)];
     expect(diagnosticsFor("lib/shared.xabsl", all, ["behavior", "chase"])).toHaveLength(2);

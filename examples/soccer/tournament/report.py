@@ -13,8 +13,10 @@ Statistics:
   shots, passes, kicks, possession);
 * activations: per option, the share of robot ticks it was active, per version, and the
   difference; per state, the share of its option's ticks spent in it and how often it was
-  entered per match. Sorted by the size of the difference, these say which options run more or
-  less and where the decisions differ.
+  entered per match. Options (and states) that only one version runs come first (they are the
+  biggest change there is), then the rest by the size of the difference; the terminal's top rows
+  and the HTML tables follow that one order. These say which options run more or less and where
+  the decisions differ.
 """
 
 from __future__ import annotations
@@ -156,9 +158,13 @@ def _option_differences(played: Sequence[dict[str, Any]]) -> list[dict[str, Any]
                 "only_in": _only_in(option, counts),
             }
         )
-    # Options both versions have first: their differences are the comparison; the rest follow.
-    rows.sort(key=lambda row: (row["only_in"] is not None, -abs(row["difference"]), row["option"]))
+    rows.sort(key=_by_change)
     return rows
+
+
+def _by_change(row: dict[str, Any]) -> tuple[bool, float, str, str]:
+    """The report's order: what only one version runs first, then the largest differences."""
+    return (row["only_in"] is None, -abs(row["difference"]), row["option"], row.get("state", ""))
 
 
 def _only_in(name: str, counts: dict[str, dict[str, Any]]) -> str | None:
@@ -195,7 +201,7 @@ def _state_differences(played: Sequence[dict[str, Any]]) -> list[dict[str, Any]]
                 "only_in": _only_in(key, states),
             }
         )
-    rows.sort(key=lambda row: (row["only_in"] is not None, -abs(row["difference"]), row["option"], row["state"]))
+    rows.sort(key=_by_change)
     return rows
 
 

@@ -254,3 +254,25 @@ def test_a_replay_draws_the_recorded_generation_from_its_intermediate_code(repla
     assert status == 200 and "<svg" in machine
     for state in view.description["options"][program.options["play_soccer"].index]["states"]:
         assert state["name"] in machine
+
+
+def test_select_agent_while_recording_is_an_event_with_the_agents_name(
+    soccer_session: Any, soccer_dir: Path, client_for: Any
+) -> None:
+    """Recording is on by default: picking an agent used to fail with a TypeError (issue 23)."""
+    from xabsl_studio.server.session.recording import LiveRecorder
+
+    folder = soccer_dir.parent / "select"
+    session = soccer_session
+    session.live_recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz)
+    with LiveServer(session) as server:
+        client = client_for(server)
+        client.frame_after()
+        reply = client.command("select_agent", robot=1, agent="soccer")
+        assert reply["ok"], reply
+        client.frame_after()
+    session.stop()
+    (file,) = sorted(folder.glob("*.mcap"))
+    with Recording(file) as recording:
+        (event,) = [e for e in recording.events if e["kind"] == "select_agent"]
+    assert event["agent"] == "blue2" and event["data"] == {"name": "soccer"}  # docs/recordings.md

@@ -9,25 +9,27 @@
 /// or CRLF line ends opens unmodified and a save writes exactly the edited text. `doc.toString()`
 /// (always "\n", one unit per line break, like document positions) stays what the language
 /// features and the as-you-type linter read.
-import { autocompletion, closeBrackets, closeBracketsKeymap, completionKeymap } from "@codemirror/autocomplete";
+import { autocompletion, closeBrackets, closeBracketsKeymap, closeCompletion, completionKeymap } from "@codemirror/autocomplete";
 import { defaultKeymap, history, historyKeymap, indentWithTab } from "@codemirror/commands";
 import { bracketMatching, HighlightStyle, indentOnInput, syntaxHighlighting } from "@codemirror/language";
-import { lintGutter, lintKeymap } from "@codemirror/lint";
+import { lintGutter, lintKeymap, setDiagnostics } from "@codemirror/lint";
 import { highlightSelectionMatches, searchKeymap } from "@codemirror/search";
 import { EditorSelection, EditorState } from "@codemirror/state";
 import { drawSelection, EditorView, highlightActiveLine, highlightActiveLineGutter, keymap, lineNumbers } from "@codemirror/view";
 import { tags as t } from "@lezer/highlight";
-import { type FileEntry, listFiles, readFile, token, writeFile } from "../api";
-import { diagnosticsFor, type SetDiagnostic } from "../behaviorsets";
+import { compile, type FileEntry, listFiles, programStatus, readFile, token, writeFile } from "../api";
+import { diagnosticsFor, homeProgram, type SetDiagnostic } from "../behaviorsets";
 import type { Span } from "../description";
 import type { CompileEvent, FileEvent } from "../protocol";
 import type { Session, SessionEvent } from "../session";
+import { lineDiff } from "../linediff";
 import { h, toast } from "../ui";
 import { toPosition, xabslCompletion } from "../xabsl/complete";
 import { xabsl } from "../xabsl/language";
-import { samePath, type ServerDiagnostic, xabslLinter } from "../xabsl/lint";
+import { lspToCodeMirror, samePath, type ServerDiagnostic, xabslLinter } from "../xabsl/lint";
 import { LspClient, lspUrl, websocketTransport } from "../xabsl/lsp";
 import { definitionAt, lspHover, referencesAt, renameAt, toChanges } from "../xabsl/navigate";
+import { LINT_CODES, LintFilter } from "./lintfilter";
 import { NewOptionDialog } from "./newoption";
 
 const highlight = HighlightStyle.define([
@@ -60,8 +62,31 @@ interface Buffer {
   state: EditorState;
   version: string;
   saved: string;
-  conflict: { version: string } | null;
+  /// the file changed on disk while this buffer has unsaved edits: its version there, and its
+  /// text once read (for the diff of the choice)
+  conflict: { version: string; theirs?: string } | null;
 }
+
+/// Scroll back to the left edge once the cursor would be in view there. CodeMirror scrolls
+/// sideways to follow a cursor past the right edge (typing at the end of a long line) but never
+/// back, so after moving to a short line the view stayed scrolled, every line's start hidden.
+const scrollBackLeft = EditorView.updateListener.of((u) => {
+  if (!u.selectionSet && !u.docChanged) return;
+  const view = u.view;
+  const scroller = view.scrollDOM;
+  if (scroller.scrollLeft === 0) return;
+  view.requestMeasure({
+    read: () => {
+      const at = view.coordsAtPos(view.state.selection.main.head);
+      if (!at) return false;
+      const x = at.right - scroller.getBoundingClientRect().left + scroller.scrollLeft; // in the unscrolled content
+      return x + 24 <= scroller.clientWidth; // in view, with a margin, at the left edge
+    },
+    write: (fits) => {
+      if (fits) scroller.scrollLeft = 0;
+    },
+  });
+});
 
 export class EditorPanel {
   readonly element: HTMLElement;
@@ -76,7 +101,14 @@ export class EditorPanel {
   private readonly buffers = new Map<string, Buffer>();
   private files: FileEntry[] = [];
   private current: Buffer | null = null;
-  private lastDiagnostics: readonly ServerDiagnostic[] = [];
+  /// The server's diagnostics of the current file's behavior sets (`xabsl compile`'s, per set):
+  /// what the status bar counts. The language server only draws them into the text as you type.
+  private lastDiagnostics: readonly SetDiagnostic[] = [];
+  /// which warnings are hidden, per behavior set (the Lint… dialog)
+  private readonly lintFilter = new LintFilter();
+  private readonly lintDialog: HTMLDialogElement;
+  private countTimer: ReturnType<typeof setTimeout> | null = null;
+  private countAsked = 0;
 
   /// The New option dialog (it writes the file and the include line, then opens the file here).
   private readonly newOptionDialog: NewOptionDialog;
@@ -102,12 +134,15 @@ export class EditorPanel {
       h("button", { title: "Find references (Shift+F12)", onclick: () => void this.references() }, "References"),
       h("button", { title: "Rename everywhere (F2)", onclick: () => void this.rename() }, "Rename"),
       h("button", { title: "Create an option: name, parameters, folder; adds its include line to the agents file", onclick: () => void this.newOption() }, "New option…"),
+      h("button#lint-filter", { title: "Which warnings to show for this behavior set (remembered in this browser)", onclick: () => this.showLintDialog() }, "Lint…"),
     );
+    this.lintDialog = h("dialog.lint-filter", { "aria-label": "Warnings shown" }) as HTMLDialogElement;
     this.element = h(
       "div.panel.editor-panel",
       {},
       h("div.editor-side", {}, h("div.section-title", {}, "Files"), this.tree),
       h("div.editor-main", {}, toolbar, this.banner, host, this.refs, this.status),
+      this.lintDialog,
     );
     this.view.contentDOM.setAttribute("aria-label", "XABSL source");
   }
@@ -126,13 +161,14 @@ export class EditorPanel {
         closeBrackets(),
         highlightActiveLine(),
         highlightSelectionMatches(),
+        scrollBackLeft,
         autocompletion({ activateOnTyping: true }),
         xabsl(),
         syntaxHighlighting(highlight),
         xabslCompletion(this.lsp, () => path || null),
         lspHover(this.lsp, () => path || null),
         lintGutter(),
-        xabslLinter(this.lsp, path || null, (result) => this.showCompile(result)),
+        xabslLinter(this.lsp, path || null, (result) => this.showCompile(result), 150, (d) => !this.lintFilter.hides(this.setKey(path), d)),
         keymap.of([
           { key: "Mod-s", preventDefault: true, run: () => (void this.save(), true) },
           { key: "F12", run: () => (this.goToDefinition(), true) },
@@ -158,7 +194,11 @@ export class EditorPanel {
           },
         }),
         EditorView.updateListener.of((u) => {
-          if (u.docChanged) this.markDirty();
+          if (u.docChanged) {
+            this.statusNote = "";
+            this.markDirty();
+            this.scheduleCounts();
+          }
         }),
       ],
     });
@@ -229,7 +269,9 @@ export class EditorPanel {
     }
     this.current = buffer;
     this.view.setState(buffer.state);
+    this.statusNote = "";
     this.showBanner();
+    void this.refreshCounts();
     for (const el of this.tree.querySelectorAll<HTMLElement>("[data-path]")) el.classList.toggle("open", el.dataset.path === path);
     this.markDirty();
     if (at) {
@@ -264,25 +306,140 @@ export class EditorPanel {
     return diagnosticsFor(path, diagnostics as readonly SetDiagnostic[], programs);
   }
 
+  /// The language server's answer: it draws the diagnostics into the text (xabslLinter); the
+  /// status bar counts the server's compile (refreshCounts), so only a failure is shown here.
   private showCompile(result: readonly ServerDiagnostic[] | Error): void {
     if (result instanceof Error) {
       this.status.className = "editor-status warn";
       this.status.textContent = `Cannot check: ${result.message}`;
-      return;
     }
-    this.lastDiagnostics = result;
+  }
+
+  /// The home behavior set of `path` (the set whose warnings its editor shows).
+  private homeOf(path: string): string | null {
+    const programs = this.files.find((f) => f.path === path)?.programs ?? [...this.session.programs.keys()];
+    return homeProgram(path, programs);
+  }
+
+  /// The key the hidden warnings of `path`'s home set are kept under.
+  private setKey(path: string): string {
+    return LintFilter.setKey(this.session.hello?.session.example ?? "", this.homeOf(path) ?? "");
+  }
+
+  /// Count again a moment after typing stops (one compile per pause, not per key).
+  private scheduleCounts(): void {
+    if (this.countTimer !== null) clearTimeout(this.countTimer);
+    this.countTimer = setTimeout(() => {
+      this.countTimer = null;
+      void this.refreshCounts();
+    }, 600);
+  }
+
+  /// The diagnostics of the current file's behavior sets from the server's compile, the one
+  /// `xabsl compile` runs: of the buffer's text while it has unsaved edits, else of the files
+  /// as the last compile found them. So the studio counts what the command line prints.
+  async refreshCounts(): Promise<void> {
+    const b = this.current;
+    if (!b) return;
+    const asked = ++this.countAsked;
+    let diagnostics: SetDiagnostic[];
+    try {
+      if (this.isDirty(b)) {
+        diagnostics = (await compile(b.path, this.view.state.sliceDoc())).diagnostics as SetDiagnostic[];
+      } else {
+        const programs = new Set(this.files.find((f) => f.path === b.path)?.programs ?? []);
+        const status = await programStatus();
+        diagnostics = Object.entries(status)
+          .filter(([key]) => !programs.size || programs.has(key))
+          .flatMap(([key, p]) => p.diagnostics.map((d) => ({ ...d, program: key })));
+      }
+    } catch {
+      return; // the next save, compile or reload counts again
+    }
+    if (asked !== this.countAsked || b !== this.current) return;
+    this.lastDiagnostics = this.own(b.path, diagnostics);
     this.renderStatus();
   }
 
-  private renderStatus(extra?: string): void {
-    const result = this.lastDiagnostics;
+  /// The Lint… dialog: per warning code of this behavior set, shown or hidden.
+  private showLintDialog(): void {
+    const path = this.current?.path;
+    if (!path) {
+      toast("Open a file of a behavior set first", "info");
+      return;
+    }
+    const set = this.setKey(path);
+    const home = this.homeOf(path);
+    const counts = new Map<string, number>();
+    for (const d of this.lastDiagnostics) if (d.severity !== "error" && (home === null || d.program === undefined || d.program === home)) counts.set(d.code, (counts.get(d.code) ?? 0) + 1);
+    for (const code of this.lintFilter.hidden(set).codes) if (!counts.has(code)) counts.set(code, 0);
+    const changed = (): void => {
+      this.renderStatus();
+      this.applySquiggles();
+      this.showLintDialog();
+    };
+    const rows = [...counts.entries()]
+      .sort((a, b) => b[1] - a[1] || a[0].localeCompare(b[0]))
+      .map(([code, n]) =>
+        h(
+          "label.lint-code",
+          {},
+          h("input", {
+            type: "checkbox",
+            checked: !this.lintFilter.hides(set, { severity: "warning", code }),
+            "data-code": code,
+            onchange: (ev: Event) => {
+              this.lintFilter.setCode(set, code, !(ev.target as HTMLInputElement).checked);
+              changed();
+            },
+          }),
+          h("code", {}, code),
+          ` ${n}`,
+          LINT_CODES.has(code) ? h("span.muted", {}, " · lint: the original compiler does not print it") : null,
+        ),
+      );
+    const hidden = this.lintFilter.hidden(set);
+    this.lintDialog.replaceChildren(
+      h("div.section-title", {}, `Warnings shown for ${home ?? "this behavior set"}`),
+      rows.length ? h("div.lint-codes", {}, ...rows) : h("div.muted", {}, "This behavior set has no warnings."),
+      h(
+        "div.actions",
+        {},
+        h("button#lint-original", { title: "Hide every lint warning: leave what the original compiler prints (xabsl compile --no-lint)", disabled: hidden.allLint, onclick: () => (this.lintFilter.setAllLint(set, true), changed()) }, "As the original compiler"),
+        h("button#lint-all", { title: "Show every warning", onclick: () => (this.lintFilter.setAllLint(set, false), changed()) }, "Show all"),
+        h("button", { onclick: () => this.lintDialog.close() }, "Close"),
+      ),
+    );
+    if (!this.lintDialog.open) this.lintDialog.showModal();
+  }
+
+  /// Draw the language server's diagnostics of the current file again, without the hidden ones.
+  private applySquiggles(): void {
+    const path = this.current?.path;
+    if (!path) return;
+    const set = this.setKey(path);
+    const own = (this.lsp.diagnostics.get(path) ?? []).filter((d) => !this.lintFilter.hides(set, d));
+    this.view.dispatch(setDiagnostics(this.view.state, lspToCodeMirror(own, this.view.state.doc)));
+  }
+
+  /// What the last save said ("hot reloaded behavior"): kept while the counts are redrawn, until
+  /// the next edit.
+  private statusNote = "";
+
+  private renderStatus(note?: string): void {
+    if (note !== undefined) this.statusNote = note;
+    const extra = this.statusNote;
+    const path = this.current?.path ?? "";
+    const set = this.setKey(path);
+    const result = this.lastDiagnostics.filter((d) => !this.lintFilter.hides(set, d));
+    const hidden = this.lastDiagnostics.length - result.length;
     const errors = result.filter((d) => d.severity === "error");
     const warnings = result.filter((d) => d.severity === "warning");
-    const path = this.current?.path ?? "";
     const elsewhere = result.filter((d) => !samePath(d.span?.file ?? d.file, path));
     const items: Array<HTMLElement | string> = [];
     items.push(h("strong", {}, errors.length ? `✗ ${errors.length} error${errors.length > 1 ? "s" : ""}` : "✓ compiles"));
     if (warnings.length) items.push(`, ${warnings.length} warning${warnings.length > 1 ? "s" : ""}`);
+    if (hidden) items.push(h("button.link.lint-hidden", { title: "Which warnings are shown (Lint…)", onclick: () => this.showLintDialog() }, ` (${hidden} hidden)`));
     if (extra) items.push(` — ${extra}`);
     for (const d of elsewhere.slice(0, 5)) {
       items.push(
@@ -299,19 +456,43 @@ export class EditorPanel {
     this.status.replaceChildren(...items);
   }
 
+  /// The choice for a buffer with unsaved edits whose file changed on disk (outside the studio or
+  /// by another client): keep mine (save it over theirs) or take theirs, with the diff between.
   private showBanner(): void {
     const b = this.current;
-    if (!b?.conflict) {
+    const conflict = b?.conflict;
+    if (!b || !conflict) {
       this.banner.hidden = true;
       return;
     }
     this.banner.hidden = false;
+    const diff =
+      conflict.theirs === undefined
+        ? h("div.muted", {}, "Reading the file on disk…")
+        : h(
+            "details.conflict-diff",
+            { open: true },
+            h("summary", {}, "What taking theirs changes: − yours, + theirs"),
+            h("pre.diff", {}, ...lineDiff(this.view.state.sliceDoc(), conflict.theirs).map((l) => h(`span.${l.kind === "+" ? "add" : l.kind === "-" ? "del" : "same"}`, {}, `${l.kind} ${l.text}\n`))),
+          );
     this.banner.replaceChildren(
       h("strong", {}, "Conflict: "),
-      `${b.path} was changed on disk by someone else since you opened it. Your text is still here, unsaved.`,
-      h("button", { onclick: () => void this.reloadFromDisk() }, "Discard mine, load theirs"),
-      h("button.danger", { onclick: () => void this.save(true) }, "Overwrite theirs with mine"),
+      `${b.path} changed on disk (outside the studio, or by another client) while you have unsaved edits. Your text is still here, unsaved.`,
+      h("button#keep-mine.danger", { title: "Save your text over the file on disk", onclick: () => void this.save(true) }, "Keep mine (save over theirs)"),
+      h("button#take-theirs", { title: "Load the file on disk; your unsaved edits are dropped", onclick: () => void this.reloadFromDisk() }, "Take theirs (drop my edits)"),
+      diff,
     );
+    if (conflict.theirs === undefined) {
+      void readFile(b.path).then(
+        (file) => {
+          if (b.conflict !== conflict) return;
+          conflict.theirs = file.text;
+          conflict.version = file.version;
+          if (b === this.current) this.showBanner();
+        },
+        () => undefined, // deleted meanwhile: the file event says so
+      );
+    }
   }
 
   private async reloadFromDisk(): Promise<void> {
@@ -344,6 +525,8 @@ export class EditorPanel {
   async save(overwrite = false): Promise<void> {
     const b = this.current;
     if (!b) return;
+    // A completion popup left open would go on offering names for text that is saved now.
+    closeCompletion(this.view);
     const text = this.view.state.sliceDoc(); // joined with the file's own line separator
     const version = overwrite && b.conflict ? b.conflict.version : b.version;
     try {
@@ -455,7 +638,9 @@ export class EditorPanel {
   }
 
 
-  /// React to other clients' writes: reload a clean buffer, flag a dirty one.
+  /// React to a file written by another client or changed on disk (`by: "disk"`: a checkout,
+  /// another editor): a buffer without unsaved edits takes the new text, one with edits asks
+  /// which to keep (showBanner).
   fileEvent(event: FileEvent): void {
     void this.refreshFiles();
     const b = this.buffers.get(event.path);
@@ -464,26 +649,33 @@ export class EditorPanel {
       toast(`${event.path} was deleted on disk.`, "error");
       return;
     }
+    const where = event.by === "disk" ? "on disk" : "by another client";
     if (!this.isDirty(b)) {
       void readFile(b.path).then((file) => {
         b.version = file.version;
         b.saved = file.text;
+        b.conflict = null;
         this.replaceText(b, file.text);
         this.markDirty();
+        if (b === this.current) this.showBanner();
+        toast(`${b.path} changed ${where}: the editor shows the new text.`, "info");
       });
     } else {
       b.conflict = { version: event.version ?? "" };
       if (b === this.current) this.showBanner();
+      toast(`${b.path} changed ${where} while you have unsaved edits: keep yours or take theirs.`, "error");
     }
   }
 
   compileEvent(event: CompileEvent): void {
-    if (!event.ok && this.current) this.lastDiagnostics = this.own(this.current.path, (event.diagnostics as unknown as ServerDiagnostic[]).map((d) => ({ ...d, program: event.program })));
+    void event;
+    void this.refreshCounts(); // every set's latest compile, as the status has them
   }
 
   render(changes: Set<SessionEvent>): void {
     if (changes.has("hello")) {
       if (!this.files.length) void this.refreshFiles();
+      if (this.current && !this.isDirty(this.current)) void this.refreshCounts();
     }
   }
 

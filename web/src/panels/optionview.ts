@@ -262,7 +262,11 @@ export class OptionView {
     const seq = this.session.isLive ? null : (this.session.view?.seq ?? null);
     const e = this.explanation;
     const ex = e && e.option === option.id && e.leaf === node.leaf && e.decided_in === node.decidedIn && (seq === null ? !e.recorded : e.seq === seq) ? e : null;
-    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}`;
+    // The server's last transition comes with its values; where it has none (a replay keeps no
+    // explain history), the transition the info line names from the buffered ticks is shown
+    // without values rather than contradicted by "no transition".
+    const known = ex && !ex.last_transition ? this.lastTransition(option) : null;
+    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}|${known ? `${known.from}>${known.to}@${known.t}` : ""}`;
     if (key === this.lastWhy) return;
     this.lastWhy = key;
     const path = decided ? leafPath(decided.decision, node.leaf) : null;
@@ -282,9 +286,17 @@ export class OptionView {
             `${last.decided_in_name} → ${last.target_name} at ${formatClock(last.t)} (leaf ${last.leaf})`,
             h("ol.conditions", {}, ...last.conditions.map((c) => this.conditionRow(c.text || c.source, c.branch, c, null))),
           )
-        : ex
-          ? h("div.muted.small", {}, "No transition of this option in the buffered history up to this tick.")
-          : null,
+        : known
+          ? h(
+              "div.last-transition",
+              {},
+              h("strong", {}, "Last transition: "),
+              `${name(known.from)} → ${name(known.to)} at ${formatClock(known.t)} (leaf ${known.leaf})`,
+              h("div.muted.small", {}, "Its condition values are not available here."),
+            )
+          : ex
+            ? h("div.muted.small", {}, "No transition of this option in the buffered history up to this tick.")
+            : null,
       h("div.muted.small", {}, ex ? (ex.recorded ? `Values recorded at t = ${formatClock(ex.t ?? 0)}: what the decision read then.` : "Values the decision read in the last tick.") : "Asking the server for values…"),
     ];
     this.why.replaceChildren(...parts.filter((p): p is Node => p !== null));
@@ -349,10 +361,12 @@ export class OptionView {
       .finally(() => {
         this.explaining = false;
         this.lastWhy = "";
-        // A paused replay sends no frame that would redraw the panel: show the answer now, and
-        // ask for the decision in view if it changed while this answer was on its way.
+        // A paused session (a replay, a breakpoint hit, the pause key) sends no frame that would
+        // redraw the panel: show the answer now, and ask for the decision in view if it
+        // changed while this answer was on its way. A running one redraws on its next frame
+        // anyway, so drawing here too costs one render per answer.
         const shown = this.current();
-        if (session.replay && shown) {
+        if (shown && !this.element.closest("[hidden]")) {
           this.renderWhy(shown, session.indexOf(session.selectedRobot));
           this.explain(false);
         }

@@ -53,7 +53,7 @@ export class TimelinePanel {
     this.canvas = h("canvas.timeline-canvas", { tabindex: 0, "aria-label": "Timeline: click or drag to go back in time; End returns to live" });
     this.ctx = this.canvas.getContext("2d") as CanvasRenderingContext2D;
     this.liveButton = h("button.live", { title: "Back to live (L or End)", onclick: () => this.session.setCursor(null) }, "● Live");
-    this.info = h("span.muted");
+    this.info = h("span.muted.timeline-info");
     this.scroller = h("div.timeline-scroll", {}, this.canvas);
     this.toolbar = h("div.toolbar", {}, h("strong", {}, "Timeline"), this.liveButton, this.info);
     this.element = h("div.panel.timeline-panel", {}, this.toolbar, this.scroller);
@@ -304,6 +304,10 @@ export class TimelinePanel {
     const tick = session.view;
     const n = this.marks.length;
     const reloads = n ? ` · ${n} reload${n === 1 ? "" : "s"} or reset${n === 1 ? "" : "s"}: click ${n === 1 ? "its" : "a"} mark on the axis to see what changed` : "";
-    this.info.textContent = `${formatMs(this.t1 - this.t0)} buffered${reloads}${tick ? ` · showing t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
+    const info = `${formatMs(this.t1 - this.t0)} buffered${reloads}${tick ? ` · showing t = ${formatClock(tick.t)}` : ""}${session.isLive ? "" : " (scrubbed: every panel shows this moment)"}`;
+    if (this.info.textContent !== info) {
+      this.info.textContent = info;
+      this.info.title = info; // the toolbar is one row: a long text is cut, the whole of it here
+    }
   }
 }

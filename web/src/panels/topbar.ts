@@ -137,7 +137,9 @@ export class TopBar {
     }
     if (this.robotPicker.value !== String(session.selectedRobot)) this.robotPicker.value = String(session.selectedRobot);
     this.renderAgent(changes);
-    const tick = session.live;
+    // The tick in view (the timeline's cursor, else the newest): in a replay the newest frame is
+    // only where the server's playback stands, so the clock and the score follow what is shown.
+    const tick = session.view;
     const status = tick?.status;
     const parts: string[] = [];
     if (status?.score && status.teams) parts.push(`${status.teams[0]} ${status.score[0]} : ${status.score[1]} ${status.teams[1]}`);
@@ -221,7 +223,10 @@ export class TopBar {
     let text: string;
     let state: string = this.linkState;
     this.checkPaused();
-    if (this.linkState === "live") {
+    if (this.linkState === "live" && this.session.replay) {
+      // a recording is never live: connected, it is a replay (paused, or playing it back)
+      text = this.paused ? "replay · paused" : "replay";
+    } else if (this.linkState === "live") {
       const age = performance.now() - c.lastFrameAt;
       if (this.paused) text = "live · paused";
       else if (this.finished && age > 2000) text = "live · match over";

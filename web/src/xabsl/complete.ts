@@ -85,6 +85,8 @@ export function lspCompletionSource(client: LspClient, path: () => string | null
     const p = path();
     const word = context.matchBefore(/@?[A-Za-z0-9_.]*$/);
     if (!p || (!context.explicit && !word?.text && !/[(,=\s]$/.test(context.state.sliceDoc(context.pos - 1, context.pos)))) return null;
+    // A number being typed names nothing to complete (`< 105`): no popup unless asked for.
+    if (!context.explicit && word && /^[0-9]/.test(word.text)) return null;
     const doc = context.state.doc;
     try {
       await client.sync(p, doc.toString());

@@ -134,13 +134,14 @@ export function toServerDiagnostics(path: string, diagnostics: readonly LspDiagn
 }
 
 /// Diagnostics as you type, from the language server: the buffer's text goes to the server
-/// (after `delay` ms without typing); what it publishes for `path` is shown in the editor, and
-/// `onResult` sees the diagnostics of every file of the behavior set (the status bar).
+/// (after `delay` ms without typing); what it publishes for `path` and `keep` keeps is shown in
+/// the editor, and `onResult` sees the diagnostics of every file of the behavior set.
 export function xabslLinter(
   client: LspClient,
   path: string | null,
   onResult: (diagnostics: readonly ServerDiagnostic[] | Error) => void,
   delay = 150,
+  keep: (d: LspDiagnostic) => boolean = () => true,
 ): Extension {
   return ViewPlugin.fromClass(
     class {
@@ -157,7 +158,7 @@ export function xabslLinter(
 
       show(): void {
         if (!path) return;
-        const own = client.diagnostics.get(path) ?? [];
+        const own = (client.diagnostics.get(path) ?? []).filter(keep);
         this.view.dispatch(setDiagnostics(this.view.state, lspToCodeMirror(own, this.view.state.doc)));
         const all: ServerDiagnostic[] = [];
         for (const [p, ds] of client.diagnostics) all.push(...toServerDiagnostics(p, ds));
