@@ -759,10 +759,10 @@ def _breaks(project: Project, analysis: Analysis, edits: list[tuple[str, Occurre
     new_errors = Counter(d.code for d in after.all_diagnostics() if d.is_error) - Counter(
         d.code for d in analysis.all_diagnostics() if d.is_error
     )
-    for d in after.all_diagnostics():
-        if d.is_error and new_errors[d.code]:
-            return d.format()
-    return None
+    added = [d for d in after.all_diagnostics() if d.is_error and new_errors[d.code]]
+    # the clash itself ("defined more than once") says more than what follows from it
+    added.sort(key=lambda d: d.code != "duplicate-definition")
+    return added[0].format() if added else None
 
 
 def _qualified_by(analysis: Analysis, key: Key, new: str) -> Iterable[tuple[str, Occurrence, str]]:
