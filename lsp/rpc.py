@@ -145,8 +145,11 @@ class XabslProtocol(LanguageServerProtocol):
         return True
 
     def reply_error(self, ident: int | str | None, error: JsonRpcException) -> None:
-        """Send the JSON-RPC error ``error`` as the answer to request ``ident``."""
-        self._send_response(ident, error=lsp.ResponseError(code=error.code, message=error.message))  # type: ignore[arg-type]
+        """Send the JSON-RPC error ``error`` as the answer to request ``ident`` (None: ``"id": null``)."""
+        if ident is None:  # lsprotocol would leave the id out; JSON-RPC wants it null
+            self._send_data({"jsonrpc": "2.0", "id": None, "error": {"code": error.code, "message": error.message}})
+            return
+        self._send_response(ident, error=lsp.ResponseError(code=error.code, message=error.message))
 
     def _send_handler_result(self, future: Future[Any], *, msg_id: Any) -> None:
         """Answer a request from its handler's future (overrides pygls: no traceback, logged in one line)."""

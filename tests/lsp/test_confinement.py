@@ -46,7 +46,7 @@ option hidden_plan {
 }
 """
 SECRET_AGENTS = """include "secret.xabsl";
-include "hidden_plan.xabsl";
+include "plan.xabsl";
 /** SECRET_COMMENT of the agent */
 agent spy("SECRET_COMMENT agent", hidden_plan);
 """
@@ -56,7 +56,7 @@ def make_outside(tmp_path: Path) -> Path:
     outside = tmp_path / "outside"
     outside.mkdir()
     (outside / "secret.xabsl").write_text(SECRET_SYMBOLS)
-    (outside / "hidden_plan.xabsl").write_text(SECRET_OPTION)
+    (outside / "plan.xabsl").write_text(SECRET_OPTION)
     (outside / "agents.xabsl").write_text(SECRET_AGENTS)
     return outside
 
