@@ -29,11 +29,18 @@ def register(subparsers: Any) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The flags of ``xabsl lsp``: the transport (stdio or websocket) and the agents file."""
+    """The flags of ``xabsl lsp``: the transport (stdio or websocket, its origins) and the agents file."""
     parser.add_argument("--stdio", action="store_true", help="speak on stdin/stdout (the default)")
     parser.add_argument("--ws", action="store_true", help="serve websocket clients instead of stdio")
     parser.add_argument("--host", default="127.0.0.1", help="websocket address (default 127.0.0.1)")
     parser.add_argument("--port", type=int, default=2087, help="websocket port (default 2087)")
+    parser.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="with --ws: a web page origin whose pages may connect (default: none, only non-browser clients)",
+    )
     parser.add_argument(
         "--agents",
         default=None,
@@ -44,10 +51,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Serve the language server until the client exits; the exit status."""
-    from xabsl_studio.lsp.server import serve_stdio, serve_websocket
+    from xabsl_studio.lsp.bridge import serve_websocket
+    from xabsl_studio.lsp.server import serve_stdio
 
     if args.ws:
-        serve_websocket(args.host, args.port, args.agents)
+        serve_websocket(args.host, args.port, args.agents, args.allow_origin)
     else:
         serve_stdio(args.agents)
     return 0

@@ -20,6 +20,9 @@ The pipeline is the one of :func:`xabsl_studio.engine.lang.compile_file` (the sa
 with the same rule that options of files with syntax errors are not checked), so the diagnostics
 are the compiler's; ``tests/lsp`` compares them.
 
+Every file is read through a :class:`~xabsl_studio.lsp.access.FileAccess` (the allowed roots, regular
+``.xabsl`` files, a size bound): an ``include`` that leaves the roots is a diagnostic, not a read.
+
 This module does not import pygls: :mod:`xabsl_studio.lsp.server` adapts it to the protocol.
 """
 
@@ -41,6 +44,7 @@ from xabsl_studio.engine.lang.parser import parse_file
 from xabsl_studio.engine.lang.symbols import Declarations, OptionHeader, SymbolTable
 from xabsl_studio.engine.lang.tokens import Token, decode_source, tokenize
 from xabsl_studio.engine.types import Span
+from xabsl_studio.lsp.access import FileAccess, OutsideRoots
 
 #: What a name occurrence stands for: ("option", name), ("behavior", name), ("input", name),
 #: ("output", name), ("constant", name), ("enum", name), ("element", qualified element),
@@ -319,11 +323,18 @@ def _header_signature(decl: ast.OptionDecl) -> tuple[object, ...]:
 
 
 class Project:
-    """One agents file's include closure, with unsaved editor texts laid over the files on disk."""
+    """One agents file's include closure, with unsaved editor texts laid over the files on disk.
 
-    def __init__(self, agents: str, base: str | None = None) -> None:
+    Args:
+        agents: the agents file (or a lone file compiled on its own).
+        base: the folder display names are relative to (default: the agents file's).
+        access: which files may be read (default: the agents file's folder and below).
+    """
+
+    def __init__(self, agents: str, base: str | None = None, access: FileAccess | None = None) -> None:
         self.agents = os.path.realpath(agents)
         self.base = os.path.realpath(base or os.path.dirname(self.agents))
+        self.access = access or FileAccess([os.path.dirname(self.agents)])
         self.overlays: dict[str, str] = {}
         self.sources: dict[str, SourceState] = {}
         self._interface: tuple[object, ...] | None = None
@@ -379,7 +390,7 @@ class Project:
             return cached  # a keystroke elsewhere: the disk was looked at a moment ago
         else:
             try:
-                stat = os.stat(real)
+                stat = os.stat(self.access.check(real))
             except OSError as error:
                 diagnostics.add("unreadable-file", f"unable to read file: {error.strerror}", None, shown)
                 self.sources.pop(real, None)
@@ -388,8 +399,7 @@ class Project:
             if cached is not None and cached.stamp == stamp:
                 return cached
             try:
-                with open(real, "rb") as handle:
-                    text = decode_source(handle.read())
+                text = decode_source(self.access.read(real))
             except OSError as error:
                 diagnostics.add("unreadable-file", f"unable to read file: {error.strerror}", None, shown)
                 self.sources.pop(real, None)
@@ -411,6 +421,16 @@ class Project:
             target = os.path.realpath(os.path.join(os.path.dirname(real), include))
             self._resolved[key] = target
         return target
+
+    def _unopenable(self, include: str, target: str) -> str:
+        """Why an included file is not read: outside the roots, not a regular file, or missing."""
+        try:
+            self.access.check(target)
+        except OutsideRoots as error:
+            return f"unable to open file '{include}': {error.strerror}"
+        if os.path.exists(target):
+            return f"unable to open file '{include}': not a regular file"
+        return f"unable to open file '{include}'"
 
     def _load(self, diagnostics: Diagnostics) -> tuple[ast.SourceFile | None, list[SourceState]]:
         """The include closure as :func:`xabsl_studio.engine.lang.loader.load` reads it, from the cache."""
@@ -438,8 +458,8 @@ class Project:
                 if target in seen:
                     continue
                 known = target in self.overlays or (not self._look_at_disk and target in self.sources)
-                if not known and not os.path.isfile(target):
-                    diagnostics.add("missing-include-file", f"unable to open file '{include.path}'", include.span)
+                if not known and not self.access.is_file(target):
+                    diagnostics.add("missing-include-file", self._unopenable(include.path, target), include.span)
                     continue
                 visit(target)
             files.append(state)

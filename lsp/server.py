@@ -8,16 +8,27 @@ and the checker's resolutions (definition, references, rename, symbols).
 A document belongs to the behavior set of the nearest ``agents.xabsl`` above it that includes
 it (or the agents file given with ``--agents`` / the ``agents`` initialization option); a file
 outside every such set is compiled on its own.
+
+The server reads only what :mod:`xabsl_studio.lsp.access` allows (the allowed roots, regular ``.xabsl``
+files, a size bound) and the texts the client sent; a request about a document that is neither
+is refused with "invalid params". :mod:`xabsl_studio.lsp.rpc` answers every request, malformed or not,
+without a traceback.
 """
 
 from __future__ import annotations
 
 import os
 import re
+import sys
 from bisect import bisect_left
+from collections import Counter
 from collections.abc import Iterable
+from typing import BinaryIO
+from urllib.parse import unquote
 
 from lsprotocol import types as lsp
+from pygls.exceptions import JsonRpcException, JsonRpcInvalidParams, JsonRpcInvalidRequest
+from pygls.io_ import StdoutWriter
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
@@ -26,7 +37,10 @@ from xabsl_studio.engine.lang import ast, deep_recursion
 from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
 from xabsl_studio.engine.lang.tokens import KEYWORDS, Token, TokenType, decode_source, tokenize
 from xabsl_studio.engine.types import Kind, Span
+from xabsl_studio.lsp.access import FileAccess
 from xabsl_studio.lsp.project import Analysis, Key, Occurrence, Project, SourceState
+from xabsl_studio.lsp.rpc import XabslProtocol, handle_text
+from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
 
 AGENTS_FILE = "agents.xabsl"
 VALUE_KEYWORDS = ("true", "false", "state_time", "option_time", "action_done", "conflict")
@@ -77,22 +91,21 @@ _WHAT = {
 }
 
 
-def _agents_files(folder: str) -> list[str]:
-    """The agents files of ``folder``: ``agents.xabsl`` first, then other files declaring agents."""
+def _agents_files(folder: str, access: FileAccess) -> list[str]:
+    """The agents files of ``folder``: ``agents.xabsl`` first, then other files declaring agents.
+
+    Only a folder inside the allowed roots is looked through, and only regular files there are read.
+    """
     found: list[str] = []
-    try:
-        names = sorted(os.listdir(folder))
-    except OSError:
-        return found
-    if AGENTS_FILE in names:
+    names = access.names(folder)
+    if AGENTS_FILE in names and access.is_file(os.path.join(folder, AGENTS_FILE)):
         found.append(os.path.realpath(os.path.join(folder, AGENTS_FILE)))
     for name in names:
         if not name.endswith(".xabsl") or name == AGENTS_FILE:
             continue
         path = os.path.join(folder, name)
         try:
-            with open(path, "rb") as handle:
-                text = decode_source(handle.read(1_000_000))
+            text = decode_source(access.read(path))
         except OSError:
             continue
         if "agent" in text and any(t.is_kw("agent") for t in tokenize(text, name, Diagnostics())):
@@ -116,14 +129,48 @@ def _param_line(p: ir.Parameter) -> str:
     return f"- `{type_text(p.kind, p.enum)} {p.short_name}`{' ' + facts if facts else ''}{doc}"
 
 
+def document_path(uri: object) -> str:
+    """The real path a document URI names (percent-decoded, links resolved).
+
+    Raises:
+        JsonRpcInvalidParams: not a ``file:`` URI, or one with a NUL byte.
+    """
+    path = to_fs_path(uri) if isinstance(uri, str) else None
+    if path is None:
+        raise JsonRpcInvalidParams(f"{_short(uri)} is no file: URI")
+    path = unquote(path)
+    if "\0" in path:
+        raise JsonRpcInvalidParams("a document URI with a NUL byte")
+    return os.path.realpath(path)
+
+
+def _short(text: object) -> str:
+    """A client's value for an error message, cut to a readable length."""
+    shown = repr(text) if not isinstance(text, str) else text
+    return shown if len(shown) <= 200 else shown[:200] + "..."
+
+
 class XabslLanguageServer(LanguageServer):
     """pygls' language server holding the behavior sets (projects) the editor has open."""
 
-    def __init__(self, agents: str | None = None, root: str | None = None) -> None:
-        super().__init__("xabsl-lsp", "0.1.0", text_document_sync_kind=lsp.TextDocumentSyncKind.Incremental)
+    protocol: XabslProtocol
+
+    def __init__(self, agents: str | None = None, root: str | None = None, access: FileAccess | None = None) -> None:
+        super().__init__(
+            "xabsl-lsp",
+            "0.1.0",
+            text_document_sync_kind=lsp.TextDocumentSyncKind.Incremental,
+            protocol_cls=XabslProtocol,
+        )
         self.fixed_agents = os.path.realpath(agents) if agents else None
         #: the behavior folder a browser client builds its document URIs on (``xabsl/root``)
         self.root = os.path.realpath(root) if root else None
+        #: what the server may read (lsp/access.py)
+        self.access = access or FileAccess(
+            [os.path.dirname(self.fixed_agents)] if self.fixed_agents else [], client_roots=True
+        )
+        #: the real paths of the documents the client has open (their text is the client's)
+        self.opened: set[str] = set()
         self.projects: dict[str, Project] = {}
         #: files compiled on their own (no agents file includes them), asked again on each change
         self.standalone: set[str] = set()
@@ -156,7 +203,7 @@ class XabslLanguageServer(LanguageServer):
                 return agents
         folder = os.path.dirname(real)
         while True:
-            for candidate in _agents_files(folder):
+            for candidate in _agents_files(folder, self.access):
                 if candidate == real or real in self.project(candidate).analyze().by_real:
                     return candidate
             parent = os.path.dirname(folder)
@@ -168,14 +215,32 @@ class XabslLanguageServer(LanguageServer):
     def project(self, agents: str) -> Project:
         """The project of an agents file, made on first use."""
         if agents not in self.projects:
-            self.projects[agents] = Project(agents)
+            self.projects[agents] = Project(agents, access=self.access)
         return self.projects[agents]
 
-    def project_of(self, uri: str) -> tuple[Project, str]:
-        """The project a document belongs to, and the document's real path."""
-        path = to_fs_path(uri) or uri
-        real = os.path.realpath(path)
+    def project_of(self, uri: str, opening: bool = False) -> tuple[Project, str]:
+        """The project a document belongs to, and the document's real path.
+
+        Raises:
+            JsonRpcInvalidParams: no file URI, or a document that is neither open (``opening``:
+                being opened) nor one the server may read.
+        """
+        real = document_path(uri)
+        if not (opening or real in self.opened or self.access.allows(real)):
+            raise JsonRpcInvalidParams(f"{_short(uri)} is not open and outside the behavior folders served here")
         return self.project(self.agents_for(real)), real
+
+    def client_folders(self) -> None:
+        """Take the client's workspace folders and ``rootUri`` as allowed roots (``xabsl lsp`` only)."""
+        uris = [f.uri for f in self.workspace.folders.values()]
+        if self.workspace.root_uri:
+            uris.append(self.workspace.root_uri)
+        paths = []
+        for u in uris:
+            path = to_fs_path(u)
+            if path is not None:
+                paths.append(unquote(path))
+        self.access.grant(paths)
 
     # ------------------------------------------------------------------ conversions
 
@@ -331,9 +396,22 @@ class XabslLanguageServer(LanguageServer):
         return next((p for p in params if p.short_name == short), None)
 
 
-def create_server(agents: str | None = None, root: str | None = None) -> XabslLanguageServer:
-    """A language server with every feature registered (one per connection)."""
-    server = XabslLanguageServer(agents, root)
+def create_server(
+    agents: str | None = None, root: str | None = None, roots: Iterable[str] | None = None
+) -> XabslLanguageServer:
+    """A language server with every feature registered (one per connection).
+
+    Args:
+        agents: the agents file of every document (``--agents``); its folder is served.
+        root: the folder ``xabsl/root`` answers (the studio's example folder).
+        roots: the only folders served (the studio's behavior folders); None: the client's
+            workspace folders are served too (``xabsl lsp``, the user's own editor).
+    """
+    if roots is None:
+        access = FileAccess([os.path.dirname(os.path.realpath(agents))] if agents else [], client_roots=True)
+    else:
+        access = FileAccess(roots)
+    server = XabslLanguageServer(agents, root, access)
 
     @server.feature("xabsl/root")
     def root_uri(ls: XabslLanguageServer, params: object) -> dict[str, str | None]:
@@ -343,13 +421,31 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
 
     @server.feature(lsp.INITIALIZE)
     def initialize(ls: XabslLanguageServer, params: lsp.InitializeParams) -> None:
+        ls.client_folders()
         options = params.initialization_options
-        if isinstance(options, dict) and isinstance(options.get("agents"), str):
-            ls.fixed_agents = os.path.realpath(options["agents"])
+        if isinstance(options, dict) and options.get("agents") is not None:
+            agents = options["agents"]
+            if not isinstance(agents, str) or not agents or "\0" in agents:
+                raise JsonRpcInvalidParams("initializationOptions.agents: the path of an agents file")
+            real = os.path.realpath(agents)
+            ls.access.add(os.path.dirname(real))  # xabsl lsp: the user's editor names its agents file
+            if not ls.access.allows(real):
+                raise JsonRpcInvalidParams(
+                    f"initializationOptions.agents: {_short(agents)} is outside the behavior folders served here"
+                )
+            ls.fixed_agents = real
+
+    @server.feature(lsp.WORKSPACE_DID_CHANGE_WORKSPACE_FOLDERS)
+    def folders_changed(ls: XabslLanguageServer, params: lsp.DidChangeWorkspaceFoldersParams) -> None:
+        ls.client_folders()
 
     def changed(ls: XabslLanguageServer, uri: str) -> None:
-        project, real = ls.project_of(uri)
-        document = ls.workspace.get_text_document(uri)
+        # pygls keeps the documents the client opened; a change to another one has no text
+        document = ls.workspace.text_documents.get(unquote(uri))
+        if document is None:
+            return
+        project, real = ls.project_of(uri, opening=True)
+        ls.opened.add(real)
         project.set_text(real, document.source)
         ls.publish(project, real)
 
@@ -369,7 +465,11 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: XabslLanguageServer, params: lsp.DidCloseTextDocumentParams) -> None:
-        project, real = ls.project_of(params.text_document.uri)
+        real = document_path(params.text_document.uri)
+        if real not in ls.opened:
+            return
+        project, _ = ls.project_of(params.text_document.uri)
+        ls.opened.discard(real)
         project.close(real)
         ls.publish(project)
 
@@ -455,15 +555,20 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
         new = params.new_name.strip()
         bare = new[1:] if new.startswith("@") else new
         if not _IDENTIFIER.fullmatch(new) or bare in KEYWORDS or (new.startswith("@") and occurrence.key[0] != "param"):
-            raise ValueError(f"'{params.new_name}' is no valid XABSL name")
+            raise JsonRpcInvalidParams(f"'{_short(params.new_name)}' is no valid XABSL name")
         key = occurrence.key
-        changes: dict[str, list[lsp.TextEdit]] = {}
-        for real, o in analysis.references(key):
-            text = _renamed(key, o, bare, analysis.table.elements.get(key[1]) if key[0] == "element" else None)
-            uri = from_fs_path(real) or real
-            changes.setdefault(uri, []).append(lsp.TextEdit(ls.range_of(analysis.by_real[real], o.start, o.end), text))
+        enum = analysis.table.elements.get(key[1]) if key[0] == "element" else None
+        edits = [(real, o, _renamed(key, o, bare, enum)) for real, o in analysis.references(key)]
         # names qualified by the renamed one: 'Enum.element', 'option.parameter'
-        for real, o, text in _qualified_by(analysis, key, bare):
+        edits += list(_qualified_by(analysis, key, bare))
+        project, _ = ls.project_of(params.text_document.uri)
+        clash = _breaks(project, analysis, edits)
+        if clash is not None:
+            raise JsonRpcException(
+                f"cannot rename '{occurrence.text}' to '{new}': {clash}", code=lsp.LSPErrorCodes.RequestFailed
+            )
+        changes: dict[str, list[lsp.TextEdit]] = {}
+        for real, o, text in edits:
             uri = from_fs_path(real) or real
             changes.setdefault(uri, []).append(lsp.TextEdit(ls.range_of(analysis.by_real[real], o.start, o.end), text))
         if key[0] == "option" and _can_rename_files(ls):
@@ -563,7 +668,10 @@ def create_server(agents: str | None = None, root: str | None = None) -> XabslLa
     def resolve(ls: XabslLanguageServer, item: lsp.CompletionItem) -> lsp.CompletionItem:
         data = item.data
         if isinstance(data, dict) and isinstance(data.get("uri"), str) and isinstance(data.get("key"), list):
-            project, _ = ls.project_of(data["uri"])
+            try:
+                project, _ = ls.project_of(data["uri"])
+            except JsonRpcInvalidParams:
+                return item  # an item of a document not served here: nothing to add
             key = tuple(str(k) for k in data["key"])
             item.documentation = lsp.MarkupContent(lsp.MarkupKind.Markdown, ls.describe(project.analyze(), key))
         return item
@@ -629,6 +737,32 @@ def _option_file_rename(
     ]
     document_changes.append(lsp.RenameFile(old_uri=from_fs_path(real) or real, new_uri=from_fs_path(target) or target))
     return lsp.WorkspaceEdit(document_changes=document_changes)
+
+
+def _breaks(project: Project, analysis: Analysis, edits: list[tuple[str, Occurrence, str]]) -> str | None:
+    """The first error a rename would add to the behavior set (a name already in use...), or None.
+
+    The edited texts are checked as the compiler checks them, in a scratch project beside the
+    open one: whatever the compiler calls a clash (two options, states or parameters of one
+    name; an option named like a basic behavior...) refuses the rename.
+    """
+    texts: dict[str, str] = {}
+    for real in dict.fromkeys(real for real, _, _ in edits):
+        text = analysis.by_real[real].text
+        for _, o, new in sorted((e for e in edits if e[0] == real), key=lambda e: e[1].start, reverse=True):
+            text = text[: o.start] + new + text[o.end :]
+        texts[real] = text
+    scratch = Project(project.agents, project.base, project.access)
+    for real, text in {**project.overlays, **texts}.items():
+        scratch.set_text(real, text)
+    after = scratch.analyze()
+    new_errors = Counter(d.code for d in after.all_diagnostics() if d.is_error) - Counter(
+        d.code for d in analysis.all_diagnostics() if d.is_error
+    )
+    added = [d for d in after.all_diagnostics() if d.is_error and new_errors[d.code]]
+    # the clash itself ("defined more than once") says more than what follows from it
+    added.sort(key=lambda d: d.code != "duplicate-definition")
+    return added[0].format() if added else None
 
 
 def _qualified_by(analysis: Analysis, key: Key, new: str) -> Iterable[tuple[str, Occurrence, str]]:
@@ -1095,14 +1229,56 @@ def _strip(name: str) -> str:
     return name[1:] if name.startswith("@") else name
 
 
-def serve_stdio(agents: str | None = None) -> None:
-    """Speak the protocol on stdin/stdout until the client says exit."""
-    create_server(agents).start_io()
+#: Longest header line of a stdio message (``Content-Length: N`` and ``Content-Type: ...``).
+MAX_HEADER_LINE = 4096
 
 
-def serve_websocket(host: str, port: int, agents: str | None = None) -> None:
-    """Speak the protocol to websocket clients on ``host:port`` (one message per frame)."""
-    create_server(agents).start_ws(host, port)
+def read_message(stream: BinaryIO, limit: int) -> bytes | int | None:
+    """The body of the next ``Content-Length`` framed message on ``stream``; None at its end.
+
+    A body over ``limit`` bytes is read away in pieces and only its length returned, so a
+    runaway length neither fills the memory nor loses the framing.
+    """
+    while True:
+        length: int | None = None
+        while True:
+            line = stream.readline(MAX_HEADER_LINE)
+            if not line:
+                return None
+            if not line.strip():
+                break
+            name, _, value = line.decode("latin-1").partition(":")
+            if name.strip().lower() == "content-length" and value.strip().isdigit():
+                length = int(value.strip())
+        if length is None:
+            continue  # headers without a length: nothing to read, wait for the next message
+        if length > limit:
+            while length > 0:
+                piece = stream.read(min(length, 1 << 20))
+                if not piece:
+                    return None
+                length -= len(piece)
+            return limit + 1
+        body = stream.read(length)
+        if len(body) < length:
+            return None
+        return body
 
 
-__all__ = ["XabslLanguageServer", "create_server", "serve_stdio", "serve_websocket", "type_text"]
+def serve_stdio(agents: str | None = None, stdin: BinaryIO | None = None, stdout: BinaryIO | None = None) -> None:
+    """Speak the protocol on stdin/stdout until the client says exit (or closes stdin)."""
+    server = create_server(agents)
+    server.protocol.set_writer(StdoutWriter(stdout or sys.stdout.buffer))
+    reader = stdin or sys.stdin.buffer
+    try:
+        while (body := read_message(reader, MAX_LSP_MESSAGE_BYTES)) is not None:
+            if isinstance(body, int):
+                too_big = JsonRpcInvalidRequest(f"Invalid Request: a message over {MAX_LSP_MESSAGE_BYTES} bytes")
+                server.protocol.reply_error(None, too_big)
+                continue
+            handle_text(server.protocol, body)
+    except BrokenPipeError:
+        pass  # the editor went away
+
+
+__all__ = ["XabslLanguageServer", "create_server", "document_path", "read_message", "serve_stdio", "type_text"]

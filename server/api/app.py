@@ -52,7 +52,7 @@ from xabsl_studio.server.api.profile import router as profile_router
 from xabsl_studio.server.api.security import SecurityMiddleware, SecurityPolicy
 from xabsl_studio.server.api.studios import Studios, StudiosMiddleware
 from xabsl_studio.server.protocol.commands import Command, History, Reload, guess_id, openapi_schemas, parse_command
-from xabsl_studio.server.protocol.limits import HISTORY_CHUNK, MAX_CLIENTS, VERSION
+from xabsl_studio.server.protocol.limits import HISTORY_CHUNK, MAX_CLIENTS, MAX_LSP_CLIENTS, VERSION, CloseCode
 from xabsl_studio.server.protocol.replies import CompileEvent, FileEvent, Reply, RestReply, encode, encode_history_chunk
 from xabsl_studio.server.protocol.types import (
     BEHAVIOR_PARAMS_INDEX,
@@ -147,6 +147,8 @@ class Studio:
         self.files = BehaviorFiles(session.example.root, [f for s in session.example.sources for f in s.file_folders])
         self.graphs = GraphCache()
         self.hub: Hub | None = None
+        #: open ``/lsp`` connections (capped at ``MAX_LSP_CLIENTS``)
+        self.lsp_connections = 0
         self.write_lock = asyncio.Lock()
         #: the include closures' files as last seen, to notice changes made outside the studio
         self.watcher = FileWatcher(self.files.root)
@@ -350,12 +352,37 @@ async def websocket(ws: WebSocket) -> None:
 
 @router.websocket("/lsp")
 async def language_server(ws: WebSocket) -> None:
-    """The XABSL language server for the editor (docs/editors.md): LSP, one message per text frame."""
+    """The XABSL language server for the editor (docs/editors.md): LSP, one message per text frame.
+
+    It serves the behavior folders only (docs/security.md); over ``MAX_LSP_CLIENTS`` connections
+    a new one is closed with 1013, as ``/ws`` does.
+    """
     from xabsl_studio.lsp.bridge import serve_connection  # pygls is imported only when an editor connects
 
     studio: Studio = ws.app.state.studio
     await ws.accept()
-    await serve_connection(ws.receive_text, ws.send_text, studio.session.example.root)
+    if studio.lsp_connections >= MAX_LSP_CLIENTS:
+        await ws.close(CloseCode.TRY_AGAIN_LATER)
+        return
+    studio.lsp_connections += 1
+
+    async def receive() -> str | bytes | None:
+        message = await ws.receive()
+        if message["type"] == "websocket.disconnect":
+            return None
+        text: str | None = message.get("text")
+        return text if text is not None else bytes(message.get("bytes") or b"")
+
+    try:
+        await serve_connection(
+            receive,
+            ws.send_text,
+            lambda code: ws.close(code),
+            roots=[str(f) for f in studio.files.folders],
+            root=str(studio.session.example.root),
+        )
+    finally:
+        studio.lsp_connections -= 1
 
 
 # -- session --------------------------------------------------------------------------------------

@@ -17,6 +17,15 @@ MAX_MESSAGE_BYTES = 64 * 1024
 #: travels whole, JSON-escaped, and files may be 16 MiB (``xabsl_studio.server.session.files.MAX_FILE_BYTES``). It is
 #: uvicorn's ``ws_max_size``; ``/ws`` keeps its own lower limit.
 MAX_LSP_MESSAGE_BYTES = 40 * 1024 * 1024
+#: Most language-server connections at once, per studio and per ``xabsl lsp --ws`` (close 1013 above):
+#: each holds its own parsed behavior set.
+MAX_LSP_CLIENTS = 16
+#: Threads that handle language-server messages, shared by every connection of the process: more
+#: would only compete with the event loop for the interpreter (the studio's frames would stall).
+MAX_LSP_WORKERS = 2
+#: Answers waiting for one language-server client; a client that sends without reading them is
+#: closed with 1008 when it has this many.
+MAX_LSP_PENDING = 4096
 #: Largest REST request body in bytes (413 above).
 MAX_BODY_BYTES = 1024 * 1024
 #: Most websocket clients at once (close 1013 above).

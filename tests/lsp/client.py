@@ -40,6 +40,8 @@ class LspClient:
         self.responses: dict[int, queue.Queue[dict[str, Any]]] = {}
         self.notifications: queue.Queue[dict[str, Any]] = queue.Queue()
         self.diagnostics: dict[str, list[dict[str, Any]]] = {}
+        #: the text of every message the server sent (leak checks search it)
+        self.received: list[str] = []
         self.lock = threading.Lock()
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()
@@ -58,7 +60,9 @@ class LspClient:
                     break
                 name, _, value = line.decode().partition(":")
                 headers[name.lower()] = value.strip()
-            body = json.loads(stream.read(int(headers["content-length"])))
+            raw = stream.read(int(headers["content-length"]))
+            self.received.append(raw.decode("utf-8", "replace"))
+            body = json.loads(raw)
             if "id" in body and "method" not in body:
                 with self.lock:
                     box = self.responses.setdefault(body["id"], queue.Queue())
@@ -77,13 +81,17 @@ class LspClient:
         stdin.write(b"Content-Length: %d\r\n\r\n" % len(data) + data)
         stdin.flush()
 
-    def request(self, method: str, params: Any, timeout: float = 30) -> Any:
+    def call(self, method: str, params: Any, timeout: float = 30) -> dict[str, Any]:
+        """The whole answer to a request: its ``result`` or its ``error``."""
         self.next_id += 1
         ident = self.next_id
         with self.lock:
             box = self.responses.setdefault(ident, queue.Queue())
         self._send({"jsonrpc": "2.0", "id": ident, "method": method, "params": params})
-        answer = box.get(timeout=timeout)
+        return box.get(timeout=timeout)
+
+    def request(self, method: str, params: Any, timeout: float = 30) -> Any:
+        answer = self.call(method, params, timeout)
         if "error" in answer:
             raise RuntimeError(answer["error"])
         return answer.get("result")

@@ -10,10 +10,15 @@ import subprocess
 import sys
 import time
 import tomllib
+from collections.abc import Iterator
+from pathlib import Path
 
-from websockets.sync.client import connect
+import pytest
+from websockets.exceptions import InvalidStatus
+from websockets.sync.client import ClientConnection, connect
 
 from tests.lsp.client import ROOT
+from tests.lsp.wire import WsRpc
 
 
 def test_the_subcommand_is_registered_through_the_entry_point_group() -> None:
@@ -80,3 +85,67 @@ def test_websocket_transport() -> None:
     finally:
         process.kill()
         process.wait()
+
+
+@pytest.fixture
+def ws_server() -> Iterator[int]:
+    """``xabsl lsp --ws`` as its own process; its port."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = int(s.getsockname()[1])
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "lsp", "--ws", "--port", str(port), "--allow-origin", "http://localhost:5173"],
+        env=env,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                with socket.create_connection(("127.0.0.1", port), timeout=1):
+                    break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
+        yield port
+    finally:
+        process.kill()
+        process.wait()
+
+
+def open_ws(port: int, **kwargs: object) -> ClientConnection:
+    return connect(f"ws://127.0.0.1:{port}", open_timeout=10, max_size=None, **kwargs)  # type: ignore[arg-type]
+
+
+def test_websocket_refuses_web_pages_of_other_origins(ws_server: int) -> None:
+    # any page open in a browser could connect to a loopback port: only the allowed origin may
+    with pytest.raises(InvalidStatus):
+        open_ws(ws_server, origin="http://evil.example").close()
+    with open_ws(ws_server, origin="http://localhost:5173") as ws:
+        assert WsRpc(ws).initialize()["capabilities"]["hoverProvider"]
+
+
+def test_websocket_connections_have_their_own_server(ws_server: int, tmp_path: Path) -> None:
+    # pygls' own transport shared one server: answers went to the last client, one's exit ended all
+    demo = ROOT / "examples" / "demo"
+    secret = tmp_path / "secret.xabsl"
+    secret.write_text('namespace secret("x") {\n  float input secret_input;\n}\n')
+    with open_ws(ws_server) as first, open_ws(ws_server) as second:
+        a, b = WsRpc(first), WsRpc(second)
+        a.initialize(demo.as_uri())
+        b.initialize(tmp_path.as_uri())
+        play = (demo / "options" / "play.xabsl").as_uri()
+        outline = a.request("textDocument/documentSymbol", {"textDocument": {"uri": play}})
+        assert [s["name"] for s in outline] == ["play"]
+        # each connection's roots are its own workspace's
+        refused = a.call("textDocument/documentSymbol", {"textDocument": {"uri": secret.as_uri()}})
+        assert "outside the behavior folders" in refused["error"]["message"]
+        assert (
+            b.request("textDocument/documentSymbol", {"textDocument": {"uri": secret.as_uri()}})[0]["name"] == "secret"
+        )
+        a.notify("exit", None)
+        assert b.request("xabsl/root", None)["uri"] == tmp_path.resolve().as_uri()
