@@ -254,9 +254,15 @@ class _Parser:
             raise self.error(where, "this test file may not read other files")
 
     def number(self, value: Any, where: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(where, f"expected a finite number, got {value!r}")
-        return float(value)
+        try:
+            number = float(value)  # an integer of 400 digits is no float
+        except OverflowError:
+            number = math.inf
+        if not math.isfinite(number):
+            raise self.error(where, f"expected a finite number, got {_short(value)}")
+        return number
 
     def seconds(self, value: Any, where: str) -> float:
         seconds = self.number(value, where)
@@ -508,6 +514,12 @@ def _range_text(value: Any) -> str:
     if isinstance(value, list):
         return "one of " + ", ".join(map(str, value))
     return f"= {value}"
+
+
+def _short(value: Any) -> str:
+    """``value`` for a message: at most 60 characters of its repr."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _s(seconds: float) -> str:
