@@ -49,15 +49,8 @@ def read_regular(path: str | os.PathLike[str], limit: int = MAX_INPUT_BYTES) -> 
         FileTooLarge: more than ``limit`` bytes.
         OSError: the path cannot be opened (missing, no permission, name too long...).
     """
-    # O_NONBLOCK: opening a FIFO for reading returns at once instead of waiting for a writer;
-    # the kind is then checked on the open descriptor, so a swap after a stat cannot slip by.
-    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    fd = _open_regular(path, limit)
     try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise NotRegularFile(path)
-        if info.st_size > limit:
-            raise FileTooLarge(path, limit)
         chunks: list[bytes] = []
         size = 0
         while True:
@@ -71,6 +64,41 @@ def read_regular(path: str | os.PathLike[str], limit: int = MAX_INPUT_BYTES) -> 
         return b"".join(chunks)
     finally:
         os.close(fd)
+
+
+def check_regular(path: str | os.PathLike[str], limit: int | None = None) -> int:
+    """The size of the regular file at ``path`` (symlinks followed), checked without reading it.
+
+    For a reader that opens the file itself (a recording's MCAP reader): a FIFO, device or folder
+    is refused here, before that reader could block on it or read without end.
+
+    Raises:
+        NotRegularFile: a device, FIFO, socket or folder.
+        FileTooLarge: more than ``limit`` bytes (when given).
+        OSError: the path cannot be opened.
+    """
+    fd = _open_regular(path, limit)
+    try:
+        return os.fstat(fd).st_size
+    finally:
+        os.close(fd)
+
+
+def _open_regular(path: str | os.PathLike[str], limit: int | None) -> int:
+    """A descriptor of the regular file at ``path``, at most ``limit`` bytes large (else raises)."""
+    # O_NONBLOCK: opening a FIFO for reading returns at once instead of waiting for a writer;
+    # the kind is then checked on the open descriptor, so a swap after a stat cannot slip by.
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise NotRegularFile(path)
+        if limit is not None and info.st_size > limit:
+            raise FileTooLarge(path, limit)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
 
 
 def resolve_output(path: str | os.PathLike[str]) -> str:

@@ -10,7 +10,7 @@ import pytest
 
 from tests.kit import KIT
 from xabsl_studio.engine.cli import main
-from xabsl_studio.engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
+from xabsl_studio.engine.files import FileTooLarge, NotRegularFile, check_regular, read_regular, write_atomically
 
 AGENTS = KIT / "demo-approach" / "agents.xabsl"
 
@@ -87,3 +87,23 @@ def test_read_regular_refuses_fifos_devices_and_oversize(tmp_path: Path) -> None
     assert read_regular(big, 1001) == b"x" * 1001
     with pytest.raises(FileNotFoundError):
         read_regular(tmp_path / "missing", 10)
+
+
+def test_check_regular_refuses_what_a_reader_of_its_own_would_block_on(tmp_path: Path) -> None:
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for path in (fifo, Path("/dev/zero"), tmp_path):
+        with pytest.raises(NotRegularFile):
+            check_regular(path)
+    file = tmp_path / "file"
+    file.write_bytes(b"x" * 10)
+    link = tmp_path / "link"
+    link.symlink_to(file)
+    assert check_regular(link) == 10
+    with pytest.raises(FileTooLarge):
+        check_regular(file, 9)
+    fds = len(os.listdir("/proc/self/fd"))
+    for _ in range(20):
+        with pytest.raises(NotRegularFile):
+            check_regular(fifo)
+    assert len(os.listdir("/proc/self/fd")) == fds, "a refused file's descriptor is closed"

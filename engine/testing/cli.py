@@ -71,8 +71,8 @@ def collect(paths: Iterable[str | Path]) -> list[Case]:
         path = Path(raw)
         if path.is_dir():
             files = sorted(path.rglob(f"*{SUFFIX}"))
-        elif path.is_file():
-            files = [path]
+        elif path.exists():
+            files = [path]  # load_suite reads regular files only: a FIFO or device is an error
         else:
             raise SpecError(f"{path}: no such test file or folder")
         for file in files:
@@ -105,7 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from xabsl_studio.engine.testing.coverage import Coverage
-    from xabsl_studio.engine.testing.report import KeywordError, keyword_matcher, write_junit
+    from xabsl_studio.engine.testing.report import KeywordError, keyword_matcher, printable, write_junit
     from xabsl_studio.engine.testing.spec import SpecError
 
     try:
@@ -114,7 +114,7 @@ def _run(args: argparse.Namespace) -> int:
             matcher: Any = keyword_matcher(args.keyword)
             cases = [c for c in cases if matcher(c.id)]
     except (SpecError, KeywordError) as error:
-        print(f"xabsl test: {error}", file=sys.stderr)
+        print(f"xabsl test: {printable(str(error), lines=True)}", file=sys.stderr)
         return 2
     if args.jobs < 1:
         print("xabsl test: --jobs must be at least 1", file=sys.stderr)
@@ -124,11 +124,11 @@ def _run(args: argparse.Namespace) -> int:
         return 1
     recordings = None if args.no_recordings else Path(args.recordings)
     results = run_cases(cases, args.jobs, recordings)
-    for result in results:
+    for result in results:  # names and values from the test files are shown, never obeyed
         if not result.ok:
-            print(result.report())
+            print(printable(result.report(), lines=True))
         elif not args.quiet:
-            print(f"{result.id}: passed ({result.ticks} ticks, {result.seconds:.2f} s)")
+            print(printable(f"{result.id}: passed ({result.ticks} ticks, {result.seconds:.2f} s)"))
     for line in Coverage.total(r.coverage for r in results).lines():
         print(line)
     passed = sum(r.ok for r in results)

@@ -3,12 +3,15 @@
 The JUnit file is the common dialect CI servers read: ``<testsuites>`` with one ``<testsuite>``
 per test file, one ``<testcase classname=SUITE name=TEST time=S>`` per test, a ``<failure
 message=...>`` (the first failed assertion; the text has all of them and the recording) or an
-``<error message=...>`` for a test that could not run. Written atomically.
+``<error message=...>`` for a test that could not run. Written atomically; names and messages
+are :func:`printable` first (control characters would make the XML unreadable, and drive the
+terminal the console report goes to).
 """
 
 from __future__ import annotations
 
 import re
+import unicodedata
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
@@ -17,11 +20,39 @@ from xabsl_studio.engine.errors import BehaviorTestError
 from xabsl_studio.engine.files import write_atomically
 from xabsl_studio.engine.testing.runner import CaseResult
 
-__all__ = ["KeywordError", "junit_xml", "keyword_matcher", "write_junit"]
+__all__ = ["KeywordError", "junit_xml", "keyword_matcher", "printable", "write_junit"]
+
+
+#: Characters shown as escapes: C0/C1 controls (escape sequences could drive a terminal), format
+#: characters (bidi overrides), line and paragraph separators, surrogates, and the noncharacters
+#: XML cannot hold.
+_HIDDEN = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
+
+
+def printable(text: str, lines: bool = False) -> str:
+    """``text`` with every invisible or control character as an escape (``\\x1b``, ``\\u202e``).
+
+    Names and messages of a test file go to a terminal and into XML: escaped, they can neither
+    drive the terminal nor make the XML unreadable, and still say what the file holds. With
+    ``lines``, line breaks and tabs stay (a multi-line report).
+    """
+    out = []
+    for char in text:
+        code = ord(char)
+        if lines and char in "\n\t":
+            out.append(char)
+        elif unicodedata.category(char) in _HIDDEN or code in (0xFFFE, 0xFFFF):
+            out.append(f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}")
+        else:
+            out.append(char)
+    return "".join(out)
 
 
 def junit_xml(results: Sequence[CaseResult]) -> str:
-    """The JUnit XML document of ``results`` (grouped by test file, in run order)."""
+    """The JUnit XML document of ``results`` (grouped by test file, in run order).
+
+    Names and messages are :func:`printable`, so the document parses whatever a test file holds.
+    """
     root = ET.Element("testsuites", name="xabsl test")
     groups: dict[str, list[CaseResult]] = {}
     for result in results:
@@ -30,8 +61,8 @@ def junit_xml(results: Sequence[CaseResult]) -> str:
         suite = ET.SubElement(
             root,
             "testsuite",
-            name=group[0].suite,
-            file=file,
+            name=printable(group[0].suite),
+            file=printable(file),
             tests=str(len(group)),
             failures=str(sum(r.status == "failed" for r in group)),
             errors=str(sum(r.status == "error" for r in group)),
@@ -40,14 +71,20 @@ def junit_xml(results: Sequence[CaseResult]) -> str:
         )
         for result in group:
             case = ET.SubElement(
-                suite, "testcase", classname=result.suite, name=result.name, file=file, time=f"{result.seconds:.3f}"
+                suite,
+                "testcase",
+                classname=printable(result.suite),
+                name=printable(result.name),
+                file=printable(file),
+                time=f"{result.seconds:.3f}",
             )
             if result.status == "failed":
-                failure = ET.SubElement(case, "failure", message=result.failures[0].message(), type="AssertionError")
-                failure.text = result.report()
+                message = printable(result.failures[0].message())
+                failure = ET.SubElement(case, "failure", message=message, type="AssertionError")
+                failure.text = printable(result.report(), lines=True)
             elif result.status == "error":
-                error = ET.SubElement(case, "error", message=result.error or "", type="TestSetupError")
-                error.text = result.report()
+                error = ET.SubElement(case, "error", message=printable(result.error or ""), type="TestSetupError")
+                error.text = printable(result.report(), lines=True)
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
@@ -61,6 +98,9 @@ class KeywordError(BehaviorTestError, ValueError):
     """A ``-k`` expression that does not parse."""
 
 
+#: Parentheses a ``-k`` expression may nest (pytest's own parser has a similar bound).
+MAX_KEYWORD_NESTING = 100
+
 _TOKEN = re.compile(r"\s*(?:(\()|(\))|([^\s()]+))")
 
 
@@ -68,7 +108,8 @@ def keyword_matcher(expression: str) -> object:
     """A predicate over test ids for ``-k``: words match as substrings (case-insensitive), with and/or/not.
 
     ``-k "goalie and not clear"`` selects the tests whose ``suite::test`` id contains ``goalie``
-    and not ``clear``, as pytest's ``-k`` does.
+    and not ``clear``, as pytest's ``-k`` does. Long chains of ``and``/``or``/``not`` are fine;
+    parentheses nest at most :data:`MAX_KEYWORD_NESTING` deep.
 
     Raises:
         KeywordError: an expression that does not parse.
@@ -86,13 +127,16 @@ def keyword_matcher(expression: str) -> object:
             position += 1
     if not tokens:
         raise KeywordError("-k: empty expression")
-    tree, rest = _or(tokens)
-    if rest:
-        raise KeywordError(f"-k {expression!r}: unexpected {rest[0]!r}")
+    parser = _KeywordParser(tokens)
+    tree = parser.any_of(0)
+    if parser.at < len(tokens):
+        raise KeywordError(f"-k {expression!r}: unexpected {tokens[parser.at]!r}")
     return tree
 
 
 class _Node:
+    """One node of a ``-k`` expression: a word, ``not`` of a node, ``and``/``or`` of several."""
+
     def __init__(self, op: str, *args: object) -> None:
         self.op, self.args = op, args
 
@@ -106,33 +150,49 @@ class _Node:
         return any(a(test_id) for a in self.args)  # type: ignore[operator]
 
 
-def _or(tokens: list[str]) -> tuple[_Node, list[str]]:
-    left, tokens = _and(tokens)
-    while tokens and tokens[0] == "or":
-        right, tokens = _and(tokens[1:])
-        left = _Node("or", left, right)
-    return left, tokens
+class _KeywordParser:
+    """Recursive descent over the tokens; recursion only for parentheses, which are bounded."""
 
+    def __init__(self, tokens: list[str]) -> None:
+        self.tokens = tokens
+        self.at = 0
 
-def _and(tokens: list[str]) -> tuple[_Node, list[str]]:
-    left, tokens = _not(tokens)
-    while tokens and tokens[0] == "and":
-        right, tokens = _not(tokens[1:])
-        left = _Node("and", left, right)
-    return left, tokens
+    def peek(self) -> str | None:
+        return self.tokens[self.at] if self.at < len(self.tokens) else None
 
+    def any_of(self, depth: int) -> _Node:
+        terms = [self.all_of(depth)]
+        while self.peek() == "or":
+            self.at += 1
+            terms.append(self.all_of(depth))
+        return terms[0] if len(terms) == 1 else _Node("or", *terms)
 
-def _not(tokens: list[str]) -> tuple[_Node, list[str]]:
-    if not tokens:
-        raise KeywordError("-k: the expression ends too early")
-    if tokens[0] == "not":
-        inner, rest = _not(tokens[1:])
-        return _Node("not", inner), rest
-    if tokens[0] == "(":
-        inner, rest = _or(tokens[1:])
-        if not rest or rest[0] != ")":
-            raise KeywordError("-k: missing )")
-        return inner, rest[1:]
-    if tokens[0] in ("and", "or", ")"):
-        raise KeywordError(f"-k: unexpected {tokens[0]!r}")
-    return _Node("word", tokens[0]), tokens[1:]
+    def all_of(self, depth: int) -> _Node:
+        terms = [self.negated(depth)]
+        while self.peek() == "and":
+            self.at += 1
+            terms.append(self.negated(depth))
+        return terms[0] if len(terms) == 1 else _Node("and", *terms)
+
+    def negated(self, depth: int) -> _Node:
+        negations = 0
+        while self.peek() == "not":  # a chain of nots is one node (or none), not a deep tree
+            negations += 1
+            self.at += 1
+        token = self.peek()
+        if token is None:
+            raise KeywordError("-k: the expression ends too early")
+        if token == "(":
+            if depth >= MAX_KEYWORD_NESTING:
+                raise KeywordError(f"-k: parentheses nested more than {MAX_KEYWORD_NESTING} deep")
+            self.at += 1
+            node = self.any_of(depth + 1)
+            if self.peek() != ")":
+                raise KeywordError("-k: missing )")
+            self.at += 1
+        elif token in ("and", "or", ")"):
+            raise KeywordError(f"-k: unexpected {token!r}")
+        else:
+            node = _Node("word", token)
+            self.at += 1
+        return _Node("not", node) if negations % 2 else node

@@ -15,6 +15,7 @@ the recording's tick ``seq`` (its tick 0 is the test's first tick).
 
 from __future__ import annotations
 
+import hashlib
 import re
 import time
 from collections.abc import Mapping
@@ -23,6 +24,7 @@ from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from xabsl_studio.engine.errors import XabslError
+from xabsl_studio.engine.files import check_regular
 from xabsl_studio.engine.host import BehaviorLoop, CommandableWorld, World, WorldCommandError
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import Recorder, Recording, RecordingError
@@ -170,7 +172,10 @@ class _Run:
         self.start_ms = self.loop.now_ms
 
     def _build(self, seed: int) -> World:
-        world: World = self.plugin.build_world(seed)
+        try:
+            world: World = self.plugin.build_world(seed)
+        except (ValueError, TypeError) as error:  # the world refused its seed or options
+            raise TestSetupError(f"the {self.plugin.name} world cannot be built: {error}") from None
         for agent in world.agents:
             key = self.plugin.program_key(agent)
             if key is None:
@@ -195,6 +200,7 @@ class _Run:
         if self.case.setup:
             raise TestSetupError("a test from a recording takes the recording's situation: no setup")
         try:
+            check_regular(recording)  # a FIFO or device would block the MCAP reader, or never end
             with Recording(recording) as opened:
                 return resimulate(opened, self._build, tick, verify=verify)
         except (RecordingError, XabslError, OSError, ValueError) as error:
@@ -316,9 +322,21 @@ def run_case(case: Case, recordings: Path | None = None) -> CaseResult:
     return result
 
 
+#: The longest recording name before ``.mcap`` (file systems take 255 bytes; ASCII here).
+MAX_RECORDING_STEM = 200
+
+
 def recording_name(case: Case) -> str:
-    """The file name of a failing test's recording: ``suite--test.mcap`` with safe characters."""
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{case.suite.name}--{case.name}") + ".mcap"
+    """The file name of a failing test's recording: ``suite--test.mcap`` with safe characters.
+
+    A name longer than :data:`MAX_RECORDING_STEM` is cut and ends in a digest of the whole id, so
+    two long names that share their start still leave two recordings.
+    """
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{case.suite.name}--{case.name}")
+    if len(stem) > MAX_RECORDING_STEM:
+        digest = hashlib.sha256(case.id.encode("utf-8", "surrogatepass")).hexdigest()[:12]
+        stem = f"{stem[: MAX_RECORDING_STEM - 13]}-{digest}"
+    return stem + ".mcap"
 
 
 def _record(case: Case, folder: Path, failing_tick: int) -> Path:

@@ -68,12 +68,29 @@ def toml_value(value: Any) -> str:
             raise DraftError(f"TOML has no {value}")
         return repr(round(value, 6))
     if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+        return '"' + _UNSAFE.sub(_escape, value) + '"'
     if isinstance(value, list | tuple):
         return "[" + ", ".join(toml_value(v) for v in value) + "]"
     if isinstance(value, Mapping):
         return "{ " + ", ".join(f"{_key(k)} = {toml_value(v)}" for k, v in value.items()) + " }" if value else "{}"
     raise DraftError(f"cannot write {value!r} in a test file")
+
+
+#: What a TOML basic string or comment cannot hold as it is: the quote and backslash (strings),
+#: control characters but the tab, and the line and paragraph separators (legal, but an editor
+#: may break the line there, and a reader would see two lines where TOML sees one).
+_UNSAFE = re.compile(r'["\\\x00-\x08\x0a-\x1f\x7f\u2028\u2029]')
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "\n": "\\n", "\r": "\\r", "\b": "\\b", "\f": "\\f"}
+
+
+def _escape(match: re.Match[str]) -> str:
+    char = match.group()
+    return _ESCAPES.get(char) or f"\\u{ord(char):04X}"
+
+
+def _comment(line: str) -> str:
+    """A comment line that stays one comment line whatever text it quotes (names, conditions)."""
+    return _UNSAFE.sub(lambda m: m.group() if m.group() in '"\\' else _escape(m), line)
 
 
 def _key(key: str) -> str:
@@ -249,6 +266,10 @@ def draft_test(
         expects.append(f"[[test.expect]]\nwithin = {toml_value(float(duration))}\nbehavior = {toml_value(behavior)}")
     if not expects:
         expects.append('[[test.expect]]\nnever = true\nsymbol = "CHANGE.ME"\nequals = 0')
+    lines = [_comment(line) if line.startswith("#") else line for line in lines]
     text = "\n".join(lines) + "\n\n" + "\n\n".join(expects) + "\n"
-    parse_suite(text, tests_folder / draft_file_name(name))  # what we write must be a valid suite
+    # What we write must be a valid suite of exactly this one test, and checking it reads no file.
+    suite = parse_suite(text, tests_folder / draft_file_name(name), read_files=False)
+    if [case.name for case in suite.cases] != [name.strip()]:
+        raise DraftError(f"the draft of {name!r} is not one test of that name")
     return text

@@ -5,6 +5,11 @@ for its tests, and a list of ``[[test]]`` tables; each test has a setup, what ru
 overrides and world commands, and ``[[test.expect]]`` assertions. :func:`load_suite` parses and
 checks everything before anything runs: a bad file is a :class:`SpecError` naming the file and
 the TOML key path (``test[2].expect[1].within``), never a traceback in the middle of a run.
+
+Files are read as ``xabsl_studio.engine.files.read_regular`` reads inputs: regular files only (a
+FIFO or ``/dev/zero`` named as a test file or ``inputs_file`` is an error, not a hang), at most
+:data:`MAX_SUITE_BYTES` and :data:`MAX_INPUTS_BYTES`. Nesting deeper than Python's parsers can
+follow is an error too, and seeds are those every world takes (:data:`MAX_SEED`).
 """
 
 from __future__ import annotations
@@ -18,11 +23,19 @@ from pathlib import Path
 from typing import Any
 
 from xabsl_studio.engine.errors import XabslError
+from xabsl_studio.engine.files import read_regular
 
 __all__ = ["COMPARATORS", "QUANTIFIERS", "Case", "Expect", "SpecError", "Suite", "load_suite", "parse_suite"]
 
 #: The file names the pytest plugin and ``xabsl test DIR`` collect.
 SUFFIX = ".xabsl-test.toml"
+
+#: The largest test file read (a real one is a few kilobytes).
+MAX_SUITE_BYTES = 16 * 1024 * 1024
+#: The largest ``inputs_file`` read (as ``xabsl trace --inputs``).
+MAX_INPUTS_BYTES = 256 * 1024 * 1024
+#: The largest seed: worlds seed numpy and ``random`` with it (as the studio's ``reset``, 32 bits).
+MAX_SEED = 2**32 - 1
 
 #: What an expectation says about time (exactly one per expectation, ``within`` implies eventually).
 QUANTIFIERS = ("always", "never", "eventually", "at")
@@ -151,19 +164,25 @@ def load_suite(file: str | Path) -> Suite:
     """
     file = Path(file)
     try:
-        text = file.read_text(encoding="utf-8")
+        text = read_regular(file, MAX_SUITE_BYTES).decode("utf-8")
     except (OSError, UnicodeDecodeError) as error:
         raise SpecError(f"{file}: cannot read: {error}") from None
     return parse_suite(text, file)
 
 
-def parse_suite(text: str, file: Path) -> Suite:
-    """Parse the text of a test file (``file`` names it in messages and anchors relative paths)."""
+def parse_suite(text: str, file: Path, *, read_files: bool = True) -> Suite:
+    """Parse the text of a test file (``file`` names it in messages and anchors relative paths).
+
+    With ``read_files`` False, a test that would read a file (``inputs_file``, ``from``) is an
+    error: the studio checks the drafts it writes so, reading nothing a request could name.
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise SpecError(f"{file}: not valid TOML: {error}") from None
-    p = _Parser(file)
+    except RecursionError:
+        raise SpecError(f"{file}: not valid TOML: arrays or tables nested too deeply") from None
+    p = _Parser(file, read_files)
     unknown = set(data) - {"suite", "setup", "test"}
     if unknown:
         raise p.error("", f"unknown top-level key(s) {', '.join(sorted(unknown))} (suite, setup, test)")
@@ -175,7 +194,7 @@ def parse_suite(text: str, file: Path) -> Suite:
     world = p.string(head["world"], "suite.world") if "world" in head else None
     options = p.table(head.get("options", {}), "suite.options")
     defaults = {
-        "seed": p.integer(head.get("seed", 1), "suite.seed"),
+        "seed": p.seed(head.get("seed", 1), "suite.seed"),
         "duration": p.seconds(head.get("duration", 10.0), "suite.duration"),
         "robot": p.string(head["robot"], "suite.robot") if "robot" in head else None,
         "agent": p.string(head["agent"], "suite.agent") if "agent" in head else None,
@@ -197,8 +216,9 @@ def parse_suite(text: str, file: Path) -> Suite:
 class _Parser:
     """Checks values and builds messages naming the file and the key path."""
 
-    def __init__(self, file: Path) -> None:
+    def __init__(self, file: Path, read_files: bool = True) -> None:
         self.file = file
+        self.read_files = read_files
 
     def error(self, where: str, message: str) -> SpecError:
         return SpecError(f"{self.file}: {where}: {message}" if where else f"{self.file}: {message}")
@@ -223,10 +243,26 @@ class _Parser:
             raise self.error(where, f"expected an integer, got {value!r}")
         return value
 
+    def seed(self, value: Any, where: str) -> int:
+        seed = self.integer(value, where)
+        if not 0 <= seed <= MAX_SEED:
+            raise self.error(where, f"expected a seed in 0..{MAX_SEED}, got {seed}")
+        return seed
+
+    def no_files(self, where: str) -> None:
+        if not self.read_files:
+            raise self.error(where, "this test file may not read other files")
+
     def number(self, value: Any, where: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(where, f"expected a finite number, got {value!r}")
-        return float(value)
+        try:
+            number = float(value)  # an integer of 400 digits is no float
+        except OverflowError:
+            number = math.inf
+        if not math.isfinite(number):
+            raise self.error(where, f"expected a finite number, got {_short(value)}")
+        return number
 
     def seconds(self, value: Any, where: str) -> float:
         seconds = self.number(value, where)
@@ -260,7 +296,7 @@ class _Parser:
             suite=suite,
             name=name,
             index=index,
-            seed=self.integer(t.get("seed", defaults["seed"]), f"{where}.seed"),
+            seed=self.seed(t.get("seed", defaults["seed"]), f"{where}.seed"),
             duration=duration,
             robot=self.string(t["robot"], f"{where}.robot") if "robot" in t else defaults["robot"],
             agent=self.string(t["agent"], f"{where}.agent") if "agent" in t else defaults["agent"],
@@ -300,9 +336,10 @@ class _Parser:
         return t, self.table(line.get("set", {}), f"{where}.set")
 
     def inputs_file(self, base: Path, value: Any, where: str) -> list[tuple[int, Mapping[str, Any]]]:
+        self.no_files(where)
         path = base / self.string(value, where)
         try:
-            lines = path.read_text(encoding="utf-8").splitlines()
+            lines = read_regular(path, MAX_INPUTS_BYTES).decode("utf-8").splitlines()
         except (OSError, UnicodeDecodeError) as error:
             raise self.error(where, f"cannot read {path}: {error}") from None
         out = []
@@ -313,6 +350,8 @@ class _Parser:
                 line = json.loads(text)
             except json.JSONDecodeError as error:
                 raise SpecError(f"{path}:{number}:{error.colno}: not JSON: {error.msg}") from None
+            except RecursionError:
+                raise SpecError(f"{path}:{number}: not JSON: arrays or objects nested too deeply") from None
             out.append(self.input_line(line, f"{path}:{number}"))
         return out
 
@@ -329,6 +368,7 @@ class _Parser:
         return tuple(sorted(out, key=lambda c: c[0]))
 
     def fork(self, base: Path, value: Any, where: str) -> tuple[Path, int, bool]:
+        self.no_files(where)
         f = self.table(value, where)
         self.keys(f, where, {"recording", "tick", "verify"})
         tick = self.integer(f.get("tick", 0), f"{where}.tick")
@@ -474,6 +514,12 @@ def _range_text(value: Any) -> str:
     if isinstance(value, list):
         return "one of " + ", ".join(map(str, value))
     return f"= {value}"
+
+
+def _short(value: Any) -> str:
+    """``value`` for a message: at most 60 characters of its repr."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _s(seconds: float) -> str:

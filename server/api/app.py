@@ -28,13 +28,17 @@ from typing import Annotated, Any
 import orjson
 from fastapi import APIRouter, Depends, FastAPI, Header, HTTPException, Query, Request, Response, WebSocket
 from fastapi import Path as FastApiPath
+from fastapi.dependencies.models import Dependant
 from fastapi.exception_handlers import http_exception_handler
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, StreamingResponse
 from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, Field, JsonValue
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import HTTPConnection
 from starlette.routing import Match
+from starlette.types import Receive, Scope, Send
 
 import xabsl_studio
 from xabsl_studio.engine.emit.dot import GraphvizMissing
@@ -43,13 +47,14 @@ from xabsl_studio.engine.runtime.activation import OPTION_NODE
 from xabsl_studio.server.api.clients import Client, Hub
 from xabsl_studio.server.api.compare import router as compare_router
 from xabsl_studio.server.api.docs import router as docs_router
+from xabsl_studio.server.api.drafts import router as drafts_router
 from xabsl_studio.server.api.forks import router as fork_router
 from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
 from xabsl_studio.server.api.library import RecordingLibrary
 from xabsl_studio.server.api.library import router as library_router
 from xabsl_studio.server.api.openapi import ErrorBody, error_responses
 from xabsl_studio.server.api.profile import router as profile_router
-from xabsl_studio.server.api.security import SecurityMiddleware, SecurityPolicy
+from xabsl_studio.server.api.security import PublicPaths, SecurityMiddleware, SecurityPolicy
 from xabsl_studio.server.api.studios import Studios, StudiosMiddleware
 from xabsl_studio.server.protocol.commands import Command, History, Reload, guess_id, openapi_schemas, parse_command
 from xabsl_studio.server.protocol.limits import HISTORY_CHUNK, MAX_CLIENTS, MAX_LSP_CLIENTS, VERSION, CloseCode
@@ -62,7 +67,7 @@ from xabsl_studio.server.protocol.types import (
     ProtocolError,
 )
 from xabsl_studio.server.session import frames
-from xabsl_studio.server.session.files import BehaviorFiles, FileError
+from xabsl_studio.server.session.files import INVISIBLE, BehaviorFiles, FileError
 from xabsl_studio.server.session.frames import Generation
 from xabsl_studio.server.session.generations import GenerationGone
 from xabsl_studio.server.session.live import CommandError, Session
@@ -91,8 +96,17 @@ then reload this page.</p>
 #: What a behavior file path looks like (documented, not enforced here: ``xabsl_studio.server.session.files`` checks
 #: paths and answers 400/403/404 with the reason, which a pattern mismatch could not give).
 FILE_PATH_PATTERN = r"^([^/\\\x00.][^/\\\x00]*/)*[^/\\\x00.][^/\\\x00]*\.xabsl$"
+#: What the path of a file the studio creates looks like: its name is visible (``files.INVISIBLE``),
+#: neither blank nor starting or ending with a space.
+NEW_FILE_PATH_PATTERN = (
+    r"^([^/\\\x00.][^/\\\x00]*/)*" + f"[^/\\\\ .{INVISIBLE}]([^/\\\\{INVISIBLE}]*[^/\\\\ {INVISIBLE}])?" + r"\.xabsl$"
+)
 _FILE_PATH: dict[str, JsonValue] = {"pattern": FILE_PATH_PATTERN}
+_NEW_FILE_PATH: dict[str, JsonValue] = {"pattern": NEW_FILE_PATH_PATTERN}
 FilePath = Annotated[str, FastApiPath(description="relative to the example folder", json_schema_extra=_FILE_PATH)]
+NewFilePath = Annotated[
+    str, FastApiPath(description="relative to the example folder", json_schema_extra=_NEW_FILE_PATH)
+]
 
 
 class FileBody(BaseModel):
@@ -105,7 +119,7 @@ class FileBody(BaseModel):
 class RenameBody(BaseModel):
     """The body of renaming a file."""
 
-    path: str = Field(description="the new path, relative to the example folder", json_schema_extra=_FILE_PATH)
+    path: str = Field(description="the new path, relative to the example folder", json_schema_extra=_NEW_FILE_PATH)
 
 
 class CompileBody(BaseModel):
@@ -330,6 +344,37 @@ def _generation_info(session: Session, gen: Generation) -> dict[str, Any]:
     return info
 
 
+def single_query_values(connection: HTTPConnection) -> None:
+    """Refuse a query parameter of the route given twice (``?t0=abc&t0=5``): which one counts would be a guess.
+
+    Parameters the route does not have are ignored, as FastAPI ignores them once; ``token`` may
+    repeat (``SecurityMiddleware`` compares every value given).
+
+    Raises:
+        RequestValidationError: a 422 in FastAPI's validation format, naming the parameter.
+    """
+    route = connection.scope.get("route")
+    dependant = getattr(route, "dependant", None)
+    if dependant is None:
+        return
+    declared = set(_query_names(dependant))
+    seen: set[str] = set()
+    for key, _ in connection.query_params.multi_items():
+        if key in seen and key in declared:
+            values = connection.query_params.getlist(key)
+            raise RequestValidationError(
+                [{"type": "repeated", "loc": ("query", key), "msg": "given more than once", "input": values}]
+            )
+        seen.add(key)
+
+
+def _query_names(dependant: Dependant) -> Iterator[str]:
+    for field in dependant.query_params:
+        yield field.alias
+    for sub in dependant.dependencies:
+        yield from _query_names(sub)
+
+
 def _studio(request: Request) -> Studio:
     studio: Studio = request.app.state.studio
     return studio
@@ -526,7 +571,7 @@ async def write_file(
 @router.post(
     "/api/files/{path:path}", tags=["files"], status_code=201, responses=error_responses(400, 404, 409, 413, 422)
 )
-async def create_file(studio: StudioDep, path: FilePath, body: FileBody) -> Response:
+async def create_file(studio: StudioDep, path: NewFilePath, body: FileBody) -> Response:
     """Create a file (409 if it exists); compile the behaviors it belongs to."""
     async with studio.write_lock:
         version = await asyncio.to_thread(studio.files.create, path, body.text)
@@ -549,107 +594,6 @@ async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = 
     async with studio.write_lock:
         await asyncio.to_thread(studio.files.delete, path, _etag(if_match))
         return await studio.after_write([path], None, 200, deleted=path)
-
-
-class TestForce(BaseModel):
-    """What the tester forced: an option or basic behavior and its parameters (enums by element name)."""
-
-    kind: str = Field(pattern="^(option|behavior)$")
-    name: str = Field(min_length=1, max_length=200)
-    params: dict[str, JsonValue] = Field(default_factory=dict)
-
-
-class TestHit(BaseModel):
-    """A breakpoint hit to reproduce: breakpoint ``breakpoint`` of behavior ``program`` after tick ``seq``."""
-
-    program: str = Field(min_length=1, max_length=500)
-    breakpoint: int = Field(ge=1, le=2**31)
-    seq: int = Field(ge=0)
-
-
-class TestDraftBody(BaseModel):
-    """Save as test: the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
-
-    name: str = Field(min_length=1, max_length=120)
-    robot: str = Field(min_length=1, max_length=120)
-    force: TestForce | None = None
-    overrides: dict[str, JsonValue] = Field(default_factory=dict)
-    active: list[tuple[str, str]] = Field(default_factory=list, max_length=500)
-    behaviors: list[str] = Field(default_factory=list, max_length=500)
-    duration: float = Field(5.0, gt=0, le=3600)
-    hit: TestHit | None = None
-    save: bool = False
-
-
-@router.post("/api/tests/draft", tags=["files"], responses=error_responses(400, 409, 422))
-async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
-    """A behavior test file reproducing the tester's situation (text; with ``save``, also written).
-
-    The setup comes from the world's latest scene when the world plug-in can turn a scene into a
-    setup (``setup_from_scene``); the file goes to the example folder's ``tests/`` (409 if it exists).
-    With ``hit``, the scene is the hit's tick and the assertions are the breakpoint's (409 when the
-    breakpoint was removed or the tick left the history).
-    """
-    from xabsl_studio.engine.files import write_atomically
-    from xabsl_studio.engine.testing.save import DraftError, draft_file_name, draft_test
-    from xabsl_studio.engine.worlds.loader import world_names
-
-    session = studio.session
-    plugin = session.example
-    latest = session.ring.latest
-    hit = None
-    if body.hit is not None:
-        point = session.breakpoints.get(body.hit.program, {}).get(body.hit.breakpoint)
-        if point is None:
-            raise HTTPException(409, f"no breakpoint {body.hit.breakpoint} in {body.hit.program!r} (removed?)")
-        latest = session.ring.get(body.hit.seq)
-        if latest is None or not latest.scene:  # the ring keeps scenes of its newest ticks only
-            raise HTTPException(409, f"the world at tick {body.hit.seq} is no longer kept; save from a recent hit")
-        hit = (point, body.robot, body.hit.seq, latest.t)
-    scene = orjson.loads(latest.scene) if latest is not None else {}
-    status = orjson.loads(latest.status) if latest is not None else {}
-    gen = session.generation
-    agents = orjson.loads(gen.scene_bytes).get("agents", []) if gen is not None else []
-    names = [str(a.get("name")) for a in agents if isinstance(a, dict)]
-    if body.robot not in names:
-        raise HTTPException(409, f"no robot {body.robot!r} in this session")
-    example = getattr(plugin, "example", plugin)
-    describe = getattr(example, "setup_from_scene", None)
-    setup = describe(scene, status, names) if callable(describe) and scene else None
-    tests = Path(plugin.root) / "tests"
-    where = Path(getattr(plugin, "path", plugin.root))
-    world = getattr(plugin, "world", None)
-    if world is None and not (where / "studio.py").is_file() and plugin.name in world_names():
-        world = plugin.name  # a folder without studio.py served in a named world: name it
-    try:
-        file = draft_file_name(body.name)
-        text = draft_test(
-            name=body.name,
-            robot=body.robot,
-            tests_folder=tests,
-            example_path=where,
-            world=world,
-            options=getattr(plugin, "options", {}),
-            seed=session.seed,
-            setup=setup,
-            force=(body.force.kind, body.force.name, body.force.params) if body.force is not None else None,
-            overrides=body.overrides,
-            active=body.active,
-            behaviors=body.behaviors,
-            duration=body.duration,
-            hit=hit,
-        )
-    except (DraftError, ValueError) as error:
-        raise HTTPException(422, str(error)) from None
-    path = tests / file
-    saved = False
-    if body.save:
-        if path.exists():
-            raise HTTPException(409, f"tests/{file} exists already")
-        tests.mkdir(exist_ok=True)
-        await asyncio.to_thread(write_atomically, path, text.encode("utf-8"))
-        saved = True
-    return {"text": text, "path": f"tests/{file}", "saved": saved}
 
 
 @router.post("/api/compile", tags=["files"], responses=error_responses(400, 404, 413, 422))
@@ -724,20 +668,45 @@ async def _command_error(request: Request, error: Exception) -> JSONResponse:
     return JSONResponse({"detail": str(error)}, status_code=409)
 
 
+def _routers() -> tuple[APIRouter, ...]:
+    """The routers every studio app includes (``create_app``)."""
+    return (router, drafts_router, docs_router, profile_router, compare_router, fork_router, library_router)
+
+
+def _allowed_methods(scope: Scope) -> set[str]:
+    """The methods the API's routes answer for the path of ``scope`` (empty: no route has it)."""
+    allowed: set[str] = set()
+    for route in (r for api in _routers() for r in api.routes):
+        if isinstance(route, APIRoute) and route.matches({**scope, "method": "GET"})[0] is not Match.NONE:
+            allowed.update(route.methods or ())
+    if "GET" in allowed:
+        allowed.add("HEAD")
+    return allowed
+
+
 async def _method_not_allowed(request: Request, error: Exception) -> Response:
     """405 with the methods *every* route of the path allows (one route per method in FastAPI)."""
     assert isinstance(error, StarletteHTTPException)
     if error.status_code != 405:
         return await http_exception_handler(request, error)
-    allowed: set[str] = set()
-    for route in router.routes:  # the API's own routes (the app wraps the included router)
-        if isinstance(route, APIRoute) and route.matches({**request.scope, "method": "GET"})[0] is not Match.NONE:
-            allowed.update(route.methods or ())
-    if "GET" in allowed:
-        allowed.add("HEAD")
+    allowed = _allowed_methods(request.scope)
     return JSONResponse(
         {"detail": "Method Not Allowed"}, status_code=405, headers={"Allow": ", ".join(sorted(allowed))}
     )
+
+
+class WebUi(StaticFiles):
+    """The built web UI at ``/``, below every route.
+
+    A path a route has (``GET /api/command``) is that route's 405, not a missing file: the mount
+    matches every path, so the router would never get to its partial matches.
+    """
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Serve a file of the build, or refuse a method a route of the path does not have."""
+        if scope["type"] == "http" and _allowed_methods(scope):
+            raise StarletteHTTPException(405)
+        await super().__call__(scope, receive, send)
 
 
 async def _no_ui(request: Request) -> HTMLResponse:
@@ -798,12 +767,16 @@ def create_app(
             under a prefix by the main app's); None: this is the main app, which serves them.
     """
     policy = policy or SecurityPolicy(token=None)
+    ui = web_dist if web_dist is not None and (web_dist / "index.html").is_file() else None
+    public = PublicPaths.of_build(ui)
     app = FastAPI(
         title="xabsl studio",
         version=str(VERSION),
         description="Live XABSL behavior session: see docs/protocol.md.",
         openapi_url="/api/openapi.json",
         docs_url="/api/docs",
+        # beside the viewer, public with it (FastAPI's default, /docs/..., is the behavior's documentation)
+        swagger_ui_oauth2_redirect_url="/api/docs/oauth2-redirect",
         redoc_url=None,
         lifespan=_lifespan,
     )
@@ -822,24 +795,20 @@ def create_app(
             return create_app(served, policy, web_dist, library=main.library, studios=beside)
 
         studio.studios = Studios(make_app)
-        app.add_middleware(StudiosMiddleware, studios=studio.studios)
+        app.add_middleware(StudiosMiddleware, studios=studio.studios, public=public)
         app.state.serves_studios = True
         if not isinstance(session, ReplaySession):
             plugin = session.example
             studio.studios.home_example = (Path(getattr(plugin, "path", plugin.root)), getattr(plugin, "world", None))
-    app.add_middleware(SecurityMiddleware, policy=policy)
+    app.add_middleware(SecurityMiddleware, policy=policy, public=public)
     app.add_exception_handler(FileError, _file_error)
     app.add_exception_handler(CommandError, _command_error)
     app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
-    app.include_router(router)
-    app.include_router(docs_router)
-    app.include_router(profile_router)
-    app.include_router(compare_router)
-    app.include_router(fork_router)
-    app.include_router(library_router)
+    for included in _routers():
+        app.include_router(included, dependencies=[Depends(single_query_values)])
     _document_messages(app)
-    if web_dist is not None and (web_dist / "index.html").is_file():
-        app.mount("/", StaticFiles(directory=web_dist, html=True), name="web")
+    if ui is not None:
+        app.mount("/", WebUi(directory=ui, html=True), name="web")
     else:
         app.add_api_route("/", _no_ui, methods=["GET"], include_in_schema=False)
     return app

@@ -2,7 +2,10 @@
 
 ``GET /docs`` lists the session's behaviors (or redirects to the only one);
 ``GET /docs/{program}/{path}`` serves a file of the documentation of the program running under
-that key. Each program is documented once into a cache folder named by its digest
+that key. Like every route, these need the token (``xabsl_studio.server.api.security``: a docs
+request that presents it gets the cookie that carries it to the pages' relative links). A page
+is a regular file of the program's documentation folder, links resolved, looked up in a worker
+thread and streamed. Each program is documented once into a cache folder named by its digest
 (:func:`xabsl_studio.engine.docs.program_digest`), so a hot reload that changes the behavior makes the next
 request document the new one, while an unchanged program is served from disk. A folder is
 generated beside its final place and renamed into it, so a request never sees half a folder.
@@ -13,6 +16,7 @@ from __future__ import annotations
 import asyncio
 import os
 import shutil
+import stat
 import tempfile
 import threading
 from html import escape
@@ -145,7 +149,17 @@ async def docs_file(request: Request, program: str, path: str) -> Response:
         raise HTTPException(503, str(error)) from None
     except GraphLayoutError as error:
         raise HTTPException(503, str(error)) from None
-    target = (folder / (path or "index.html")).resolve()
-    if not target.is_relative_to(folder.resolve()) or not target.is_file():
+    target = await asyncio.to_thread(page, folder, path or "index.html")
+    if target is None:
         raise HTTPException(404, f"no documentation page {path!r}")
     return FileResponse(target, headers={"Cache-Control": "no-cache"})
+
+
+def page(folder: Path, path: str) -> Path | None:
+    """The regular file ``path`` names inside the documentation folder (links resolved), or None."""
+    try:
+        target = Path(os.path.realpath(folder / path))
+        inside = target.is_relative_to(os.path.realpath(folder))
+        return target if inside and stat.S_ISREG(target.stat().st_mode) else None
+    except (OSError, ValueError):  # a name too long, a NUL: no such page
+        return None

@@ -3,8 +3,13 @@
 Threats, and the check for each:
 
 * another machine on the network (the server bound off loopback): a token, generated and printed
-  like Jupyter's when none is given, required on every ``/api`` request (except the OpenAPI
-  schema) and on the websocket handshake;
+  like Jupyter's when none is given, required on every request and websocket handshake, under
+  every prefix (``/api``, ``/docs``, ``/replay/ID/``, ``/fork/ID/``, what a route added later
+  serves). Public are only what carries no behavior data, for ``GET``/``HEAD``: the web UI's
+  static files (the page reads the token from its address) and the API schema
+  (:data:`PUBLIC_API`). The behavior documentation at ``/docs`` is behind the token; its pages
+  link to each other without it, so a docs request that presented the token gets a cookie
+  (:data:`DOCS_COOKIE`, HttpOnly, SameSite=Strict) that opens the documentation, and only it;
 * a web page in the user's browser (CSRF / cross-site websocket hijacking): mutating requests and
   the websocket must come without ``Origin`` or from the server's own origin (or one given with
   ``--allow-origin``);
@@ -19,14 +24,21 @@ Threats, and the check for each:
 
 from __future__ import annotations
 
+import base64
+import hashlib
+import hmac
+import secrets
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import orjson
+from starlette.requests import cookie_parser
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from xabsl_studio.server.api.studios import split_prefix
 from xabsl_studio.server.protocol.limits import MAX_BODY_BYTES
 from xabsl_studio.server.protocol.tokens import MIN_TOKEN_CHARS as MIN_TOKEN_CHARS
 from xabsl_studio.server.protocol.tokens import TokenError as TokenError
@@ -36,6 +48,10 @@ TOKEN_HEADER = "x-xabsl-token"
 MUTATING = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 #: Paths under /api that need no token (the schema is public documentation).
 PUBLIC_API = frozenset({"/api/openapi.json", "/api/docs", "/api/docs/oauth2-redirect"})
+#: Methods a public path answers without the token.
+READING = frozenset({"GET", "HEAD"})
+#: The cookie that carries the documentation's access from page to page: ``xabsl-docs-PORT``.
+DOCS_COOKIE = "xabsl-docs"
 _LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1", "[::1]"})
 
 
@@ -108,6 +124,17 @@ class SecurityPolicy:
         given.extend(parse_qs(query).get("token", []))
         return token_matches(given, self.token)
 
+    def docs_cookie(self) -> str | None:
+        """The value of the documentation cookie: derived from the token, not the token itself.
+
+        A server on another port of the same host receives the cookie too (cookies ignore ports):
+        it learns a key that opens this server's documentation, never its API or websocket.
+        """
+        if self.token is None:
+            return None
+        digest = hmac.new(self.token.encode(), b"xabsl-studio /docs cookie", hashlib.sha256).digest()
+        return base64.urlsafe_b64encode(digest).rstrip(b"=").decode()
+
     def host_ok(self, headers: dict[str, str]) -> bool:
         """On a loopback server: the ``Host`` is a loopback name with an optional numeric port."""
         if not self.loopback:
@@ -147,12 +174,58 @@ def _with_port(netloc: str, default: str) -> str:
     return netloc if ":" in netloc else netloc + ":" + default
 
 
-class SecurityMiddleware:
-    """Applies a :class:`SecurityPolicy` to every HTTP request and websocket handshake."""
+def is_docs(path: str) -> bool:
+    """A path of the behavior documentation (``/docs`` and below)."""
+    return path == "/docs" or path.startswith("/docs/")
 
-    def __init__(self, app: ASGIApp, policy: SecurityPolicy) -> None:
+
+class PublicPaths:
+    """Which requests need no token: reading the web UI's files or the API schema.
+
+    Args:
+        ui: the web UI's top-level entries (files by name, folders as ``name/``); ``/`` always is.
+    """
+
+    def __init__(self, ui: Iterable[str] = ()) -> None:
+        self.ui = frozenset(ui)
+
+    @classmethod
+    def of_build(cls, web_dist: Path | None) -> PublicPaths:
+        """The public paths of a built web UI (its top-level files and folders), or of none."""
+        if web_dist is None or not web_dist.is_dir():
+            return cls()
+        return cls(p.name + "/" if p.is_dir() else p.name for p in web_dist.iterdir() if not p.name.startswith("."))
+
+    def __call__(self, scope: Scope, path: str) -> bool:
+        """True for a request of ``scope`` for ``path`` (inside a ``/replay/ID`` prefix, if any)."""
+        if scope.get("method") not in READING:
+            return False
+        if path == "/" or path in PUBLIC_API:
+            return True
+        top, slash, _ = path[1:].partition("/")
+        return (top + slash) in self.ui
+
+
+class SecurityMiddleware:
+    """Applies a :class:`SecurityPolicy` to every HTTP request and websocket handshake.
+
+    Args:
+        app: the app behind the checks.
+        policy: the checks.
+        public: the requests that need no token (default: ``/`` and the API schema).
+    """
+
+    def __init__(self, app: ASGIApp, policy: SecurityPolicy, public: PublicPaths | None = None) -> None:
         self.app = app
         self.policy = policy
+        self.public = public or PublicPaths()
+
+    def _docs_cookie_ok(self, headers: dict[str, str], scope: Scope, path: str) -> bool:
+        expected = self.policy.docs_cookie()
+        if expected is None or scope.get("method") not in READING or not is_docs(path):
+            return False
+        given = cookie_parser(headers.get("cookie", "")).get(_cookie_name(scope))
+        return given is not None and secrets.compare_digest(given.encode("utf-8", "surrogateescape"), expected.encode())
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         """Check one request or handshake, then pass it on (or answer 401/403/413 here)."""
@@ -174,12 +247,19 @@ class SecurityMiddleware:
 
         method = scope["method"]
         path = scope["path"]
+        split = split_prefix(path)
+        # the path inside /replay/ID/ or /fork/ID/ (their redirect to the slash is public)
+        inner = path if split is None else (split[2] if split[2] is not None else "/")
         if not policy.host_ok(headers):
             await _json(send, 403, "this server only answers requests for a loopback host name")
             return
-        if path.startswith("/api") and path not in PUBLIC_API and not policy.token_ok(headers, query):
-            await _json(send, 401, "a token is required (Authorization: Bearer TOKEN or ?token=TOKEN)")
-            return
+        if not self.public(scope, inner):
+            if policy.token_ok(headers, query):
+                if policy.token is not None and split is None and is_docs(path):
+                    send = _with_cookie(send, _cookie_name(scope), policy.docs_cookie() or "")
+            elif not self._docs_cookie_ok(headers, scope, inner):
+                await _json(send, 401, "a token is required (Authorization: Bearer TOKEN or ?token=TOKEN)")
+                return
         if method in MUTATING:
             if not policy.origin_ok(headers, scope.get("scheme", "http")):
                 await _json(send, 403, f"requests from origin {headers.get('origin')} are not allowed")
@@ -194,6 +274,25 @@ class SecurityMiddleware:
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, send)
+
+
+def _cookie_name(scope: Scope) -> str:
+    """``xabsl-docs-8000``: one cookie per port, since two studios on one host share cookies."""
+    server = scope.get("server")
+    port = server[1] if isinstance(server, tuple | list) and len(server) > 1 and server[1] else 0
+    return f"{DOCS_COOKIE}-{port}"
+
+
+def _with_cookie(send: Send, name: str, value: str) -> Send:
+    """``send`` that adds the documentation cookie to the response's headers."""
+    cookie = f"{name}={value}; Path=/; HttpOnly; SameSite=Strict".encode("latin-1")
+
+    async def sending(message: Message) -> None:
+        if message["type"] == "http.response.start":
+            message = {**message, "headers": [*message.get("headers", []), (b"set-cookie", cookie)]}
+        await send(message)
+
+    return sending
 
 
 async def _read_body(receive: Receive, limit: int) -> bytes | None:

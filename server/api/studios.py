@@ -13,6 +13,11 @@ new one is refused) and closes them all when the main app stops. :class:`Studios
 passes a request for ``/replay/ID/...`` to that studio's app with the prefix taken off the path,
 so the studio's own :class:`~xabsl_studio.server.api.security.SecurityMiddleware` checks it as it checks ``/api``
 (token, Origin, Host) behind the main app's.
+
+Without the token nothing tells an open id from a closed one: the main app's check runs first
+(on the path inside the prefix), ``/replay/ID`` redirects to ``/replay/ID/`` for any id, and the
+public paths (the web UI's files, the API schema) answer the same under every prefix: a closed
+id's are served by the main app, whose files are the same.
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ if TYPE_CHECKING:
 
     from xabsl_studio.server.session.live import Session
 
-__all__ = ["MAX_FORKS", "MAX_REPLAYS", "StudioFull", "Studios", "StudiosMiddleware", "SubStudio"]
+__all__ = ["MAX_FORKS", "MAX_REPLAYS", "StudioFull", "Studios", "StudiosMiddleware", "SubStudio", "split_prefix"]
 
 #: Replays open at once (each holds a recording file open and a ring of frames).
 MAX_REPLAYS = 4
@@ -45,6 +50,17 @@ MAX_FORKS = 2
 
 Kind = Literal["replay", "fork"]
 _PREFIX = re.compile(r"^/(replay|fork)/([0-9]+)(/.*)?$")
+
+
+def split_prefix(path: str) -> tuple[str, int, str | None] | None:
+    """``/replay/3/api/status`` -> ``("replay", 3, "/api/status")``; None for a path of the main studio.
+
+    The rest is None for ``/replay/3`` (no slash: redirected to ``/replay/3/``).
+    """
+    match = _PREFIX.match(path)
+    if match is None:
+        return None
+    return match.group(1), int(match.group(2)), match.group(3)
 
 
 class StudioFull(ServerError):
@@ -177,25 +193,23 @@ class Studios:
 class StudiosMiddleware:
     """Passes ``/replay/ID/...`` and ``/fork/ID/...`` to that studio's app, the prefix taken off."""
 
-    def __init__(self, app: ASGIApp, studios: Studios) -> None:
+    def __init__(self, app: ASGIApp, studios: Studios, public: Callable[[Scope, str], bool]) -> None:
         self.app = app
         self.studios = studios
+        #: whether a request for a path inside the prefix needs no token (the main app's policy)
+        self.public = public
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         """Dispatch one request or websocket by its path prefix."""
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
-        match = _PREFIX.match(scope["path"])
-        if match is None:
+        split = split_prefix(scope["path"])
+        if split is None:
             await self.app(scope, receive, send)
             return
-        kind, ident, rest = match.group(1), int(match.group(2)), match.group(3)
-        studio = self.studios.get(kind, ident)
-        if studio is None:
-            await _not_found(scope, send, f"no {kind} {ident} is open (closed, or the server restarted)")
-            return
-        if rest is None:  # "/replay/3": the page's relative addresses need the slash
+        kind, ident, rest = split
+        if rest is None:  # "/replay/3": the page's relative addresses need the slash (for any id)
             await _redirect(scope, send, f"/{kind}/{ident}/")
             return
         prefix = f"/{kind}/{ident}".encode()
@@ -203,7 +217,13 @@ class StudiosMiddleware:
         inner = dict(scope, path=rest, root_path="")
         if isinstance(raw, bytes) and raw.startswith(prefix):
             inner["raw_path"] = raw[len(prefix) :]
-        await studio.app(inner, receive, send)
+        studio = self.studios.get(kind, ident)
+        if studio is not None:
+            await studio.app(inner, receive, send)
+        elif self.public(scope, rest):  # the same answer as an open studio's (its files are these)
+            await self.app(inner, receive, send)
+        else:
+            await _not_found(scope, send, f"no {kind} {ident} is open (closed, or the server restarted)")
 
 
 async def _not_found(scope: Scope, send: Send, detail: str) -> None:

@@ -8,9 +8,14 @@ the disk and refuses, before touching anything: empty paths, NUL, backslashes, a
 created or written, so the studio cannot be used to drop other kinds of files.
 
 Names are checked before any system call: a segment over 255 bytes (UTF-8) or a path over
-4,096 bytes is a 400, never an ``OSError``. Only regular files are listed, read or written (a FIFO
-named ``*.xabsl`` would otherwise block the listing for ever), each at most
-:data:`MAX_FILE_BYTES`.
+4,096 bytes is a 400, never an ``OSError``. A name the studio *creates* (a new file, a rename's
+target) must also be visible (:meth:`BehaviorFiles.check_new_name`, :data:`INVISIBLE`): no
+control, invisible format (zero-width, bidi override), line or paragraph separator characters,
+no space other than U+0020, and no blank, leading or trailing spaces. A ``:`` is an ordinary
+character (``a:b.xabsl``), but a first name that is a drive (``C:/...``) is an absolute path;
+on Windows, where ``C:name`` and ``name:stream`` mean a drive and a stream, a colon is refused
+everywhere. Only regular files are listed, read or written (a FIFO named ``*.xabsl`` would
+otherwise block the listing for ever), each at most :data:`MAX_FILE_BYTES`.
 
 Files are kept as they are: the text is returned exactly as stored (CR, CRLF and LF line ends
 untouched), decoded as UTF-8 or, when that fails, as latin-1; a save encodes with the encoding
@@ -28,7 +33,9 @@ from __future__ import annotations
 import errno
 import hashlib
 import os
+import re
 import threading
+import unicodedata
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -40,6 +47,18 @@ from xabsl_studio.server.protocol.errors import ServerError
 SUFFIX = ".xabsl"
 #: The largest behavior file listed or opened (a real option file is a few kilobytes).
 MAX_FILE_BYTES = 16 * 1024 * 1024
+#: A first name that is a drive (``C:``, ``C:/...``): absolute on Windows, and meant so elsewhere.
+_DRIVE = re.compile(r"^[A-Za-z]:(/|$)")
+#: What a new file name may not hold, as a regular-expression class body (for the check here and
+#: the OpenAPI pattern of new names): C0 and C1 controls, DEL, every space but U+0020, the line and
+#: paragraph separators, the invisible format characters (soft hyphen, zero-width characters, bidi
+#: embeddings, overrides and isolates, word joiners, the BOM, annotation marks). Lone surrogates
+#: are refused by ``check_syntax`` (no Unicode); in a class, they would not be an ECMA pattern.
+INVISIBLE = (
+    r"\x00-\x1f\x7f-\xa0\xad\u061c\u1680\u180e\u2000-\u200f\u2028-\u202f\u205f-\u2064\u2066-\u206f"
+    r"\u3000\ufeff\ufff9-\ufffb"
+)
+_INVISIBLE = re.compile(f"[{INVISIBLE}]")
 #: Longest name segment and path, in bytes of UTF-8 (the usual NAME_MAX and PATH_MAX).
 MAX_NAME_BYTES = 255
 MAX_PATH_BYTES = 4096
@@ -111,8 +130,10 @@ class BehaviorFiles:
         """The segments of an API path, or FileError(400) for a path that can never be valid."""
         if not path or "\x00" in path or "\\" in path:
             raise FileError(400, "bad path: empty, NUL or backslash")
-        if path.startswith("/") or (len(path) > 1 and path[1] == ":"):
+        if path.startswith("/") or _DRIVE.match(path):
             raise FileError(400, "bad path: absolute paths are not allowed")
+        if os.name == "nt" and ":" in path:  # C:name, name:stream
+            raise FileError(400, "bad path: ':' names a drive or a stream on Windows")
         try:
             size = len(path.encode("utf-8"))
         except UnicodeEncodeError:
@@ -128,6 +149,23 @@ class BehaviorFiles:
             if part.startswith("."):
                 raise FileError(400, "bad path: hidden names are not allowed")
         return parts
+
+    def check_new_name(self, path: str) -> None:
+        """FileError(400) unless the file name of ``path`` shows as what it is (see the module docstring).
+
+        Only the last name: the folders exist already (the studio creates none).
+        """
+        part = self.check_syntax(path)[-1]
+        stem = part.removesuffix(SUFFIX)
+        if not stem.strip():
+            raise FileError(400, f"bad file name {part!r}: blank")
+        if stem != stem.strip(" "):
+            raise FileError(400, f"bad file name {part!r}: it starts or ends with a space")
+        hidden = _INVISIBLE.search(part)
+        if hidden is not None:
+            char = hidden.group()
+            name = unicodedata.name(char, "a control character")
+            raise FileError(400, f"bad file name {part!r}: U+{ord(char):04X} ({name}) does not show as itself")
 
     def resolve(self, path: str, *, must_exist: bool = True, writable: bool = False) -> Path:
         """The real location of API path ``path``, confined to a behavior folder.
@@ -225,6 +263,7 @@ class BehaviorFiles:
 
     def create(self, path: str, text: str) -> str:
         """Create a new file (409 if it exists); returns its version."""
+        self.check_new_name(path)
         real = self.resolve(path, must_exist=False, writable=True)
         data = encode(text, "utf-8", path)
         with self._lock:
@@ -248,6 +287,7 @@ class BehaviorFiles:
     def rename(self, path: str, new_path: str, if_match: str | None) -> str:
         """Move a file to ``new_path`` (409 if that exists); returns the file's version."""
         real = self.resolve(path, writable=True)
+        self.check_new_name(new_path)
         target = self.resolve(new_path, must_exist=False, writable=True)
         with self._lock:
             current = version_of(self._bytes(real, path))

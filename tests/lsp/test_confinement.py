@@ -26,6 +26,7 @@ from tests.lsp.wire import WsRpc, server_log
 from tests.server.conftest import LiveServer
 from xabsl_studio.engine.worlds.bench import BenchExample
 from xabsl_studio.server.api.security import SecurityPolicy
+from xabsl_studio.server.protocol.limits import MAX_LSP_WORKERS
 from xabsl_studio.server.session.live import Session
 
 #: words of the outside file that must never reach a client
@@ -210,12 +211,20 @@ def test_includes_in_a_buffer_reach_only_the_behavior_folder(live: LiveServer, o
     assert log.tracebacks() == []
 
 
+def _connection_threads() -> int:
+    """Threads of the language server's connections: not the shared worker pool's (``xabsl-lsp``, at
+    most MAX_LSP_WORKERS, kept for the next connection: checked on their own) nor the studio's own
+    thread pools (its file watcher's asyncio executor, Starlette's AnyIO workers)."""
+    ignored = ("xabsl-lsp", "asyncio_", "AnyIO worker thread")
+    return sum(1 for t in threading.enumerate() if not t.name.startswith(ignored))
+
+
 def test_devices_and_fifos_answer_at_once_and_the_connection_lives_on(live: LiveServer) -> None:
     demo = Path(live.session.example.root)
     os.mkfifo(demo / "options" / "fifo.xabsl")
     (demo / "options" / "zero.xabsl").symlink_to("/dev/zero")
     os.mkfifo(demo / "other.xabsl")  # the folder's files are looked through for agents files
-    threads = threading.active_count()
+    threads = _connection_threads()
     with server_log() as log, connect(lsp_url(live), open_timeout=10, max_size=None) as ws:
         rpc = WsRpc(ws)
         rpc.initialize()
@@ -231,9 +240,11 @@ def test_devices_and_fifos_answer_at_once_and_the_connection_lives_on(live: Live
         errors = [d for d in rpc.diagnostics(play) if d["severity"] == 1]
         assert errors == []
     deadline = time.monotonic() + 10
-    while threading.active_count() > threads and time.monotonic() < deadline:
+    while _connection_threads() > threads and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert threading.active_count() <= threads, "a worker thread of the connection is left behind"
+    assert _connection_threads() <= threads, "a thread of the connection is left behind"
+    pool = [t for t in threading.enumerate() if t.name.startswith("xabsl-lsp")]
+    assert len(pool) <= MAX_LSP_WORKERS, "the language server's worker pool grew past its bound"
     assert log.tracebacks() == []
 
 

@@ -7,6 +7,7 @@ import os
 import shutil
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -232,3 +233,33 @@ def test_the_biggest_difference_leads_the_terminal_and_the_html_report(capsys):
     assert sorted(printed, key=terminal.index) == order[: report.TOP]
     states = [f"{row['option']}/{row['state']}" for row in summary["states"]]
     assert states[0] == "new_skill/s"
+
+
+@pytest.mark.parametrize(
+    ("name", "target", "why"),
+    [
+        ("options/secret.xabsl", "/etc/passwd", "absolute"),
+        ("escape.xabsl", "../../outside.xabsl", "outside"),
+    ],
+)
+def test_a_git_tree_with_a_link_out_of_it_is_a_usage_error(tmp_path, name, target, why):
+    repo = tmp_path / "repo"
+    shutil.copytree(DEFAULT_HOME, repo / "team")
+    (repo / "outside.xabsl").write_text("/* not the team's */\n")
+    (repo / "team" / name).symlink_to(target)
+    _git(repo, "init", "-q")
+    _git(repo, "add", ".")
+    _git(repo, "commit", "-qm", "a link out")
+    done = subprocess.run(
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "tournament", "git:HEAD:team", str(DEFAULT_AWAY), "-n", "1"],
+        cwd=repo,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+        check=False,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert "Traceback" not in done.stderr and "Error" not in done.stderr, done.stderr
+    assert "git:HEAD:team" in done.stderr and f"team/{name}" in done.stderr and why in done.stderr, done.stderr
+    assert target in done.stderr
