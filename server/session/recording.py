@@ -290,7 +290,9 @@ class LiveRecorder:
         assert gen is not None
         stamp = time.strftime("%Y%m%d-%H%M%S")
         name = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.example).strip("._") or "session"
-        n = 1
+        # Counted on from this recorder's earlier files: a name is never used twice, even when the
+        # folder's cap removed the file that had it (rolls within one second reused -001).
+        n = len(self.files) + 1
         path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"  # names sort in time order
         while path.exists() or path.with_name(path.name + ".part").exists():
             n += 1
@@ -356,10 +358,14 @@ class LiveRecorder:
         self._prune()
 
     def _prune(self) -> None:
-        """Delete the oldest recordings while the folder holds more than the cap."""
-        files = sorted(self.folder.glob("*.mcap"), key=lambda p: p.stat().st_mtime)
+        """Delete the oldest recordings while the folder holds more than the cap; never the newest.
+
+        Oldest by name (they sort in time order; modification times of files closed within one
+        second do not), and the file just finished stays even when it alone is over the cap.
+        """
+        files = sorted(self.folder.glob("*.mcap"), key=lambda p: p.name)
         total = sum(p.stat().st_size for p in files)
-        while files and total > self.cap_bytes:
+        while len(files) > 1 and total > self.cap_bytes:
             oldest = files.pop(0)
             total -= oldest.stat().st_size
             oldest.unlink(missing_ok=True)

@@ -216,7 +216,7 @@ def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer
 
     folder = soccer_dir.parent / "rolling"
     session = soccer_session
-    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes=60_000, roll_ticks=40)
+    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes=200_000, roll_ticks=40)
     session.live_recorder = recorder
     with LiveServer(session) as server:
         client = client_for(server)
@@ -227,7 +227,8 @@ def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer
     session.stop()
     assert len(recorder.files) >= 8  # a new file every 40 ticks
     kept = sorted(folder.glob("*.mcap"))
-    assert sum(p.stat().st_size for p in kept) <= 60_000 and len(kept) < len(recorder.files)
+    assert sum(p.stat().st_size for p in kept) <= 200_000 and len(kept) < len(recorder.files)
+    assert len(set(recorder.files)) == len(recorder.files)  # no name used twice
     assert kept == sorted(recorder.files[-len(kept) :])  # the newest survive; names sort in time order
     with Recording(kept[-1]) as recording:  # each file opens on its own
         assert len(recording) >= 1 and recording.tick(0).agents
@@ -276,3 +277,23 @@ def test_select_agent_while_recording_is_an_event_with_the_agents_name(
     with Recording(file) as recording:
         (event,) = [e for e in recording.events if e["kind"] == "select_agent"]
     assert event["agent"] == "blue2" and event["data"] == {"name": "soccer"}  # docs/recordings.md
+
+
+def test_the_newest_recording_stays_even_alone_over_the_cap(
+    soccer_session: Any, soccer_dir: Path, client_for: Any
+) -> None:
+    """A cap below one file's size deleted the file just written, so nothing was kept at all."""
+    from xabsl_studio.server.session.recording import LiveRecorder
+
+    folder = soccer_dir.parent / "tiny"
+    session = soccer_session
+    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes=1_000, roll_ticks=40)
+    session.live_recorder = recorder
+    with LiveServer(session) as server:
+        client = client_for(server)
+        client.frame_after()
+        assert client.command("pause")["ok"]
+        for _ in range(3):
+            assert client.command("step", ticks=40)["ok"]
+    session.stop()
+    assert sorted(folder.glob("*.mcap")) == [recorder.files[-1]]
