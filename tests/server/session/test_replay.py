@@ -211,20 +211,26 @@ def test_the_live_studio_records_its_session(soccer_session: Any, soccer_dir: Pa
         assert isinstance(last.agents["blue1"].inputs["ball.distance"], float)
 
 
-def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer_dir: Path, client_for: Any) -> None:
+def _record_steps(session: Any, client_for: Any, folder: Path, cap_bytes: int, steps: int) -> Any:
+    """Record ``steps`` steps of 40 ticks of a paused live session into ``folder`` (a file per step)."""
     from xabsl_studio.server.session.recording import LiveRecorder
 
-    folder = soccer_dir.parent / "rolling"
-    session = soccer_session
-    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes=200_000, roll_ticks=40)
+    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes, roll_ticks=40)
     session.live_recorder = recorder
     with LiveServer(session) as server:
         client = client_for(server)
         client.frame_after()
         assert client.command("pause")["ok"]
-        for _ in range(8):
+        for _ in range(steps):
             assert client.command("step", ticks=40)["ok"]
     session.stop()
+    return recorder
+
+
+def test_live_recordings_roll_and_keep_under_the_cap(soccer_session: Any, soccer_dir: Path, client_for: Any) -> None:
+
+    folder = soccer_dir.parent / "rolling"
+    recorder = _record_steps(soccer_session, client_for, folder, 200_000, 8)
     assert len(recorder.files) >= 8  # a new file every 40 ticks
     kept = sorted(folder.glob("*.mcap"))
     assert sum(p.stat().st_size for p in kept) <= 200_000 and len(kept) < len(recorder.files)
@@ -283,17 +289,7 @@ def test_the_newest_recording_stays_even_alone_over_the_cap(
     soccer_session: Any, soccer_dir: Path, client_for: Any
 ) -> None:
     """A cap below one file's size deleted the file just written, so nothing was kept at all."""
-    from xabsl_studio.server.session.recording import LiveRecorder
 
     folder = soccer_dir.parent / "tiny"
-    session = soccer_session
-    recorder = LiveRecorder(folder, "soccer", session.behavior_hz, session.physics_hz, cap_bytes=1_000, roll_ticks=40)
-    session.live_recorder = recorder
-    with LiveServer(session) as server:
-        client = client_for(server)
-        client.frame_after()
-        assert client.command("pause")["ok"]
-        for _ in range(3):
-            assert client.command("step", ticks=40)["ok"]
-    session.stop()
+    recorder = _record_steps(soccer_session, client_for, folder, 1_000, 3)
     assert sorted(folder.glob("*.mcap")) == [recorder.files[-1]]
