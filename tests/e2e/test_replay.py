@@ -100,7 +100,20 @@ def test_why_at_a_past_tick_shows_operand_values(tab: Any, recording: Path) -> N
     tab.wait_for_function(f"() => {STUDIO}.session.view.seq === {view.seq}")
     tab.keyboard.press("o")
     tab.evaluate(f"() => {STUDIO}.session.openOptionById({option})")
-    tab.wait_for_function("() => document.querySelector('.why').textContent.includes('Values recorded at')")
+    try:
+        tab.wait_for_function(
+            "() => document.querySelector('.option-title').textContent === 'approach_ball'"
+            " && document.querySelector('.why').textContent.includes('Values recorded at')"
+            " && document.querySelector('.why .comparisons li code') !== null",
+            timeout=30000,
+        )
+    except Exception:
+        # What the page showed instead: the option, the robot and the why pane's text.
+        shown = tab.evaluate(
+            f"() => [document.querySelector('.option-title').textContent, {STUDIO}.session.openOption,"
+            f" {STUDIO}.session.selectedRobot, {STUDIO}.session.view.seq, document.querySelector('.why').textContent]"
+        )
+        raise AssertionError(f"the why pane of approach_ball at seq {view.seq} shows {shown}") from None
     comparison = tab.locator(".why .comparisons li code").first.inner_text()
     assert comparison.startswith("ball.distance (") and comparison.endswith(") < 900"), comparison
     shown = float(comparison.split("(")[1].split(")")[0])
