@@ -210,9 +210,13 @@ def _binary(op: str, a: Value, b: Value) -> Value:
 _COMPARISONS = frozenset(COMPARISON_OPERATORS) | frozenset(ENUM_COMPARISON_OPERATORS)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Comparison:
-    """One comparison of a condition with the values of its sides (``?`` when unknown)."""
+    """One comparison of a condition with the values of its sides (``?`` when unknown).
+
+    Also the wire shape of the studio's ``explain`` result (``server.protocol.replies`` names
+    this class), so it carries ``shown``, the text the studio prints: ``ball.distance (412.3) < 500``.
+    """
 
     text: str
     op: str
@@ -221,11 +225,10 @@ class Comparison:
     right: str
     right_value: str
     value: bool | None
+    shown: str
 
     def __str__(self) -> str:
-        left = self.left if self.left_value == self.left else f"{self.left} ({self.left_value})"
-        right = self.right if self.right_value == self.right else f"{self.right} ({self.right_value})"
-        return f"{left} {self.op} {right}"
+        return self.shown
 
 
 def comparisons(condition: Expression, values: Values, text: Callable[[Expression], str]) -> tuple[Comparison, ...]:
@@ -249,9 +252,24 @@ def comparisons(condition: Expression, values: Values, text: Callable[[Expressio
                 shown.append("?")
         left, right = raw
         result = None if left is None or right is None else bool(_binary(node.op, left, right))
+        op, left_text, right_text = node.op.removeprefix("enum"), text(node.left), text(node.right)
         found.append(
             Comparison(
-                text(node), node.op.removeprefix("enum"), text(node.left), shown[0], text(node.right), shown[1], result
+                text=text(node),
+                op=op,
+                left=left_text,
+                left_value=shown[0],
+                right=right_text,
+                right_value=shown[1],
+                value=result,
+                # an operand whose value is its own text (a literal) is not repeated
+                shown=" ".join(
+                    (
+                        left_text if shown[0] == left_text else f"{left_text} ({shown[0]})",
+                        op,
+                        right_text if shown[1] == right_text else f"{right_text} ({shown[1]})",
+                    )
+                ),
             )
         )
     return tuple(found)

@@ -9,17 +9,13 @@ follow (tests validate real messages against it). Generated into ``web/src/messa
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import orjson
 from pydantic import with_config
 
-from xabsl_studio.server.protocol.limits import (
-    VERSION,
-)
-
-if TYPE_CHECKING:
-    pass
+from xabsl_studio.engine.runtime import debug
+from xabsl_studio.server.protocol.limits import VERSION
 from xabsl_studio.server.protocol.types import SCHEMA, CommandId, HelloReason, PathNode, WireValue
 
 
@@ -227,19 +223,9 @@ class HistoryChunk:
     frames: list[Frame]
 
 
-@with_config(SCHEMA)
-@dataclass(frozen=True, slots=True, kw_only=True)
-class Comparison:
-    """One comparison inside a condition with the values of its two sides (``ball.distance (412.3) < 500``)."""
-
-    text: str
-    op: str
-    left: str
-    left_value: str
-    right: str
-    right_value: str
-    value: bool | None
-    shown: str
+# One comparison inside a condition with the values of its two sides: the engine's own
+# definition is the wire shape (validated like the others: no key it does not declare).
+Comparison = with_config(SCHEMA)(debug.Comparison)
 
 
 @with_config(SCHEMA)

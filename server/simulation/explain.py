@@ -11,6 +11,7 @@ branch and comparisons, and the decision tree with the path taken.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from xabsl_studio.engine.ir.model import If, Option, Transition, leaf_path
@@ -50,19 +51,7 @@ def explanation_result(option: Option, explanation: Explanation) -> dict[str, An
                 "value": _plain(c.value),
                 "branch": c.branch,
                 "span": c.span.as_dict() if c.span else None,
-                "comparisons": [
-                    {
-                        "text": k.text,
-                        "op": k.op,
-                        "left": k.left,
-                        "left_value": k.left_value,
-                        "right": k.right,
-                        "right_value": k.right_value,
-                        "value": k.value,
-                        "shown": str(k),
-                    }
-                    for k in c.comparisons
-                ],
+                "comparisons": [dataclasses.asdict(k) for k in c.comparisons],
             }
             for c in explanation.conditions
         ],

@@ -44,7 +44,12 @@ export interface CheckCondition {
   condition: string;
 }
 
-/** One comparison inside a condition with the values of its two sides (`ball.distance (412.3) < 500`). */
+/**
+ * One comparison of a condition with the values of its sides (`?` when unknown).
+ *
+ * Also the wire shape of the studio's `explain` result (`server.protocol.replies` names
+ * this class), so it carries `shown`, the text the studio prints: `ball.distance (412.3) < 500`.
+ */
 export interface Comparison {
   text: string;
   op: string;
