@@ -9,6 +9,8 @@ from __future__ import annotations
 import enum
 from typing import NamedTuple, TypeAlias
 
+from typing_extensions import TypedDict
+
 #: Milliseconds of the engine clock (the original engine uses an unsigned 32-bit counter).
 Ms: TypeAlias = int
 #: A symbol or parameter value at run time: decimals are floats, enum values are host integers.
@@ -26,6 +28,18 @@ class Kind(enum.Enum):
     def ic_code(self) -> str:
         """The type letter of the intermediate code (§3.2): ``d``, ``b`` or ``e``."""
         return self.value[0]
+
+
+class SpanJson(TypedDict):
+    """A :class:`Span` as JSON (``Span.as_dict``): the studio's and the command line's one shape."""
+
+    file: str
+    line: int
+    col: int
+    end_line: int
+    end_col: int
+    start: int
+    end: int
 
 
 class Span(NamedTuple):
@@ -51,7 +65,7 @@ class Span(NamedTuple):
         """The span from the start of ``self`` to the end of ``other`` (same file)."""
         return Span(self.file, self.line, self.col, other.end_line, other.end_col, self.start, other.end)
 
-    def as_dict(self) -> dict[str, object]:
+    def as_dict(self) -> SpanJson:
         """The span as a JSON-ready dict (the field names as keys)."""
         return {
             "file": self.file,

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from xabsl_studio.engine import ir
-from xabsl_studio.engine.types import Span
+from xabsl_studio.engine.types import Span, SpanJson
 
 SCHEMA_VERSION = 1
 
@@ -86,7 +86,7 @@ class _Exporter:
         return render_expression(e, self.owner)
 
     @staticmethod
-    def span(span: Span | None) -> dict[str, Any] | None:
+    def span(span: Span | None) -> SpanJson | None:
         return span.as_dict() if span else None
 
     def parameter(self, p: ir.Parameter) -> dict[str, Any]:

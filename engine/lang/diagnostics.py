@@ -12,8 +12,11 @@ from __future__ import annotations
 import enum
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Literal
 
-from xabsl_studio.engine.types import Span
+from typing_extensions import TypedDict
+
+from xabsl_studio.engine.types import Span, SpanJson
 
 
 class Severity(enum.Enum):
@@ -90,6 +93,30 @@ if not all(CODES[code][0] is Severity.WARNING for code in LINT_CODES):  # pragma
     raise AssertionError("lint is warnings only: an error can never be hidden")
 
 
+class RelatedJson(TypedDict):
+    """A place a diagnostic points to besides its own (``related``)."""
+
+    message: str
+    span: SpanJson
+
+
+class DiagnosticJson(TypedDict):
+    """A :class:`Diagnostic` as JSON (``--format json``, the studio's saves, compiles and status).
+
+    ``file`` is the path the compiler read; ``span`` is None for a diagnostic about no place in
+    a file (a missing agents file). ``original_code`` is the original compiler's error number or "".
+    """
+
+    severity: Literal["error", "warning"]
+    code: str
+    original_code: str
+    lint: bool
+    message: str
+    file: str
+    span: SpanJson | None
+    related: list[RelatedJson]
+
+
 @dataclass(frozen=True, slots=True)
 class Diagnostic:
     """One finding about a behavior: where, how bad, which rule, what to do."""
@@ -122,10 +149,10 @@ class Diagnostic:
         line, col = (self.span.line, self.span.col) if self.span else (0, 0)
         return f"{where}:{line}:{col}: {self.severity.value}: {self.message} [{self.code}]"
 
-    def as_dict(self) -> dict[str, object]:
+    def as_dict(self) -> DiagnosticJson:
         """The diagnostic as plain JSON data (``--format json``, the studio)."""
         return {
-            "severity": self.severity.value,
+            "severity": "error" if self.is_error else "warning",
             "code": self.code,
             "original_code": self.original_code,
             "lint": self.is_lint,

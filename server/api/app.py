@@ -34,7 +34,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, StreamingResponse
 from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, Field, JsonValue
+from pydantic import JsonValue
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import HTTPConnection
 from starlette.routing import Match
@@ -59,6 +59,19 @@ from xabsl_studio.server.api.studios import Studios, StudiosMiddleware
 from xabsl_studio.server.protocol.commands import Command, History, Reload, guess_id, openapi_schemas, parse_command
 from xabsl_studio.server.protocol.limits import HISTORY_CHUNK, MAX_CLIENTS, MAX_LSP_CLIENTS, VERSION, CloseCode
 from xabsl_studio.server.protocol.replies import CompileEvent, FileEvent, Reply, RestReply, encode, encode_history_chunk
+from xabsl_studio.server.protocol.rest import (
+    FILE_PATH_PATTERN,
+    NEW_FILE_PATH_PATTERN,
+    CompileBody,
+    CompileResult,
+    FileBody,
+    FileList,
+    GenerationDiff,
+    ProgramDiagnostic,
+    Recompiled,
+    RenameBody,
+    SaveResult,
+)
 from xabsl_studio.server.protocol.types import (
     BEHAVIOR_PARAMS_INDEX,
     DEPTH_INDEX,
@@ -67,7 +80,7 @@ from xabsl_studio.server.protocol.types import (
     ProtocolError,
 )
 from xabsl_studio.server.session import frames
-from xabsl_studio.server.session.files import INVISIBLE, BehaviorFiles, FileError
+from xabsl_studio.server.session.files import BehaviorFiles, FileError
 from xabsl_studio.server.session.frames import Generation
 from xabsl_studio.server.session.generations import GenerationGone
 from xabsl_studio.server.session.live import CommandError, Session
@@ -95,40 +108,12 @@ then reload this page.</p>
 
 #: What a behavior file path looks like (documented, not enforced here: ``xabsl_studio.server.session.files`` checks
 #: paths and answers 400/403/404 with the reason, which a pattern mismatch could not give).
-FILE_PATH_PATTERN = r"^([^/\\\x00.][^/\\\x00]*/)*[^/\\\x00.][^/\\\x00]*\.xabsl$"
-#: What the path of a file the studio creates looks like: its name is visible (``files.INVISIBLE``),
-#: neither blank nor starting or ending with a space.
-NEW_FILE_PATH_PATTERN = (
-    r"^([^/\\\x00.][^/\\\x00]*/)*" + f"[^/\\\\ .{INVISIBLE}]([^/\\\\{INVISIBLE}]*[^/\\\\ {INVISIBLE}])?" + r"\.xabsl$"
-)
 _FILE_PATH: dict[str, JsonValue] = {"pattern": FILE_PATH_PATTERN}
 _NEW_FILE_PATH: dict[str, JsonValue] = {"pattern": NEW_FILE_PATH_PATTERN}
 FilePath = Annotated[str, FastApiPath(description="relative to the example folder", json_schema_extra=_FILE_PATH)]
 NewFilePath = Annotated[
     str, FastApiPath(description="relative to the example folder", json_schema_extra=_NEW_FILE_PATH)
 ]
-
-
-class FileBody(BaseModel):
-    """The body of writing or creating a file."""
-
-    text: str = Field(description="the whole file content")
-    version: str | None = Field(default=None, description="the version edited (instead of If-Match)")
-
-
-class RenameBody(BaseModel):
-    """The body of renaming a file."""
-
-    path: str = Field(description="the new path, relative to the example folder", json_schema_extra=_NEW_FILE_PATH)
-
-
-class CompileBody(BaseModel):
-    """The body of compiling unsaved text."""
-
-    path: str = Field(
-        description="the file the text belongs to, relative to the example folder", pattern=FILE_PATH_PATTERN
-    )
-    text: str = Field(description="its unsaved content")
 
 
 class NdjsonResponse(StreamingResponse):
@@ -232,10 +217,10 @@ class Studio:
 
     # -- compiling and hot reload -------------------------------------------------------------------------
 
-    async def recompile(self, keys: list[str]) -> dict[str, dict[str, Any]]:
+    async def recompile(self, keys: list[str]) -> dict[str, Recompiled]:
         """Compile behaviors from disk and hot-swap the clean ones; per key ok + diagnostics."""
         session = self.session
-        results: dict[str, dict[str, Any]] = {}
+        results: dict[str, Recompiled] = {}
         for key in keys:
             compilation = await asyncio.to_thread(session.compile, key)
             problem = await session.apply(key, compilation)
@@ -267,12 +252,14 @@ class Studio:
             keys.extend(k for k in self.programs_of(path) if k not in keys)
         results = await self.recompile(keys)
         ok = all(r["ok"] for r in results.values())
-        diagnostics = [dict(d, program=k) for k, r in results.items() for d in r["diagnostics"]]
+        diagnostics: list[ProgramDiagnostic] = [
+            {**d, "program": k} for k, r in results.items() for d in r["diagnostics"]
+        ]
         if self.hub is not None:
             for path in paths:
                 gone = path == deleted
                 self.hub.broadcast(FileEvent(path=path, version=None if gone else version, deleted=gone))
-        body: dict[str, Any] = {
+        body: SaveResult = {
             "path": paths[-1],
             "version": version,
             "saved": True,
@@ -524,7 +511,7 @@ async def activation_log(studio: StudioDep, t0: int = Query(0), t1: int = Query(
 
 
 @router.get("/api/generations/{number}/diff", tags=["session"], responses=error_responses(404))
-async def generation_diff(studio: StudioDep, number: int = FastApiPath(ge=0, le=2**62)) -> dict[str, Any]:
+async def generation_diff(studio: StudioDep, number: int = FastApiPath(ge=0, le=2**62)) -> GenerationDiff:
     """What a hot reload (or reset, fork) changed: per behavior file, its unified diff.
 
     Against generation ``number - 1``, from the sources the session keeps of recent generations.
@@ -542,12 +529,10 @@ async def generation_diff(studio: StudioDep, number: int = FastApiPath(ge=0, le=
 
 
 @router.get("/api/files", tags=["files"], responses=error_responses())
-async def list_files(studio: StudioDep) -> dict[str, Any]:
+async def list_files(studio: StudioDep) -> FileList:
     """Every behavior file: path, version, size, the behaviors it belongs to."""
     listed = await asyncio.to_thread(studio.files.list)
-    for item in listed:
-        item["programs"] = studio.programs_of(item["path"])
-    return {"files": listed}
+    return {"files": [{**item, "programs": studio.programs_of(item["path"])} for item in listed]}
 
 
 @router.get("/api/files/{path:path}", tags=["files"], responses=error_responses(400, 404, 415))
@@ -597,16 +582,16 @@ async def delete_file(studio: StudioDep, path: FilePath, if_match: str | None = 
 
 
 @router.post("/api/compile", tags=["files"], responses=error_responses(400, 404, 413, 422))
-async def compile_text(studio: StudioDep, body: CompileBody) -> dict[str, Any]:
+async def compile_text(studio: StudioDep, body: CompileBody) -> CompileResult:
     """Diagnostics for unsaved text of a file (nothing is saved or swapped): as-you-type linting."""
     real = studio.files.resolve(body.path, must_exist=False)
     keys = studio.programs_of(body.path)
-    diagnostics: list[dict[str, Any]] = []
+    diagnostics: list[ProgramDiagnostic] = []
     ok = True
     for key in keys:
         compilation = await asyncio.to_thread(studio.session.compile, key, {str(real): body.text})
         ok = ok and compilation.ok
-        diagnostics.extend(dict(d.as_dict(), program=key) for d in compilation.diagnostics)
+        diagnostics.extend({**d.as_dict(), "program": key} for d in compilation.diagnostics)
     return {"ok": ok, "diagnostics": diagnostics, "programs": keys}
 
 

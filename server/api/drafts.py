@@ -20,47 +20,17 @@ from typing import Annotated, Any
 
 import orjson
 from fastapi import APIRouter, Depends, HTTPException, Request
-from pydantic import BaseModel, Field, JsonValue
 
 from xabsl_studio.engine.files import write_atomically
 from xabsl_studio.engine.testing.save import DraftError, draft_file_name, draft_test
 from xabsl_studio.engine.worlds.loader import world_names
 from xabsl_studio.server.api.openapi import error_responses
+from xabsl_studio.server.protocol.rest import TestDraft, TestDraftBody
 from xabsl_studio.server.session.files import FileError
 
 __all__ = ["TestDraftBody", "router", "save_draft"]
 
 router = APIRouter()
-
-
-class TestForce(BaseModel):
-    """What the tester forced: an option or basic behavior and its parameters (enums by element name)."""
-
-    kind: str = Field(pattern="^(option|behavior)$")
-    name: str = Field(min_length=1, max_length=200)
-    params: dict[str, JsonValue] = Field(default_factory=dict)
-
-
-class TestHit(BaseModel):
-    """A breakpoint hit to reproduce: breakpoint ``breakpoint`` of behavior ``program`` after tick ``seq``."""
-
-    program: str = Field(min_length=1, max_length=500)
-    breakpoint: int = Field(ge=1, le=2**31)
-    seq: int = Field(ge=0)
-
-
-class TestDraftBody(BaseModel):
-    """Save as test: the tester's situation (docs/tests.md); ``save`` writes ``tests/NAME.xabsl-test.toml``."""
-
-    name: str = Field(min_length=1, max_length=120)
-    robot: str = Field(min_length=1, max_length=120)
-    force: TestForce | None = None
-    overrides: dict[str, JsonValue] = Field(default_factory=dict)
-    active: list[tuple[str, str]] = Field(default_factory=list, max_length=500)
-    behaviors: list[str] = Field(default_factory=list, max_length=500)
-    duration: float = Field(5.0, gt=0, le=3600)
-    hit: TestHit | None = None
-    save: bool = False
 
 
 def _studio(request: Request) -> Any:
@@ -99,7 +69,7 @@ def save_draft(root: Path, file: str, text: str) -> None:
 
 
 @router.post("/api/tests/draft", tags=["files"], responses=error_responses(400, 409, 422))
-async def test_draft(studio: StudioDep, body: TestDraftBody) -> dict[str, Any]:
+async def test_draft(studio: StudioDep, body: TestDraftBody) -> TestDraft:
     """A behavior test file reproducing the tester's situation (text; with ``save``, also written).
 
     The setup comes from the world's latest scene when the world plug-in can turn a scene into a

@@ -22,16 +22,15 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Request
-from pydantic import BaseModel, Field
 
 from xabsl_studio.server.api.openapi import error_responses
 from xabsl_studio.server.api.studios import StudioFull, Studios
+from xabsl_studio.server.protocol.rest import RECORDING_NAME_PATTERN, ForkBody, OpenBody
 
 __all__ = ["RecordingLibrary", "router"]
 
 #: What a recording's name may look like (a plain file name).
-NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.+-]{0,200}\.mcap$"
-_NAME = re.compile(NAME_PATTERN)
+_NAME = re.compile(RECORDING_NAME_PATTERN)
 #: The most recordings listed (newest first).
 MAX_LISTED = 500
 
@@ -112,18 +111,6 @@ def _facts(path: Path) -> dict[str, Any]:
             }
     except (RecordingError, OSError) as error:
         return {"error": str(error)}
-
-
-class OpenBody(BaseModel):
-    """Which recording to open."""
-
-    name: str = Field(description="a recording's name as listed", pattern=NAME_PATTERN, max_length=210)
-
-
-class ForkBody(BaseModel):
-    """Run from here: the tick of the replay to start the live session from."""
-
-    seq: int = Field(ge=1, le=2**40, description="the fork tick (the first tick the new session runs)")
 
 
 router = APIRouter()

@@ -14,7 +14,8 @@ from typing import Any, Literal
 import orjson
 from pydantic import with_config
 
-from xabsl_studio.engine.runtime import debug
+from xabsl_studio.engine.lang.diagnostics import DiagnosticJson
+from xabsl_studio.engine.runtime.debug import Comparison
 from xabsl_studio.server.protocol.limits import VERSION
 from xabsl_studio.server.protocol.types import SCHEMA, CommandId, HelloReason, PathNode, WireValue
 
@@ -65,7 +66,7 @@ class CompileEvent:
     event: Literal["compile"] = "compile"
     program: str
     ok: bool
-    diagnostics: list[dict[str, Any]]
+    diagnostics: list[DiagnosticJson]
 
 
 @with_config(SCHEMA)
@@ -225,7 +226,7 @@ class HistoryChunk:
 
 # One comparison inside a condition with the values of its two sides: the engine's own
 # definition is the wire shape (validated like the others: no key it does not declare).
-Comparison = with_config(SCHEMA)(debug.Comparison)
+with_config(SCHEMA)(Comparison)
 
 
 @with_config(SCHEMA)

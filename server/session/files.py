@@ -43,21 +43,13 @@ from typing import Any
 
 from xabsl_studio.engine.files import FileTooLarge, NotRegularFile, read_regular, write_atomically
 from xabsl_studio.server.protocol.errors import ServerError
+from xabsl_studio.server.protocol.rest import INVISIBLE, FileStat
 
 SUFFIX = ".xabsl"
 #: The largest behavior file listed or opened (a real option file is a few kilobytes).
 MAX_FILE_BYTES = 16 * 1024 * 1024
 #: A first name that is a drive (``C:``, ``C:/...``): absolute on Windows, and meant so elsewhere.
 _DRIVE = re.compile(r"^[A-Za-z]:(/|$)")
-#: What a new file name may not hold, as a regular-expression class body (for the check here and
-#: the OpenAPI pattern of new names): C0 and C1 controls, DEL, every space but U+0020, the line and
-#: paragraph separators, the invisible format characters (soft hyphen, zero-width characters, bidi
-#: embeddings, overrides and isolates, word joiners, the BOM, annotation marks). Lone surrogates
-#: are refused by ``check_syntax`` (no Unicode); in a class, they would not be an ECMA pattern.
-INVISIBLE = (
-    r"\x00-\x1f\x7f-\xa0\xad\u061c\u1680\u180e\u2000-\u200f\u2028-\u202f\u205f-\u2064\u2066-\u206f"
-    r"\u3000\ufeff\ufff9-\ufffb"
-)
 _INVISIBLE = re.compile(f"[{INVISIBLE}]")
 #: Longest name segment and path, in bytes of UTF-8 (the usual NAME_MAX and PATH_MAX).
 MAX_NAME_BYTES = 255
@@ -206,9 +198,9 @@ class BehaviorFiles:
 
     # -- operations ---------------------------------------------------------------------------------
 
-    def list(self) -> list[dict[str, Any]]:
+    def list(self) -> list[FileStat]:
         """Every ``.xabsl`` file below the behavior folders: path, version, size."""
-        found: dict[str, dict[str, Any]] = {}
+        found: dict[str, FileStat] = {}
         for folder in self.folders:
             for directory, subdirs, names in os.walk(folder):
                 subdirs[:] = sorted(d for d in subdirs if not d.startswith("."))

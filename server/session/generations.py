@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Mapping
-from typing import Any
+from typing import Literal
 
 from xabsl_studio.server.protocol.errors import ServerError
+from xabsl_studio.server.protocol.rest import ChangedFile, GenerationDiff
 from xabsl_studio.server.session.frames import Generation, Ring
 
 #: The most generations kept (a reload every second for two minutes stays well inside).
@@ -87,7 +88,7 @@ class Generations:
                     seen[id(text)] = len(text)
         return sum(seen.values())
 
-    def diff(self, number: int) -> dict[str, Any]:
+    def diff(self, number: int) -> GenerationDiff:
         """What changed from generation ``number - 1`` to ``number``: per file a unified diff.
 
         Raises:
@@ -99,11 +100,13 @@ class Generations:
         previous = self._by_number.get(number - 1)
         if previous is None:
             raise GenerationGone(f"generation {number - 1}, the one before {number}, is not kept (any more)")
-        files = []
+        files: list[ChangedFile] = []
         for key, names in sorted(gen.changed.items()):
             old, new = previous.sources.get(key, {}), gen.sources.get(key, {})
             for name in names:
-                change = "added" if name not in old else "removed" if name not in new else "changed"
+                change: Literal["changed", "added", "removed"] = (
+                    "added" if name not in old else "removed" if name not in new else "changed"
+                )
                 files.append(
                     {
                         "program": key,

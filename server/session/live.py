@@ -78,6 +78,7 @@ from xabsl_studio.server.protocol.host import (
     WorkerRequest,
 )
 from xabsl_studio.server.protocol.replies import ForkOrigin
+from xabsl_studio.server.protocol.rest import ProgramStatus
 from xabsl_studio.server.protocol.types import HelloReason
 from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.breakpoints import BreakpointStore, validate
@@ -121,7 +122,7 @@ class ProgramState:
         """The program the studio shows: the running one, else what parsed of a broken one."""
         return self.running if self.running is not None else self.partial
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> ProgramStatus:
         """The behavior set as ``GET /api/status`` shows it."""
         comp = self.compilation
         return {

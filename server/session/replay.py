@@ -70,6 +70,7 @@ from xabsl_studio.server.protocol.commands import (
     Step,
 )
 from xabsl_studio.server.protocol.host import WorkerCommand
+from xabsl_studio.server.protocol.rest import ReplayInfo
 from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.live import CommandError, Session
@@ -562,6 +563,19 @@ class ReplaySession(Session):
         """The status of a replay: position, length, the live session's fields where they apply."""
         latest = self.ring.latest
         gen = self.generation
+        replay: ReplayInfo = {
+            "file": self.recording.path,
+            "ticks": len(self.source),
+            "first": self.source.first,
+            "position": self.position,
+            "t0": self.t_first,
+            "t1": self.t_last,
+            "seconds": round(len(self.source) / self.behavior_hz, 3),
+            "header": {k: v for k, v in self.recording.header.items() if k != "tables"},
+            "events": len(self.recording.events),
+            "seeks": self.seeks,
+            "seek_ms": round(1000 * self.seek_seconds / self.seeks, 3) if self.seeks else 0.0,
+        }
         return {
             "example": self.example.name,
             "paused": self.paused,
@@ -586,19 +600,7 @@ class ReplaySession(Session):
             "simulation": {"running": False, "pid": None, "restarts": 0, "crash": None, "pipe": {}},
             "programs": {},
             "world": latest_status(latest),
-            "replay": {
-                "file": self.recording.path,
-                "ticks": len(self.source),
-                "first": self.source.first,
-                "position": self.position,
-                "t0": self.t_first,
-                "t1": self.t_last,
-                "seconds": round(len(self.source) / self.behavior_hz, 3),
-                "header": {k: v for k, v in self.recording.header.items() if k != "tables"},
-                "events": len(self.recording.events),
-                "seeks": self.seeks,
-                "seek_ms": round(1000 * self.seek_seconds / self.seeks, 3) if self.seeks else 0.0,
-            },
+            "replay": replay,
         }
 
 

@@ -1,5 +1,8 @@
 /// REST calls under `/api` (docs/protocol.md, "REST"): same origin, token from the page address.
-import type { ServerDiagnostic } from "./xabsl/lint";
+import type { CompileResult, FileEntry, FileList, FileText, GenerationDiff, ProgramStatus, SaveResult, TestDraft } from "./messages.gen";
+
+// The REST results are defined once, in server/protocol/rest.py, and generated into messages.gen.ts.
+export type { ChangedFile, CompileResult, FileEntry, FileText, GenerationDiff, ProgramStatus, SaveResult, TestDraft } from "./messages.gen";
 
 /// The token of a server that requires one: `?token=` of the page address.
 export const token: string | null = new URLSearchParams(globalThis.location?.search ?? "").get("token");
@@ -59,33 +62,13 @@ async function request<T>(method: string, path: string, body?: unknown, extra: R
   return { status: response.status, data: data as T };
 }
 
-export interface FileEntry {
-  path: string;
-  version: string;
-  size: number;
-  programs: string[];
-}
 
-export interface FileText {
-  path: string;
-  version: string;
-  text: string;
-}
 
-export interface SaveResult {
-  path: string;
-  version: string;
-  saved: boolean;
-  ok: boolean;
-  diagnostics: ServerDiagnostic[];
-  reloaded: string[];
-  detail?: string;
-}
 
 const encodePath = (path: string): string => path.split("/").map(encodeURIComponent).join("/");
 
 export async function listFiles(): Promise<FileEntry[]> {
-  return (await request<{ files: FileEntry[] }>("GET", "files")).data.files;
+  return (await request<FileList>("GET", "files")).data.files;
 }
 
 export async function readFile(path: string): Promise<FileText> {
@@ -105,11 +88,6 @@ export async function createFile(path: string, text: string): Promise<{ status: 
   return { status, result: data };
 }
 
-export interface CompileResult {
-  ok: boolean;
-  diagnostics: ServerDiagnostic[];
-  programs?: unknown;
-}
 
 /// Compile with unsaved text for one file (nothing saved or swapped).
 export async function compile(path: string, text: string): Promise<CompileResult> {
@@ -137,16 +115,6 @@ export function graphSvg(program: string, option?: string | number, agent?: stri
   return svg;
 }
 
-/// One behavior set in `GET /api/status` (`programs`): the last compile and what runs.
-export interface ProgramStatus {
-  folder: string;
-  agents_file: string;
-  ok: boolean;
-  running: boolean;
-  partial?: boolean;
-  error: string | null;
-  diagnostics: ServerDiagnostic[];
-}
 
 /// The behavior sets of `GET /api/status`.
 export async function programStatus(): Promise<Record<string, ProgramStatus>> {
@@ -159,13 +127,6 @@ export function clearGraphCache(): void {
   svgCache.clear();
 }
 
-/// "Save as test" (`POST /api/tests/draft`, docs/tests.md): the behavior test file reproducing the
-/// tester's situation; with `save`, also written to the example's `tests/` folder (409 if it exists).
-export interface TestDraft {
-  text: string;
-  path: string;
-  saved: boolean;
-}
 
 export async function draftTest(body: unknown): Promise<TestDraft> {
   const { status, data } = await request<TestDraft & { detail?: string }>("POST", "tests/draft", body);
@@ -173,22 +134,7 @@ export async function draftTest(body: unknown): Promise<TestDraft> {
   return data;
 }
 
-/// One behavior file a generation changed (`GET /api/generations/{n}/diff`).
-export interface ChangedFile {
-  program: string;
-  path: string;
-  change: "changed" | "added" | "removed";
-  /// A unified diff from the previous generation's text to this one's.
-  diff: string;
-}
 
-/// What generation `n` (a hot reload, reset, fork) changed against generation `n - 1`.
-export interface GenerationDiff {
-  number: number;
-  reason: string;
-  previous: number;
-  files: ChangedFile[];
-}
 
 /// `GET /api/generations/{n}/diff` (an ApiError with status 404 when the server keeps it no more).
 export async function generationDiff(n: number): Promise<GenerationDiff> {

@@ -35,6 +35,14 @@ export interface BreakpointList {
   breakpoints: BreakpointInfo[];
 }
 
+/** One behavior file a generation changed. */
+export interface ChangedFile {
+  program: string;
+  path: string;
+  change: "changed" | "added" | "removed";
+  diff: string;
+}
+
 /** Check `condition` against behavior set `program`'s symbols (default: the first): diagnostics. */
 export interface CheckCondition {
   type: "command";
@@ -61,13 +69,26 @@ export interface Comparison {
   shown: string;
 }
 
+/** The body of compiling unsaved text. */
+export interface CompileBody {
+  path: string;
+  text: string;
+}
+
 /** A behavior set was compiled after a file change (`ok`: a `hello` with reason reload follows). */
 export interface CompileEvent {
   type: "event";
   event: "compile";
   program: string;
   ok: boolean;
-  diagnostics: Record<string, unknown>[];
+  diagnostics: DiagnosticJson[];
+}
+
+/** `POST /api/compile`: diagnostics of unsaved text (nothing saved or swapped). */
+export interface CompileResult {
+  ok: boolean;
+  diagnostics: ProgramDiagnostic[];
+  programs: string[];
 }
 
 /** One `if` on the path to the leaf an option's decision took, with the values it had. */
@@ -93,6 +114,23 @@ export interface CrashEvent {
   message: string;
   seq: number;
   t: number | null;
+}
+
+/**
+ * A `Diagnostic` as JSON (`--format json`, the studio's saves, compiles and status).
+ *
+ * `file` is the path the compiler read; `span` is None for a diagnostic about no place in
+ * a file (a missing agents file). `original_code` is the original compiler's error number or "".
+ */
+export interface DiagnosticJson {
+  severity: "error" | "warning";
+  code: string;
+  original_code: string;
+  lint: boolean;
+  message: string;
+  file: string;
+  span: SpanJson | null;
+  related: RelatedJson[];
 }
 
 /** Enable or disable breakpoint `breakpoint` of behavior set `program` (default: the first). */
@@ -141,6 +179,20 @@ export interface Fault {
   state: string | null;
 }
 
+/** The body of writing or creating a file. */
+export interface FileBody {
+  text: string;
+  version?: string | null;
+}
+
+/** One behavior file of `GET /api/files`: also the behavior sets it belongs to. */
+export interface FileEntry {
+  path: string;
+  version: string;
+  size: number;
+  programs: string[];
+}
+
 /**
  * A behavior file was written, created, renamed or deleted: by a client of the studio, or on disk.
  *
@@ -154,6 +206,25 @@ export interface FileEvent {
   version: string | null;
   deleted: boolean;
   by?: "studio" | "disk";
+}
+
+/** `GET /api/files`: every behavior file below the behavior folders. */
+export interface FileList {
+  files: FileEntry[];
+}
+
+/** A behavior file on disk: its path in the API, its version (content hash), its size in bytes. */
+export interface FileStat {
+  path: string;
+  version: string;
+  size: number;
+}
+
+/** `GET /api/files/{path}`: a file's text and version (also its ETag). */
+export interface FileText {
+  path: string;
+  version: string;
+  text: string;
 }
 
 /** Replace the root of `robot`'s engine by the basic behavior `behavior` with `params`. */
@@ -190,6 +261,11 @@ export interface Fork {
   seq: number;
 }
 
+/** Run from here: the tick of the replay to start the live session from. */
+export interface ForkBody {
+  seq: number;
+}
+
 /**
  * Where the running world was forked (`fork`): the original's tick `seq` (time `t`) ran again as `start`.
  *
@@ -221,6 +297,14 @@ export interface Frame {
   robots: RobotFrame[];
   scene: Record<string, unknown>;
   status?: Record<string, unknown> | null;
+}
+
+/** `GET /api/generations/{n}/diff`: what generation `n` changed against `n - 1`. */
+export interface GenerationDiff {
+  number: number;
+  reason: string;
+  previous: number;
+  files: ChangedFile[];
 }
 
 /**
@@ -280,6 +364,8 @@ export interface HistoryResult {
   generations?: GenerationInfo[];
 }
 
+export type JsonValue = unknown;
+
 /** The last transition of the option up to the explained tick: when, from where to where, why. */
 export interface LastTransition {
   seq: number;
@@ -299,6 +385,11 @@ export interface ListBreakpoints {
   id?: number | string | null;
   op: "list_breakpoints";
   program?: string | null;
+}
+
+/** Which recording to open. */
+export interface OpenBody {
+  name: string;
 }
 
 /** The input symbol `symbol` of `robot`'s engine reads `value`. */
@@ -328,6 +419,48 @@ export interface ProgramCompile {
   ok: boolean;
   diagnostics: Record<string, unknown>[];
   error: string | null;
+}
+
+/** A diagnostic of one behavior set of a save or a compile (`program`: the set's key). */
+export interface ProgramDiagnostic {
+  severity: "error" | "warning";
+  code: string;
+  original_code: string;
+  lint: boolean;
+  message: string;
+  file: string;
+  span: SpanJson | null;
+  related: RelatedJson[];
+  program: string;
+}
+
+/** One behavior set in `GET /api/status`: its last compile and what runs. */
+export interface ProgramStatus {
+  folder: string;
+  agents_file: string;
+  ok: boolean;
+  running: boolean;
+  partial: boolean;
+  error: string | null;
+  diagnostics: DiagnosticJson[];
+  files: string[];
+}
+
+/**
+ * One behavior set compiled from disk after a change (`reload`'s `programs`, a save).
+ *
+ * `error`: why it was not swapped in (its diagnostics' errors, or the engine refused it).
+ */
+export interface Recompiled {
+  ok: boolean;
+  diagnostics: DiagnosticJson[];
+  error: string | null;
+}
+
+/** A place a diagnostic points to besides its own (`related`). */
+export interface RelatedJson {
+  message: string;
+  span: SpanJson;
 }
 
 /** Back to the normal root of `robot`'s engine. */
@@ -367,6 +500,26 @@ export interface RemoveBreakpoint {
   op: "remove_breakpoint";
   program?: string | null;
   breakpoint: number;
+}
+
+/** The body of renaming a file. */
+export interface RenameBody {
+  path: string;
+}
+
+/** `replay` of `GET /api/status` on a replay: the recording and the playback position. */
+export interface ReplayInfo {
+  file: string;
+  ticks: number;
+  first: number;
+  position: number;
+  t0: number;
+  t1: number;
+  seconds: number;
+  header: Record<string, unknown>;
+  events: number;
+  seeks: number;
+  seek_ms: number;
 }
 
 /** The answer to a command (and the error answer to a bad message: `id` then may be null). */
@@ -437,6 +590,21 @@ export interface RobotInfo {
   engine?: boolean;
 }
 
+/**
+ * A write, create, rename or delete: what was saved, and the recompile of its behavior sets.
+ *
+ * `detail` (with status 422): saved, but a behavior set did not compile.
+ */
+export interface SaveResult {
+  path: string;
+  version: string | null;
+  saved: boolean;
+  ok: boolean;
+  diagnostics: ProgramDiagnostic[];
+  reloaded: string[];
+  detail?: string;
+}
+
 /** A replay: make tick `seq` of the recording the current one (a live session refuses it). */
 export interface Seek {
   type: "command";
@@ -493,6 +661,17 @@ export interface SetBreakpoint {
   enabled?: boolean;
 }
 
+/** A `Span` as JSON (`Span.as_dict`): the studio's and the command line's one shape. */
+export interface SpanJson {
+  file: string;
+  line: number;
+  col: number;
+  end_line: number;
+  end_col: number;
+  start: number;
+  end: number;
+}
+
 /** Run at real time x `speed`. */
 export interface Speed {
   type: "command";
@@ -539,6 +718,40 @@ export interface Subscribe {
   rate?: number;
   robots?: number[] | null;
   id?: number | string | null;
+}
+
+/** `POST /api/tests/draft`: the behavior test file reproducing the tester's situation. */
+export interface TestDraft {
+  text: string;
+  path: string;
+  saved: boolean;
+}
+
+/** Save as test: the tester's situation (docs/tests.md); `save` writes `tests/NAME.xabsl-test.toml`. */
+export interface TestDraftBody {
+  name: string;
+  robot: string;
+  force?: TestForce | null;
+  overrides?: Record<string, JsonValue>;
+  active?: [string, string][];
+  behaviors?: string[];
+  duration?: number;
+  hit?: TestHit | null;
+  save?: boolean;
+}
+
+/** What the tester forced: an option or basic behavior and its parameters (enums by element name). */
+export interface TestForce {
+  kind: string;
+  name: string;
+  params?: Record<string, JsonValue>;
+}
+
+/** A breakpoint hit to reproduce: breakpoint `breakpoint` of behavior `program` after tick `seq`. */
+export interface TestHit {
+  program: string;
+  breakpoint: number;
+  seq: number;
 }
 
 /** A command of the world itself (`engine.host.CommandableWorld`); without `name`, the list of them. */

@@ -7,15 +7,11 @@
 /// is loaded at every n-th tick, enough for the timeline and the plots. "Why" asks the server for
 /// the explanation of the tick in view (`explain` with `seq`): any tick of a replay is explainable.
 import type { Connection } from "./connection";
+import type { ReplayInfo as ReplayStatus } from "./messages.gen";
 import type { Session } from "./session";
 
-export interface ReplayInfo {
-  file: string;
-  ticks: number;
-  /// Behavior times (ms) of the first and the last tick.
-  t0: number;
-  t1: number;
-}
+/// What the page keeps of a replay's status (`replay` of `GET /api/status`, server/protocol/rest.py).
+export type ReplayInfo = Pick<ReplayStatus, "file" | "ticks" | "t0" | "t1">;
 
 /// Ticks one `history` request spans (the server refuses more than 4800).
 export const HUNK_TICKS = 4000;
@@ -24,7 +20,7 @@ export const MAX_TICKS = 12_000;
 
 /// The replay described by a status answer, or null for a live session.
 export function replayOf(status: Record<string, unknown> | null | undefined): ReplayInfo | null {
-  const replay = status?.["replay"] as Partial<ReplayInfo> | undefined;
+  const replay = status?.["replay"] as Partial<ReplayStatus> | undefined;
   if (!replay || typeof replay.ticks !== "number" || typeof replay.t0 !== "number" || typeof replay.t1 !== "number") return null;
   return { file: String(replay.file ?? ""), ticks: replay.ticks, t0: replay.t0, t1: replay.t1 };
 }

@@ -3,9 +3,9 @@ import type { ProgramStatus } from "../src/api";
 import { problemHeadline } from "../src/panels/banner";
 import { callsText } from "../src/panels/symbols";
 
-const error = { severity: "error" as const, code: "syntax-error", message: "unexpected 'else'", file: "a.xabsl", span: null };
+const error = { severity: "error" as const, code: "syntax-error", original_code: "", lint: false, message: "unexpected 'else'", file: "a.xabsl", span: null, related: [] };
 const warning = { ...error, severity: "warning" as const };
-const status = (over: Partial<ProgramStatus>): ProgramStatus => ({ folder: "team", agents_file: "agents.xabsl", ok: false, running: false, error: null, diagnostics: [], ...over });
+const status = (over: Partial<ProgramStatus>): ProgramStatus => ({ folder: "team", agents_file: "agents.xabsl", ok: false, running: false, partial: false, error: null, diagnostics: [], files: [], ...over });
 
 describe("problemHeadline", () => {
   it("counts errors, not warnings, and says the robots stand when nothing runs", () => {

@@ -48,9 +48,12 @@ describe("speeds", () => {
 const diagnostic = (program: string, severity: SetDiagnostic["severity"], message: string, line = 7): SetDiagnostic => ({
   severity,
   code: "x",
+  original_code: "",
+  lint: false,
   message,
   file: "behavior/basic_behaviors.xabsl",
   span: { file: "behavior/basic_behaviors.xabsl", line, col: 3, end_line: line, end_col: 9, start: 0, end: 0 },
+  related: [],
   program,
 });
 

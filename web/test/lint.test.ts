@@ -12,6 +12,7 @@ function diag(line: number, col: number, endCol: number, extra: Partial<ServerDi
     severity: "error",
     code: "unknown-state",
     original_code: "X5552",
+    lint: false,
     message: "option 'play' has no state 'serch' (did you mean 'search'?)",
     file: "behavior/options/play.xabsl",
     span: { file: "behavior/options/play.xabsl", line, col, end_line: line, end_col: endCol, start, end: start + endCol - col },

@@ -537,7 +537,7 @@ export class EditorPanel {
         toast(`Not saved: ${b.path} changed on disk. Choose what to keep.`, "error");
         return;
       }
-      b.version = result.version;
+      b.version = result.version ?? b.version;
       b.saved = text;
       this.lsp.saved(b.path);
       b.conflict = null;

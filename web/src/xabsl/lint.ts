@@ -9,20 +9,14 @@
 import { type Diagnostic, setDiagnostics } from "@codemirror/lint";
 import type { Extension, Text } from "@codemirror/state";
 import { type EditorView, ViewPlugin, type ViewUpdate } from "@codemirror/view";
-import type { Span } from "../description";
+import type { DiagnosticJson } from "../messages.gen";
 import { fromPosition } from "./complete";
 import type { LspClient, LspDiagnostic } from "./lsp";
 
 /// One diagnostic as the server sends it (engine/lang/diagnostics.py, `--format json`).
-export interface ServerDiagnostic {
-  severity: "error" | "warning" | "info" | "hint";
-  code: string;
-  original_code?: string;
-  message: string;
-  file: string | null;
-  span: Span | null;
-  related?: Array<{ message: string; span: Span | null }>;
-}
+/// A diagnostic as the server sends it (the compiler's one JSON shape, `DiagnosticJson`), in a
+/// save, a compile, the status, a compile event; the language server's are converted to it.
+export type ServerDiagnostic = DiagnosticJson;
 
 /// Whether two behavior file paths name the same file (server paths may be absolute or relative
 /// to the behavior root; the editor knows the root-relative one).
@@ -82,9 +76,8 @@ export function toCodeMirror(diagnostics: readonly ServerDiagnostic[], doc: Text
     }
     if (to < from) to = from;
     if (to === from && to < doc.length) to = from + 1;
-    const severity = d.severity === "error" || d.severity === "warning" || d.severity === "info" || d.severity === "hint" ? d.severity : "error";
     const code = d.original_code ? `${d.code} ${d.original_code}` : d.code;
-    out.push({ from, to, severity, message: d.message, source: code });
+    out.push({ from, to, severity: d.severity, message: d.message, source: code });
   }
   return out.sort((a, b) => a.from - b.from || a.to - b.to);
 }
@@ -115,10 +108,12 @@ export function lspToCodeMirror(diagnostics: readonly LspDiagnostic[], doc: Text
 
 /// The protocol's diagnostics of `path` in the shape of the REST compile's (the status bar's).
 export function toServerDiagnostics(path: string, diagnostics: readonly LspDiagnostic[]): ServerDiagnostic[] {
+  // The compiler gives errors and warnings only; a client-side hint or info counts as a warning.
   return diagnostics.map((d) => ({
-    severity: d.severity === 1 ? "error" : d.severity === 2 ? "warning" : d.severity === 3 ? "info" : "hint",
+    severity: d.severity === 1 ? "error" : "warning",
     code: String(d.code ?? ""),
-    ...(d.data?.original_code ? { original_code: d.data.original_code } : {}),
+    original_code: d.data?.original_code ?? "",
+    lint: d.data?.lint ?? false,
     message: d.message,
     file: path,
     span: {
@@ -130,6 +125,7 @@ export function toServerDiagnostics(path: string, diagnostics: readonly LspDiagn
       start: 0,
       end: 0,
     },
+    related: [],
   }));
 }
 

@@ -25,7 +25,7 @@ export interface LspDiagnostic {
   code?: string | number;
   source?: string;
   message: string;
-  data?: { replacement?: string; original_code?: string } | null;
+  data?: { replacement?: string; original_code?: string; lint?: boolean } | null;
 }
 export interface LspTextEdit {
   range: LspRange;
