@@ -412,3 +412,30 @@ def test_every_module_imports_the_project_through_its_one_package_name() -> None
 @pytest.mark.parametrize("source", ["import engine\n", "from server.app import create_app\n", "import lsp.cli as c\n"])
 def test_bare_import_rule_catches(source: str, tmp_path: Path) -> None:
     assert bare_imports(write(tmp_path, "m.py", source), tmp_path)
+
+
+#: The session kinds the studio's edge must not tell apart by class (it asks the session).
+SESSION_KINDS = frozenset({"Session", "ReplaySession", "AttachedSession"})
+
+
+def session_class_checks(files: list[Path], root: Path = ROOT / PACKAGE) -> list[str]:
+    """``isinstance(x, ReplaySession)`` and the like: where the edge branches on a session's class."""
+    found = []
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "isinstance":
+                kinds = node.args[1] if len(node.args) == 2 else None
+                names = {n.id for n in ast.walk(kinds) if isinstance(n, ast.Name)} if kinds is not None else set()
+                if names & SESSION_KINDS:
+                    found.append(f"{path.relative_to(root)}:{node.lineno}")
+    return found
+
+
+def test_the_edge_asks_sessions_instead_of_testing_their_class() -> None:
+    found = session_class_checks(list(python_files("server/api")))
+    assert not found, "server/api branches on a session's class (add to the Session interface):\n" + "\n".join(found)
+
+
+def test_the_session_class_rule_catches(tmp_path: Path) -> None:
+    source = "def f(s):\n    return isinstance(s, ReplaySession | int)\n\ndef g(s):\n    return isinstance(s, int)\n"
+    assert session_class_checks([write(tmp_path, "m.py", source)], tmp_path) == ["m.py:2"]

@@ -84,7 +84,6 @@ from xabsl_studio.server.session.files import BehaviorFiles, FileError
 from xabsl_studio.server.session.frames import Generation
 from xabsl_studio.server.session.generations import GenerationGone
 from xabsl_studio.server.session.live import CommandError, Session
-from xabsl_studio.server.session.replay import ReplaySession
 from xabsl_studio.server.session.watch import POLL_SECONDS, FileWatcher
 
 log = logging.getLogger("xabsl.server")
@@ -191,12 +190,8 @@ class Studio:
             raise CommandError("history needs t0 <= t1")
         if client is None:
             raise CommandError("history streams over the websocket; use GET /api/log over REST")
-        generations: list[dict[str, Any]] = []
-        if isinstance(self.session, ReplaySession):  # the whole recording, read from the file
-            count, encoded = self.session.history_frames(t0, t1, every)
-        else:
-            gens, count, encoded = frames.span_history(self.session.ring, t0, t1, every)
-            generations = [_generation_info(self.session, gen) for gen in gens]
+        gens, count, encoded = self.session.history_span(t0, t1, every)
+        generations = [_generation_info(self.session, gen) for gen in gens]
         chunks = max(1, -(-count // HISTORY_CHUNK)) if count else 0
 
         def messages() -> Iterator[bytes]:
@@ -517,7 +512,7 @@ async def generation_diff(studio: StudioDep, number: int = FastApiPath(ge=0, le=
     Against generation ``number - 1``, from the sources the session keeps of recent generations.
     """
     session = studio.session
-    if isinstance(session, ReplaySession):
+    if not session.keeps_sources:
         raise HTTPException(404, "a replay keeps no behavior sources per generation")
     try:
         return session.generations.diff(number)
@@ -712,7 +707,7 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     watching = None
     # The main studio watches (a recording has no files; a fork beside it runs what it was
     # started with, and its own saves reload it)
-    if getattr(app.state, "serves_studios", False) and not isinstance(session, ReplaySession):
+    if getattr(app.state, "serves_studios", False) and session.played is None:
         studio.watcher.watch(studio.watched_paths())
         watching = asyncio.create_task(studio.watch_files())
     try:
@@ -767,7 +762,7 @@ def create_app(
     )
     app.state.studio = studio = Studio(session, policy)
     if library is None:
-        own = [Path(session.recording.path)] if isinstance(session, ReplaySession) else []
+        own = [Path(session.played.path)] if session.played is not None else []
         library = RecordingLibrary(None, own)
     studio.library = library
     if studios is not None:
@@ -782,7 +777,7 @@ def create_app(
         studio.studios = Studios(make_app)
         app.add_middleware(StudiosMiddleware, studios=studio.studios, public=public)
         app.state.serves_studios = True
-        if not isinstance(session, ReplaySession):
+        if session.played is None:  # a replay runs no example of its own
             plugin = session.example
             studio.studios.home_example = (Path(getattr(plugin, "path", plugin.root)), getattr(plugin, "world", None))
     app.add_middleware(SecurityMiddleware, policy=policy, public=public)

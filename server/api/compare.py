@@ -50,7 +50,6 @@ from xabsl_studio.engine.record.sources import compile_sources
 from xabsl_studio.server.api.openapi import error_responses
 from xabsl_studio.server.protocol.errors import ServerError
 from xabsl_studio.server.session.live import ProgramState, Session
-from xabsl_studio.server.session.replay import ReplaySession
 
 router = APIRouter()
 
@@ -69,8 +68,8 @@ class VersionError(ServerError):
 
 
 def _state(session: Session, key: str) -> ProgramState:
-    if isinstance(session, ReplaySession) or key not in session.programs:
-        known = ", ".join(session.programs) if not isinstance(session, ReplaySession) else ""
+    if not session.keeps_sources or key not in session.programs:
+        known = ", ".join(session.programs) if session.keeps_sources else ""
         raise VersionError(
             404, f"no behavior set {key!r} in this studio" + (f" (behavior sets: {known})" if known else "")
         )
@@ -245,7 +244,7 @@ async def compare(
 
 def _generations(studio: Any, number: int, program: str | None) -> dict[str, Any]:
     session: Session = studio.session
-    if isinstance(session, ReplaySession):
+    if not session.keeps_sources:
         raise VersionError(404, "a replay keeps no behavior sources per generation")
     gen, previous = session.generations.get(number), session.generations.get(number - 1)
     if gen is None or previous is None:

@@ -183,16 +183,15 @@ async def fork_recording(studio: StudioDep, body: ForkBody) -> dict[str, Any]:
     such example on this machine, a tick outside it).
     """
     from xabsl_studio.server.session.fork import ForkError, fork_session
-    from xabsl_studio.server.session.replay import ReplaySession
 
-    session = studio.session
-    if not isinstance(session, ReplaySession):
+    recording = studio.session.played
+    if recording is None:
         raise HTTPException(409, "run from here forks a replay; this studio runs live")
     try:
-        forked = await asyncio.to_thread(fork_session, session.recording, body.seq, _studios(studio).home_example)
+        forked = await asyncio.to_thread(fork_session, recording, body.seq, _studios(studio).home_example)
     except ForkError as error:
         raise HTTPException(422, str(error)) from None
-    name = Path(session.recording.path).name
+    name = Path(recording.path).name
     try:
         opened = await _studios(studio).add(
             "fork", f"{forked.example.name} (fork of {name} at {body.seq})", forked, {"file": name, "seq": body.seq}

@@ -32,10 +32,10 @@ import itertools
 import logging
 import multiprocessing
 import socket
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import orjson
 
@@ -88,6 +88,9 @@ from xabsl_studio.server.session.recording import LiveRecorder
 from xabsl_studio.server.simulation import worker
 from xabsl_studio.server.simulation.forkstart import ForkStart
 from xabsl_studio.server.simulation.worker import CommandError, WorkerConfig, check_speed
+
+if TYPE_CHECKING:
+    from xabsl_studio.engine.record import Recording
 
 __all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session", "fork_request", "original_tick"]
 
@@ -156,7 +159,24 @@ class Session:
         behavior_hz, physics_hz: the loop's rates (``xabsl_studio.engine.host``).
         ring_seconds: how much history the ring buffer keeps.
         state_dir: where breakpoints are stored (default: ``xabsl_studio.server.session.breakpoints.state_folder()``).
+
+    The studio's edge (``xabsl_studio.server.api``) serves every kind of session (live, a replay,
+    a fork, attached robots) through this class's interface; what differs between kinds, it asks
+    the session (:attr:`keeps_sources`, :attr:`played`, :meth:`history_span`), never its class.
     """
+
+    #: Whether the session keeps its generations' behavior sources (hot reload, generation
+    #: diffs, version compare): a replay has only the recording's intermediate code.
+    keeps_sources: ClassVar[bool] = True
+
+    @property
+    def played(self) -> Recording | None:
+        """The recording this session plays back, or None: it runs (and records) its own ticks."""
+        return None
+
+    def history_span(self, x0: int, x1: int, every: int) -> tuple[list[frames.Generation], int, Iterator[bytes]]:
+        """The ``history`` of timeline times ``x0 .. x1``: generations whose ticks follow, a count, the frames."""
+        return frames.span_history(self.ring, x0, x1, every)
 
     def __init__(
         self,

@@ -39,7 +39,7 @@ from bisect import bisect_right
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import orjson
 
@@ -323,6 +323,18 @@ class ReplaySession(Session):
         root: the folder the studio's file API serves (default: the recording's folder).
         speed: playback speed, x the recording's rate.
     """
+
+    keeps_sources: ClassVar[bool] = False
+
+    @property
+    def played(self) -> Recording:
+        """The recording this session plays back."""
+        return self.recording
+
+    def history_span(self, x0: int, x1: int, every: int) -> tuple[list[Generation], int, Iterator[bytes]]:
+        """The whole recording's frames of behavior times ``x0 .. x1``, read from the file (no ring)."""
+        count, encoded = self.history_frames(x0, x1, every)
+        return [], count, encoded
 
     def __init__(self, path: str | Path, root: Path | None = None, speed: float = 1.0) -> None:
         try:
