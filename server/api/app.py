@@ -321,7 +321,7 @@ def _generation_info(session: Session, gen: Generation) -> dict[str, Any]:
         "changed_files": sorted({path for paths in gen.changed.values() for path in paths}),
     }
     if session.generation is None or gen.number != session.generation.number:
-        info["structure"] = gen.structure
+        info["structure"] = gen.wire_structure()[0]
         info["scene"] = orjson.loads(gen.scene_bytes)
     return info
 

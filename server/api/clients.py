@@ -315,7 +315,7 @@ class Hub:
             token_required=self.token_required,
             offset=gen.offset,
         )
-        return encode_hello(reason, gen.number, info, gen.structure_bytes, gen.scene_bytes, session.fork)
+        return encode_hello(reason, gen.number, info, gen.wire_structure()[1], gen.scene_bytes, session.fork)
 
     token_required = False
 

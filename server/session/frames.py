@@ -33,6 +33,7 @@ import orjson
 from xabsl_studio.engine.types import Value
 from xabsl_studio.server.protocol.host import NewGeneration, Sample
 from xabsl_studio.server.protocol.limits import FULL_EVERY
+from xabsl_studio.server.protocol.packing import pack_structure
 from xabsl_studio.server.protocol.types import (
     HelloReason,
     WireValue,
@@ -70,6 +71,18 @@ class Generation:
     changed: dict[str, list[str]] = field(default_factory=dict)
     #: per behavior key: enum name -> host value -> element (the raw enum values of an entry's ``reads``)
     enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
+    #: the structure as browsers get it (spans packed), made on first use
+    _wire: tuple[dict[str, Any], bytes] | None = field(default=None, repr=False)
+
+    def wire_structure(self) -> tuple[dict[str, Any], bytes]:
+        """The structure as a browser gets it, and encoded (``xabsl_studio.server.protocol.packing``).
+
+        Made once per generation, when the first client needs it.
+        """
+        if self._wire is None:
+            packed = pack_structure(self.structure)
+            self._wire = (packed, orjson.dumps(packed))
+        return self._wire
 
     @classmethod
     def from_message(cls, message: NewGeneration) -> Generation:

@@ -186,6 +186,32 @@ export function isLeaf(tree: DecisionTree): tree is Leaf {
   return (tree as Leaf).leaf !== undefined;
 }
 
+/// The order of a packed span's numbers after the file index (server/protocol/packing.py).
+const SPAN_FIELDS = ["line", "col", "end_line", "end_col", "start", "end"] as const;
+
+/// A description as the studio sends it, spans packed (`span_files` and
+/// `[file index, line, col, end_line, end_col, start, end]`, server/protocol/packing.py), with
+/// its spans as objects again; a description without `span_files` is returned as it is.
+export function unpackDescription(packed: BehaviorDescription & { span_files?: string[] }): BehaviorDescription {
+  const files = packed.span_files;
+  if (!files) return packed;
+  const unpack = (value: unknown): unknown => {
+    if (Array.isArray(value)) return value.map(unpack);
+    if (value === null || typeof value !== "object") return value;
+    const out: Record<string, unknown> = {};
+    for (const [key, item] of Object.entries(value)) {
+      if (key === "span_files") continue;
+      if (key === "span" && Array.isArray(item)) {
+        const span: Record<string, unknown> = { file: files[item[0] as number] };
+        SPAN_FIELDS.forEach((field, i) => (span[field] = item[i + 1]));
+        out[key] = span;
+      } else out[key] = unpack(item);
+    }
+    return out;
+  };
+  return unpack(packed) as BehaviorDescription;
+}
+
 /// Build the lookup tables of a description.
 export function indexDescription(description: BehaviorDescription): DescriptionIndex {
   const transitions = new Map<number, Map<string, Transition>>();

@@ -10,7 +10,7 @@
 /// (the server's `history` serves them with their descriptions), and every tick is read with
 /// the description of its own generation: `programs`, `robots` and `scene` are those of the
 /// generation of the tick in view (a "hello" change is raised when the view crosses into another).
-import { type BehaviorDescription, type DescriptionIndex, indexDescription } from "./description";
+import { type BehaviorDescription, type DescriptionIndex, indexDescription, unpackDescription } from "./description";
 import { TickBuffer } from "./history";
 import type { GenerationInfo } from "./messages.gen";
 import type { ReplayInfo } from "./replay";
@@ -311,7 +311,7 @@ function generationView(number: number, robots: RobotInfo[], programs: Record<st
     number,
     reason: "connect",
     offset: 0,
-    programs: new Map(Object.entries(programs).map(([k, d]) => [k, indexDescription(d)])),
+    programs: new Map(Object.entries(programs).map(([k, d]) => [k, indexDescription(unpackDescription(d))])),
     robots,
     scene,
     changedFiles: null,

@@ -1,0 +1,70 @@
+"""The program descriptions as the studio sends them to a browser: every span packed.
+
+A description (``xabsl_studio.engine.emit.json``) places a span on every option, state, decision
+node, leaf, transition and action; as objects with the file path spelled out, spans are more
+than half of a description's bytes, and the description is the bulk of the first message of a
+session (``hello``; 186 KB for the soccer example, 2 MB for a 180-option team set). On the wire to
+a browser each description therefore carries ``span_files`` (the paths, once) and every span
+becomes ``[file index, line, col, end_line, end_col, start, end]``; ``web/src/description.ts``
+``unpackDescription`` restores the objects when the hello arrives, so no panel sees the packed
+form. Recordings, ``xabsl compile --json`` and ``GET /api/structure`` keep the plain description.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["SPAN_FIELDS", "pack_structure", "unpack_description"]
+
+#: The order of a packed span's numbers after the file index (``xabsl_studio.engine.types.Span``).
+SPAN_FIELDS = ("line", "col", "end_line", "end_col", "start", "end")
+
+
+def pack_structure(structure: dict[str, Any]) -> dict[str, Any]:
+    """``structure`` (a hello's robots and programs) with each program's spans packed; a new dict."""
+    programs = structure.get("programs") or {}
+    return {**structure, "programs": {key: _pack_description(d) for key, d in programs.items()}}
+
+
+def _pack_description(description: dict[str, Any]) -> dict[str, Any]:
+    files: dict[str, int] = {}
+
+    def pack(value: Any) -> Any:
+        if isinstance(value, dict):
+            out = {}
+            for key, item in value.items():
+                if key == "span" and isinstance(item, dict) and "file" in item:
+                    index = files.setdefault(item["file"], len(files))
+                    out[key] = [index, *(item[f] for f in SPAN_FIELDS)]
+                else:
+                    out[key] = pack(item)
+            return out
+        if isinstance(value, list):
+            return [pack(item) for item in value]
+        return value
+
+    packed = pack(description)
+    packed["span_files"] = list(files)
+    return packed  # type: ignore[no-any-return]
+
+
+def unpack_description(packed: dict[str, Any]) -> dict[str, Any]:
+    """The plain description of a packed one (what the web UI's ``unpackDescription`` does)."""
+    files = packed["span_files"]
+
+    def unpack(value: Any) -> Any:
+        if isinstance(value, dict):
+            return {
+                key: (
+                    {"file": files[item[0]], **dict(zip(SPAN_FIELDS, item[1:], strict=True))}
+                    if key == "span" and isinstance(item, list)
+                    else unpack(item)
+                )
+                for key, item in value.items()
+                if key != "span_files"
+            }
+        if isinstance(value, list):
+            return [unpack(item) for item in value]
+        return value
+
+    return unpack(packed)  # type: ignore[no-any-return]
