@@ -100,7 +100,12 @@ export interface EnableBreakpoint {
   enabled: boolean;
 }
 
-/** Why `option` of `robot`'s engine took its leaf in the last tick or at tick `seq` (`Explanation`). */
+/**
+ * Why `option` of `robot`'s engine took its leaf in the last tick or at tick `seq` (`Explanation`).
+ *
+ * With `why_not`, the answer also says why that decision did not go to state `why_not`,
+ * from the same values (`xabsl_studio.server.protocol.replies.WhyNot`).
+ */
 export interface Explain {
   type: "command";
   id?: number | string | null;
@@ -108,6 +113,7 @@ export interface Explain {
   robot: number;
   option: number | string;
   seq?: number | null;
+  why_not?: number | string | null;
 }
 
 /** The result of `explain`. */
@@ -127,6 +133,7 @@ export interface Explanation {
   recorded?: boolean;
   tree?: Record<string, unknown>;
   last_transition?: LastTransition | null;
+  why_not?: WhyNot | null;
 }
 
 /** Why a robot's engine stopped (until `reset_agent`). */
@@ -432,6 +439,21 @@ export interface RobotInfo {
   engine?: boolean;
 }
 
+/**
+ * One leaf of the decision that goes to the asked-for state, and the conditions on its way.
+ *
+ * Each condition's `branch` is the branch this route needs, `value` what it was (null:
+ * the decision did not read what it takes: it never got that far).
+ */
+export interface Route {
+  leaf: number;
+  stay: boolean;
+  leaf_span: Record<string, unknown> | null;
+  conditions: Condition[];
+  blocked_at: number | null;
+  parts_at: number | null;
+}
+
 /** A replay: make tick `seq` of the recording the current one (a live session refuses it). */
 export interface Seek {
   type: "command";
@@ -534,6 +556,14 @@ export interface Subscribe {
   rate?: number;
   robots?: number[] | null;
   id?: number | string | null;
+}
+
+/** Why the explained decision did not go to state `target`: every route there, each with its blocker. */
+export interface WhyNot {
+  target: number;
+  target_name: string;
+  went: boolean;
+  routes: Route[];
 }
 
 /** A command of the world itself (`engine.host.CommandableWorld`); without `name`, the list of them. */
