@@ -403,7 +403,7 @@ class Simulation(EngineSet):
             raise CommandError("that tick ran a version of the behavior this simulation no longer has")
         option = self._named(command.option, codec.option_ids, "option")
         ir_option = codec.program.options[option]
-        results = []
+        results: list[dict[str, Any]] = []
         for seq, t, decided, leaf, _, reads in command.ticks:
             if not 0 <= decided < len(ir_option.states):
                 raise CommandError(f"option {option} has no state {decided}")
