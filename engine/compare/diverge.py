@@ -157,6 +157,8 @@ def diverge(a: Recording, b: Recording, agents: list[str] | None = None) -> Dive
         raise RecordingError(f"{a.path} ({a.first}..{a.end - 1}) and {b.path} ({b.first}..{b.end - 1}) share no tick")
     found: dict[str, Divergence | None] = dict.fromkeys(shared)
     open_ = set(shared)
+    # per pair of generations: do both number options, states and behaviors alike (then ids compare)?
+    alike: dict[tuple[str, int, int], bool] = {}
     # a tick missing on one side shows as two seqs meeting (a file cut short just ends the comparison)
     pairs = zip(_ticks(a, first, end, shared), _ticks(b, first, end, shared), strict=False)
     for (seq, t, ticks_a), (seq_b, _, ticks_b) in pairs:
@@ -165,6 +167,11 @@ def diverge(a: Recording, b: Recording, agents: list[str] | None = None) -> Dive
         for name in sorted(open_ & ticks_a.keys() & ticks_b.keys()):
             (gen_a, path_a), (gen_b, path_b) = ticks_a[name], ticks_b[name]
             desc_a, desc_b = a.program(name, gen_a).description, b.program(name, gen_b).description
+            pair = (name, gen_a, gen_b)
+            if pair not in alike:
+                alike[pair] = _names(desc_a) == _names(desc_b)
+            if alike[pair] and _ids(path_a) == _ids(path_b):
+                continue
             if _keys(desc_a, path_a) != _keys(desc_b, path_b):
                 found[name] = _divergence(a, b, name, seq, t, desc_a, path_a, desc_b, path_b)
                 open_.discard(name)
@@ -198,6 +205,17 @@ def _ticks(
         for _, at, agent, gen, path in rows:
             ticks[agent], t = (gen, path), at
         yield seq, t, ticks
+
+
+def _names(description: dict[str, Any]) -> tuple[Any, ...]:
+    """What ids stand for: the options with their states, the basic behaviors, in id order."""
+    options = tuple((o["name"], tuple(s["name"] for s in o["states"])) for o in description["options"])
+    return options, tuple(b["name"] for b in description["behaviors"])
+
+
+def _ids(path: list[list[Any]]) -> list[tuple[Any, ...]]:
+    """A path's nodes by ids (kind, depth, id, an option's state), for two generations that number alike."""
+    return [(n[KIND], n[DEPTH], n[ID], n[STATE] if n[KIND] == 0 else -1) for n in path]
 
 
 def _keys(description: dict[str, Any], path: list[list[Any]]) -> list[tuple[Any, ...]]:

@@ -148,6 +148,10 @@ export class OptionView {
     const k = option && program ? `${program}|${option.id}|${session.hello?.generation ?? 0}` : "";
     if (k !== this.key && k !== this.loading) {
       this.explanation = null;
+      // a state id of another option (or generation) would ask about the wrong state
+      this.whyNotState = null;
+      this.whyNot = null;
+      this.whyNotError = "";
       if (!option || !program) {
         this.key = k;
         this.view.clear(session.hello ? "No option to show." : "Connecting…");
