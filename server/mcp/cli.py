@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     except ModuleNotFoundError as error:
         if error.name is None or not error.name.startswith("mcp"):
             raise
-        print("xabsl mcp: the mcp package is not installed (pip install mcp)", file=sys.stderr)
+        print("xabsl mcp: the mcp package is not installed (pip install 'xabsl-studio[mcp]')", file=sys.stderr)
         return 2
     from xabsl_studio.server.mcp.tools import Roots
 

@@ -213,3 +213,11 @@ def test_a_client_written_from_the_spec_over_newline_delimited_json_rpc(runs: Ru
         process.stdout.close()
         assert process.stderr is not None
         process.stderr.close()
+
+
+def test_without_the_mcp_package_the_command_says_what_to_install() -> None:
+    # `None` in sys.modules makes `import mcp` fail as a missing package does
+    code = "import sys; sys.modules['mcp'] = None; from xabsl_studio.server.mcp.cli import main; sys.exit(main([]))"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environment(), timeout=60)
+    assert done.returncode == 2
+    assert done.stderr.strip() == "xabsl mcp: the mcp package is not installed (pip install 'xabsl-studio[mcp]')"
