@@ -20,7 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from xabsl_studio.engine.compare.diverge import diverge, path_lines
 from xabsl_studio.engine.errors import XabslError
+from xabsl_studio.engine.lang import compile_file
+from xabsl_studio.engine.profile import ProfileError, profile
 from xabsl_studio.engine.record.reader import Recording, RecordingError
 from xabsl_studio.engine.record.why import RecordedDecision, explain_at, recorded_decision, seq_at, why_not_at
 from xabsl_studio.engine.runtime.debug import Condition, Explanation, show_value
@@ -75,8 +78,6 @@ class Roots:
 
 def compile_behavior(roots: Roots, agents_file: str) -> dict[str, Any]:
     """Compile a behavior set: ``ok``, the error and warning counts, each diagnostic at ``file:line:col``."""
-    from xabsl_studio.engine.lang import compile_file
-
     path = roots.file(agents_file, "agents file")
     compilation = compile_file(str(path), base=str(path.parent))
     diagnostics = compilation.diagnostics
@@ -108,8 +109,6 @@ def activation(
         agent = view.agents.get(robot)
         if agent is None:
             raise ToolProblem(f"{robot} has no tick {at} in {recording}")
-        from xabsl_studio.engine.compare.diverge import path_lines
-
         lines = path_lines(agent.program.description, agent.path)
         return {
             "robot": robot,
@@ -175,8 +174,6 @@ def why_not(
 
 def divergence(roots: Roots, a: str, b: str, robots: list[str] | None = None) -> dict[str, Any]:
     """The first tick each robot acts differently in recordings ``a`` and ``b``, both paths and both whys."""
-    from xabsl_studio.engine.compare.diverge import diverge
-
     with _open(roots, a) as ra, _open(roots, b) as rb:
         try:
             report = diverge(ra, rb, robots)
@@ -187,8 +184,6 @@ def divergence(roots: Roots, a: str, b: str, robots: list[str] | None = None) ->
 
 def profile_summary(roots: Roots, recording: str, robots: list[str] | None = None, top: int = 10) -> dict[str, Any]:
     """Per robot its ``top`` options by share of time (with their states), coverage and oscillations."""
-    from xabsl_studio.engine.profile import ProfileError, profile
-
     top = max(1, min(top, MAX_ITEMS))
     with _open(roots, recording) as rec:
         try:
@@ -320,7 +315,7 @@ def _why_not_text(answer: WhyNot) -> str:
     went = "stayed in" if answer.went_to == answer.decided_in else "went to"
     head = f"{answer.option} in {answer.decided_in} {went} {answer.went_to}, not {answer.target}"
     if answer.went:
-        head = f"{answer.option} in {answer.decided_in} {went} {answer.target}: it did not fail to"
+        head = f"{answer.option} in {answer.decided_in} {went} {answer.target}: the decision did go there"
     if not answer.routes:
         return f"{head}: no transition of {answer.decided_in} leads to {answer.target}"
     lines = [head]
