@@ -14,6 +14,7 @@ A problem is a :class:`ToolProblem` whose message says what is wrong, never a tr
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -253,6 +254,8 @@ def _open(roots: Roots, recording: str) -> Recording:
 def _tick(recording: Recording, time_s: float | None, seq: int | None) -> int:
     if (time_s is None) == (seq is None):
         raise ToolProblem("give the tick as time_s (seconds, as the studio's timeline shows) or seq, one of them")
+    if time_s is not None and not math.isfinite(time_s):
+        raise ToolProblem(f"time_s must be a finite number of seconds, got {time_s}")
     try:
         if time_s is not None:
             return seq_at(recording, time_s)
