@@ -226,6 +226,8 @@ LAYERS: dict[str, frozenset[str]] = {
     # the language server shares the studio's wire limits (message sizes, connection caps)
     "lsp": frozenset({"engine", "server.protocol"}),
     "server.protocol": frozenset({"engine"}),
+    # `xabsl mcp`: the engine's answers to an assistant, its own process like the language server
+    "server.mcp": frozenset({"engine"}),
     "server.simulation": frozenset({"engine", "server.protocol"}),
     "server.session": frozenset({"engine", "server.protocol", "server.simulation"}),
     "server.api": frozenset({"engine", "lsp", "server.protocol", "server.simulation", "server.session"}),

@@ -57,6 +57,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.profile",
         "profile a recording: time per option and state, transitions, oscillations, coverage",
     ),
+    "diverge": (
+        "xabsl_studio.engine.cli.diverge",
+        "the first tick where two recordings act differently, per robot: both paths and the why of each",
+    ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
     "run": (
         "xabsl_studio.engine.cli.run",

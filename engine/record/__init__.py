@@ -8,6 +8,7 @@
 * :mod:`xabsl_studio.engine.record.writer`   :class:`Recorder`: samples a running world, feeds the encoder
 * :mod:`xabsl_studio.engine.record.reader`   :class:`Recording`: iterate ticks, seek, rebuild activation trees
 * :mod:`xabsl_studio.engine.record.fork`     re-simulate a recorded deterministic run to any tick, switch behavior
+* :mod:`xabsl_studio.engine.record.why`      why and why not at a recorded tick, from the recorded reads
 
 Independent of the server: the studio records through the same :class:`Recorder`.
 """

@@ -71,12 +71,14 @@ __all__ = [
     "ReadValues",
     "Unknown",
     "Values",
+    "comparisons",
     "decision_reads",
     "decision_tree",
     "evaluate",
     "explain_decision",
     "render",
     "show_value",
+    "span_text",
 ]
 
 
@@ -478,7 +480,7 @@ def explain_decision(
             value: Value | None = evaluate(node.condition, values)
         except (Unknown, ArithmeticError, DebugError, ValueError, TypeError):
             value = None
-        cut = text if text is not None else functools.partial(_span_text, node, option.name)
+        cut = text if text is not None else functools.partial(span_text, node, option.name)
         conditions.append(
             Condition(
                 node.text,
@@ -521,6 +523,18 @@ class Debugger:
         Raises:
             DebugError: unknown option, or it has not decided anything since the last load.
         """
+        ir_option, state, leaf, values = self.last_decision(option)
+        return explain_decision(ir_option, state, leaf, values)
+
+    def last_decision(self, option: str) -> tuple[Option, State, int, ReadValues]:
+        """The last decision of option ``option``: its state, leaf and the values it read (for "why" and "why not").
+
+        The values are those read in the last tick, unknown when the decision did not run in it
+        (see :meth:`explain`).
+
+        Raises:
+            DebugError: unknown option, or it has not decided anything since the last load.
+        """
         loaded = self.engine.loaded
         slot = loaded.layout.options.get(option)
         if slot is None:
@@ -535,7 +549,7 @@ class Debugger:
         ran = loaded.last_tick[slot.index] == self.engine.tick
         reads = decision_reads(self.engine.reads(), ir_option.index) if ran else None
         values = ReadValues(loaded.program, ir_option, reads, self._enums(loaded.program))
-        return explain_decision(ir_option, state, leaf, values)
+        return ir_option, state, leaf, values
 
     def _enums(self, program: Program) -> dict[str, dict[int, str]]:
         loaded = self.engine.loaded
@@ -560,7 +574,7 @@ def _leaf(tree: If | Transition, leaf: int) -> Transition:
     return node
 
 
-def _span_text(node: If, option: str, expression: Expression) -> str:
+def span_text(node: If, option: str, expression: Expression) -> str:
     """The source text of a sub-expression of ``node``'s condition, cut from the condition's text.
 
     ``node.text`` is the condition's source with runs of blanks collapsed; a sub-expression's span

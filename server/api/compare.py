@@ -9,6 +9,9 @@ Two routes, behind the same token, Origin and Host checks as every ``/api`` rout
   Given two recordings of the studio's library (``recording`` of the new version, ``against`` of
   the old one), the option graph is also coloured by each option's change of time share
   (``xabsl profile --against``);
+* ``GET /api/compare/diverge?recording=NAME&against=NAME``: where two library recordings of one
+  seed (two versions, or a fork and its original) first act differently, per robot, with both
+  paths and both whys: the document of ``xabsl diverge --json``, for the timeline's mark;
 * ``GET /api/compare/generations/{number}``: what generation ``number`` (a hot reload) changed
   against ``number - 1``, for every behavior set it changed: the structural view of the
   timeline's reload mark, beside its text diff (``GET /api/generations/{number}/diff``).
@@ -37,6 +40,7 @@ from xabsl_studio.engine.cli import UsageError
 from xabsl_studio.engine.cli.sides import resolve_side
 from xabsl_studio.engine.cli.versions import GIT_PREFIX
 from xabsl_studio.engine.compare import StructuralDiff, diff_programs
+from xabsl_studio.engine.compare.diverge import diverge
 from xabsl_studio.engine.compare.graphs import draw
 from xabsl_studio.engine.compare.report import document
 from xabsl_studio.engine.docs.graphs import GraphLayoutError
@@ -238,6 +242,37 @@ async def compare(
     studio = request.app.state.studio
     try:
         return await asyncio.to_thread(_locked, _answer, studio, program, old, new, recording, against)
+    except VersionError as error:
+        raise HTTPException(error.status, str(error)) from None
+
+
+def _diverge(studio: Any, recording: str, against: str) -> dict[str, Any]:
+    paths = []
+    for name in (recording, against):
+        try:
+            paths.append(studio.library.resolve(name))
+        except LookupError as error:
+            raise VersionError(404, str(error)) from None
+    try:
+        with Recording(paths[0]) as a, Recording(paths[1]) as b:
+            answer: dict[str, Any] = diverge(a, b).to_json()
+    except RecordingError as error:
+        raise VersionError(422, str(error)) from None
+    # the studio names recordings by their library names, never by where they lie on disk
+    answer.update(a=recording, b=against)
+    return answer
+
+
+@router.get("/api/compare/diverge", tags=["compare"], responses=error_responses(404, 422))
+async def compare_diverge(
+    request: Request,
+    recording: str = Query(min_length=1, max_length=300, description="a library recording"),
+    against: str = Query(min_length=1, max_length=300, description="the library recording to compare it with"),
+) -> dict[str, Any]:
+    """The first tick each robot acts differently in two recordings, both paths and both whys (``xabsl diverge``)."""
+    studio = request.app.state.studio
+    try:
+        return await asyncio.to_thread(_locked, _diverge, studio, recording, against)
     except VersionError as error:
         raise HTTPException(error.status, str(error)) from None
 

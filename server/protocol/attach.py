@@ -298,8 +298,15 @@ def _command(body: dict[str, Any]) -> WorkerCommand:
         ticks = body.get("ticks")
         if not isinstance(ticks, list) or not all(isinstance(t, list) and len(t) == 10 for t in ticks):
             raise WireError("explain_recorded: ticks must be a list of 10-item lists")
+        why_not = body.get("why_not")
+        if why_not is not None and (isinstance(why_not, bool) or not isinstance(why_not, int | str)):
+            raise WireError("explain_recorded: why_not must be a state id, a name or null")
         return ExplainRecorded(
-            _int(body, "robot"), _str(body, "option"), _int(body, "generation"), tuple(tuple(t) for t in ticks)
+            _int(body, "robot"),
+            _str(body, "option"),
+            _int(body, "generation"),
+            tuple(tuple(t) for t in ticks),
+            why_not=why_not,
         )
     if op == "release_owner":
         return ReleaseOwner()

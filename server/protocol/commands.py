@@ -217,7 +217,11 @@ class Reload:
 @with_config(STRICT)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Explain:
-    """Why ``option`` of ``robot``'s engine took its leaf in the last tick or at tick ``seq`` (:class:`Explanation`)."""
+    """Why ``option`` of ``robot``'s engine took its leaf in the last tick or at tick ``seq`` (:class:`Explanation`).
+
+    With ``why_not``, the answer also says why that decision did not go to state ``why_not``,
+    from the same values (:class:`~xabsl_studio.server.protocol.replies.WhyNot`).
+    """
 
     type: Literal["command"] = "command"
     id: CommandId | None = None
@@ -226,6 +230,8 @@ class Explain:
     option: Ref
     #: the tick (a ring buffer seq) to explain from recorded values; null: the live engine now
     seq: Annotated[int, Field(ge=0, le=2**62), INTEGRAL] | None = None
+    #: also say why the decision did not go to this state of the option (id or name): ``why_not``
+    why_not: Ref | None = None
 
 
 @with_config(STRICT)

@@ -151,6 +151,8 @@ class ExplainRecorded:
     generation: int
     ticks: tuple[tuple[Any, ...], ...]
     op: Literal["explain_recorded"] = "explain_recorded"
+    #: a state (id or name) to say "why not" of, for the explained tick (the first of ``ticks``)
+    why_not: int | str | None = None
 
 
 @dataclass(frozen=True, slots=True)

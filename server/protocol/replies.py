@@ -260,6 +260,37 @@ class LastTransition:
 
 @with_config(SCHEMA)
 @dataclass(frozen=True, slots=True, kw_only=True)
+class Route:
+    """One leaf of the decision that goes to the asked-for state, and the conditions on its way.
+
+    Each condition's ``branch`` is the branch this route needs, ``value`` what it was (null:
+    the decision did not read what it takes: it never got that far).
+    """
+
+    leaf: int
+    stay: bool
+    leaf_span: dict[str, Any] | None
+    conditions: list[Condition]
+    #: the first condition whose value is not the branch needed (null: none known)
+    blocked_at: int | None
+    #: the condition where this route leaves the path the decision took (null: the leaf taken)
+    parts_at: int | None
+
+
+@with_config(SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class WhyNot:
+    """Why the explained decision did not go to state ``target``: every route there, each with its blocker."""
+
+    target: int
+    target_name: str
+    #: the decision did go there (one route is then the leaf taken)
+    went: bool
+    routes: list[Route]
+
+
+@with_config(SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Explanation:
     """The result of ``explain``."""
 
@@ -282,6 +313,8 @@ class Explanation:
     tree: dict[str, Any] = field(default_factory=dict)
     #: the last transition up to this tick found in the ring buffer (null: none recorded)
     last_transition: LastTransition | None = None
+    #: with ``why_not`` asked: why this decision did not go to that state
+    why_not: WhyNot | None = None
 
 
 @with_config(SCHEMA)

@@ -685,7 +685,11 @@ class Session:
             if isinstance(command.option, int)
             else command.option
         )
-        ok, results, error = await self._send(ExplainRecorded(command.robot, name, generation, ticks), owner)
+        # live: the answer has its why-not already; this asks for the last transition only
+        why_not = None if live is not None else command.why_not
+        ok, results, error = await self._send(
+            ExplainRecorded(command.robot, name, generation, ticks, why_not=why_not), owner
+        )
         if not ok:
             raise CommandError(error)
         if live is not None:

@@ -43,6 +43,7 @@ from typing import Any, ClassVar
 
 import orjson
 
+from xabsl_studio.engine.errors import DebugError
 from xabsl_studio.engine.host import Agent, AgentController, BehaviorSource, ExampleError, World
 from xabsl_studio.engine.ir.model import Expression, Option, Program
 from xabsl_studio.engine.record import Recording, RecordingError, TickView
@@ -74,7 +75,7 @@ from xabsl_studio.server.protocol.rest import ReplayInfo
 from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.live import CommandError, Session
-from xabsl_studio.server.simulation.explain import explanation_result, tree_result
+from xabsl_studio.server.simulation.explain import explanation_result, tree_result, why_not_result
 from xabsl_studio.server.simulation.worker import check_speed
 
 __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
@@ -511,10 +512,12 @@ class ReplaySession(Session):
 
     async def explain(self, command: Explain, owner: str | None = None) -> Any:
         """``explain`` at tick ``command.seq`` (default: the current one), from the recording."""
-        return self.explain_at(command.robot, command.option, command.seq)
+        return self.explain_at(command.robot, command.option, command.seq, command.why_not)
 
-    def explain_at(self, robot: int, option: str | int, seq: int | None = None) -> dict[str, Any]:
-        """``explain`` at tick ``seq`` (default: the current one) of ``robot``."""
+    def explain_at(
+        self, robot: int, option: str | int, seq: int | None = None, why_not: int | str | None = None
+    ) -> dict[str, Any]:
+        """``explain`` at tick ``seq`` (default: the current one) of ``robot``; with why not state ``why_not``."""
         robots = self.source.robots
         if not 0 <= robot < len(robots) or robots[robot]["program"] is None:
             raise CommandError(f"no XABSL robot {robot} in this recording")
@@ -531,7 +534,9 @@ class ReplaySession(Session):
         program = self.recorded_program(robots[robot]["program"], agent.gen)
         if program is None:
             raise CommandError(f"{self.recording.path} holds no intermediate code (an older recording): no why")
-        result = explain(program, agent, previous.agents.get(name) if previous else None, option, view.t, previous)
+        result = explain(
+            program, agent, previous.agents.get(name) if previous else None, option, view.t, previous, why_not
+        )
         # Asked without a tick (the page's "live" view: the playback position): shown as live.
         result.update(seq=at if seq is not None else None, t=view.t, recorded=seq is not None)
         return result
@@ -741,6 +746,7 @@ def explain(
     option: str | int,
     t: int,
     previous_view: TickView | None = None,
+    why_not: int | str | None = None,
 ) -> dict[str, Any]:
     """Why ``option`` took its leaf in the recorded tick of ``agent`` (the live ``explain``'s shape).
 
@@ -748,10 +754,11 @@ def explain(
     way to the recorded leaf has ``branch`` (taken, as recorded), ``value`` (computed from the
     recorded values; null when they do not tell) and ``comparisons``: per comparison its text,
     the value of each side (``?``: not recorded) and its result; ``tree`` is the decision tree
-    with the path taken.
+    with the path taken; with ``why_not`` (a state), ``why_not`` says why the decision did not
+    go there, from the same values.
 
     Raises:
-        CommandError: no such option, or it did not decide anything in that tick.
+        CommandError: no such option or state, or it did not decide anything in that tick.
     """
     if isinstance(option, int):
         found = [o for o in program.options.values() if o.index == option]
@@ -796,6 +803,16 @@ def explain(
     # The IC has no source text: show the conditions as they were written (the description's).
     _source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
     result.update(recorded=True, tree=tree, last_transition=None)
+    if why_not is not None:
+        try:
+            result["why_not"] = why_not_result(
+                ir_option, decided, leaf, why_not, values, functools.partial(render, option=ir_option.name)
+            )
+        except DebugError as error:
+            raise CommandError(str(error)) from None
+        described = agent.program.option(ir_option.index)["states"][decided_in]["decision"]
+        for route in result["why_not"]["routes"]:
+            _copy_texts(route["conditions"], described)
     return result
 
 
@@ -836,8 +853,13 @@ def _source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[
             copy(node["else"], source["else"])
 
     copy(tree, described)
+    _copy_texts(result["conditions"], described)
+
+
+def _copy_texts(conditions: list[dict[str, Any]], described: dict[str, Any]) -> None:
+    """The description's texts onto the conditions of one path down ``described``, by their branches."""
     node = described
-    for condition in result["conditions"]:
+    for condition in conditions:
         if "if" not in node:
             break
         condition["text"] = node["if"]

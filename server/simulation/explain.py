@@ -6,18 +6,31 @@ past tick of the ring (``explain_decision`` over the reads the ring kept) and a 
 replayed recording (``explain_decision`` over the recording's reads and the program rebuilt from
 its intermediate code). The decisions themselves are evaluated by ``xabsl_studio.engine.runtime.debug``; this
 module only lays the answer out: ids, names, the leaf's span, each condition with its value,
-branch and comparisons, and the decision tree with the path taken.
+branch and comparisons, the decision tree with the path taken, and "why not" a state (the routes
+to it, ``xabsl_studio.engine.runtime.whynot``) from the same values.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import Any
 
-from xabsl_studio.engine.ir.model import If, Option, Transition, leaf_path
-from xabsl_studio.engine.runtime.debug import Explanation, Values, decision_tree, render
+from xabsl_studio.engine.errors import DebugError
+from xabsl_studio.engine.ir.model import Expression, If, Option, State, Transition, leaf_path
+from xabsl_studio.engine.runtime.debug import Condition, Explanation, Values, decision_tree, render
+from xabsl_studio.engine.runtime.whynot import explain_why_not
+from xabsl_studio.engine.types import SpanJson
 
-__all__ = ["explanation_result", "if_text", "mark_values", "tree_result"]
+__all__ = [
+    "condition_result",
+    "explanation_result",
+    "if_text",
+    "mark_values",
+    "tree_result",
+    "why_not_result",
+    "why_not_state",
+]
 
 
 def explanation_result(option: Option, explanation: Explanation) -> dict[str, Any]:
@@ -25,15 +38,10 @@ def explanation_result(option: Option, explanation: Explanation) -> dict[str, An
     states = {s.name: s.index for s in option.states}
     decided = option.state(explanation.decided_in)
     # The leaf's own span, so the editor can point at the transition that fired.
-    leaf_span = None
     try:
-        node: If | Transition = decided.decision
-        for _, branch in leaf_path(decided.decision, explanation.leaf):
-            assert isinstance(node, If)
-            node = node.then if branch else node.otherwise
-        leaf_span = node.span.as_dict() if node.span else None
+        leaf_span = _leaf_span(decided, explanation.leaf)
     except KeyError:
-        pass
+        leaf_span = None
     return {
         "option": option.index,
         "option_name": option.name,
@@ -44,18 +52,71 @@ def explanation_result(option: Option, explanation: Explanation) -> dict[str, An
         "target_name": explanation.target,
         "stay": explanation.stay,
         "leaf_span": leaf_span,
-        "conditions": [
+        "conditions": [condition_result(c) for c in explanation.conditions],
+    }
+
+
+def condition_result(condition: Condition) -> dict[str, Any]:
+    """One condition of a path: its text, value, branch, span and comparisons."""
+    return {
+        "text": condition.text,
+        "source": condition.source,
+        "value": _plain(condition.value),
+        "branch": condition.branch,
+        "span": condition.span.as_dict() if condition.span else None,
+        "comparisons": [dataclasses.asdict(k) for k in condition.comparisons],
+    }
+
+
+def why_not_state(option: Option, state: int | str) -> str:
+    """The name of ``option``'s state ``state`` (id or name).
+
+    Raises:
+        DebugError: no such state.
+    """
+    if isinstance(state, int):
+        if not 0 <= state < len(option.states):
+            raise DebugError(f"option {option.name} has no state {state}")
+        return option.states[state].name
+    if state not in {s.name for s in option.states}:
+        raise DebugError(f"option {option.name} has no state {state}")
+    return state
+
+
+def why_not_result(
+    option: Option,
+    state: State,
+    leaf: int,
+    target: int | str,
+    values: Values,
+    text: Callable[[Expression], str] | None = None,
+) -> dict[str, Any]:
+    """The ``why_not`` part of an ``explain`` result: why ``state``'s decision did not go to ``target``."""
+    answer = explain_why_not(option, state, leaf, why_not_state(option, target), values, text)
+    return {
+        "target": option.state(answer.target).index,
+        "target_name": answer.target,
+        "went": answer.went,
+        "routes": [
             {
-                "text": c.text,
-                "source": c.source,
-                "value": _plain(c.value),
-                "branch": c.branch,
-                "span": c.span.as_dict() if c.span else None,
-                "comparisons": [dataclasses.asdict(k) for k in c.comparisons],
+                "leaf": route.leaf,
+                "stay": route.stay,
+                "leaf_span": _leaf_span(state, route.leaf),
+                "conditions": [condition_result(c) for c in route.conditions],
+                "blocked_at": route.blocked_at,
+                "parts_at": route.leaves_taken_path_at,
             }
-            for c in explanation.conditions
+            for route in answer.routes
         ],
     }
+
+
+def _leaf_span(state: State, leaf: int) -> SpanJson | None:
+    node: If | Transition = state.decision
+    for _, branch in leaf_path(state.decision, leaf):
+        assert isinstance(node, If)
+        node = node.then if branch else node.otherwise
+    return node.span.as_dict() if node.span else None
 
 
 def tree_result(option: Option, state_name: str, leaf: int, values: Values | None) -> dict[str, Any]:

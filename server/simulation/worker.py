@@ -83,7 +83,7 @@ from xabsl_studio.server.protocol.limits import MAX_SPEED, MIN_SPEED
 from xabsl_studio.server.protocol.types import HelloReason
 from xabsl_studio.server.simulation.engines import CommandError as CommandError
 from xabsl_studio.server.simulation.engines import EngineSet
-from xabsl_studio.server.simulation.explain import explanation_result, mark_values, tree_result
+from xabsl_studio.server.simulation.explain import explanation_result, mark_values, tree_result, why_not_result
 from xabsl_studio.server.simulation.forkstart import ForkStart
 from xabsl_studio.server.simulation.runlog import LOGGED_OPS, Programs, RunLog, Switch
 
@@ -381,12 +381,17 @@ class Simulation(EngineSet):
             raise CommandError("explain at a past tick needs a replay (xabsl serve --replay FILE.mcap)")
         _, engine, codec = self._robot(command.robot)
         option = self._named(command.option, codec.option_ids, "option")
-        explanation = Debugger(engine).explain(option)
+        debugger = Debugger(engine)
+        explanation = debugger.explain(option)
         ir_option = codec.program.options[option]
         result = explanation_result(ir_option, explanation)
         result["tree"] = tree_result(ir_option, explanation.decided_in, explanation.leaf, None)
         mark_values(result["tree"], explanation)
         result.update(seq=None, t=None, recorded=False)
+        if command.why_not is not None:
+            # from the same reads as the explanation: the last decision's
+            _, state, leaf, values = debugger.last_decision(option)
+            result["why_not"] = why_not_result(ir_option, state, leaf, command.why_not, values)
         return result
 
     def _op_explain_recorded(self, command: ExplainRecorded, owner: str | None) -> Any:
@@ -398,7 +403,7 @@ class Simulation(EngineSet):
             raise CommandError("that tick ran a version of the behavior this simulation no longer has")
         option = self._named(command.option, codec.option_ids, "option")
         ir_option = codec.program.options[option]
-        results = []
+        results: list[dict[str, Any]] = []
         for seq, t, decided, leaf, _, reads in command.ticks:
             if not 0 <= decided < len(ir_option.states):
                 raise CommandError(f"option {option} has no state {decided}")
@@ -412,6 +417,8 @@ class Simulation(EngineSet):
                 raise CommandError(f"state {option}.{state.name} has no leaf {leaf}") from None
             result = explanation_result(ir_option, explanation)
             result.update(seq=seq, t=t, recorded=True, tree=tree_result(ir_option, state.name, leaf, values))
+            if command.why_not is not None and not results:  # the explained tick, not the last transition's
+                result["why_not"] = why_not_result(ir_option, state, leaf, command.why_not, values)
             results.append(result)
         return results
 

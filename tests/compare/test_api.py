@@ -193,3 +193,30 @@ def test_a_hot_reload_compared_structurally(client: TestClient, repo: Path) -> N
     ]
     assert '<g id="leaf_0_2" class="edge changed">' in program["svg"]["state_machines"]["patrol"]
     assert _get(client, "/api/compare/generations/99999")[0] == 404
+
+
+def test_where_two_library_recordings_first_act_differently(client: TestClient, tmp_path: Path) -> None:
+    from tests.compare.test_diverge import first_difference
+
+    library = tmp_path / "recordings"
+    library.mkdir()
+    old_set = write_set(tmp_path / "old_set")
+    # the new version does not rest on a low battery: it patrols from the first tick on
+    new_set = write_set(tmp_path / "new_set", edited(options__patrol_dot_xabsl=("battery < 10", "battery < -1")))
+    _record(library / "new.mcap", new_set)
+    _record(library / "old.mcap", old_set)
+    (library / "broken.mcap").write_bytes(b"not an mcap file")
+    client.app.state.studio.library = RecordingLibrary(library)  # type: ignore[attr-defined]
+    status, body = _get(client, "/api/compare/diverge", recording="new.mcap", against="old.mcap")
+    assert status == 200, body
+    assert (body["a"], body["b"]) == ("new.mcap", "old.mcap")  # library names, not paths on disk
+    earliest = body["earliest"]
+    assert isinstance(earliest, dict) and earliest["option"] == "patrol"
+    agent = str(earliest["agent"])
+    assert earliest["seq"] == first_difference(library / "new.mcap", library / "old.mcap", agent)
+    assert "battery < -1" in str(earliest["why_a"]) and "battery < 10" in str(earliest["why_b"])
+    assert _get(client, "/api/compare/diverge", recording="new.mcap", against="gone.mcap")[0] == 404
+    assert _get(client, "/api/compare/diverge", recording="../new.mcap", against="old.mcap")[0] == 404
+    status, body = _get(client, "/api/compare/diverge", recording="new.mcap", against="broken.mcap")
+    assert status == 422 and "not a readable MCAP file" in str(body)
+    assert _get(client, "/api/compare/diverge", recording="new.mcap")[0] == 422  # `against` missing

@@ -167,6 +167,10 @@ function main(): void {
   const compare = new CompareView(() => [...session.programs.keys()]);
   timeline.element.querySelector(".toolbar")?.append(compare.button);
   timeline.changes.onStructure = (gen) => void compare.showGeneration(gen);
+  compare.onDivergence = (divergence) => {
+    timeline.markDivergence(divergence);
+    pending.add("cursor"); // paused: no tick follows that would redraw
+  };
   optionView.breakpoints.onHitsChanged = () => {
     timeline.markHits(optionView.breakpoints.hits);
     pending.add("cursor"); // paused: no tick follows that would redraw

@@ -143,7 +143,12 @@ export interface EnableBreakpoint {
   enabled: boolean;
 }
 
-/** Why `option` of `robot`'s engine took its leaf in the last tick or at tick `seq` (`Explanation`). */
+/**
+ * Why `option` of `robot`'s engine took its leaf in the last tick or at tick `seq` (`Explanation`).
+ *
+ * With `why_not`, the answer also says why that decision did not go to state `why_not`,
+ * from the same values (`xabsl_studio.server.protocol.replies.WhyNot`).
+ */
 export interface Explain {
   type: "command";
   id?: number | string | null;
@@ -151,6 +156,7 @@ export interface Explain {
   robot: number;
   option: number | string;
   seq?: number | null;
+  why_not?: number | string | null;
 }
 
 /** The result of `explain`. */
@@ -170,6 +176,7 @@ export interface Explanation {
   recorded?: boolean;
   tree?: Record<string, unknown>;
   last_transition?: LastTransition | null;
+  why_not?: WhyNot | null;
 }
 
 /** Why a robot's engine stopped (until `reset_agent`). */
@@ -591,6 +598,21 @@ export interface RobotInfo {
 }
 
 /**
+ * One leaf of the decision that goes to the asked-for state, and the conditions on its way.
+ *
+ * Each condition's `branch` is the branch this route needs, `value` what it was (null:
+ * the decision did not read what it takes: it never got that far).
+ */
+export interface Route {
+  leaf: number;
+  stay: boolean;
+  leaf_span: Record<string, unknown> | null;
+  conditions: Condition[];
+  blocked_at: number | null;
+  parts_at: number | null;
+}
+
+/**
  * A write, create, rename or delete: what was saved, and the recompile of its behavior sets.
  *
  * `detail` (with status 422): saved, but a behavior set did not compile.
@@ -752,6 +774,14 @@ export interface TestHit {
   program: string;
   breakpoint: number;
   seq: number;
+}
+
+/** Why the explained decision did not go to state `target`: every route there, each with its blocker. */
+export interface WhyNot {
+  target: number;
+  target_name: string;
+  went: boolean;
+  routes: Route[];
 }
 
 /** A command of the world itself (`engine.host.CommandableWorld`); without `name`, the list of them. */

@@ -8,7 +8,7 @@
 /// changes marked; given a recording of each version, the option graph's nodes are coloured by
 /// the change of their time share (blue: more time, rose: less; docs/compare.md).
 import { apiJson } from "../api";
-import { h } from "../ui";
+import { formatClock, h } from "../ui";
 import { SvgView } from "./svgview";
 
 export interface Where {
@@ -101,7 +101,34 @@ export function changedOptions(comparison: Comparison): string[] {
   return seen;
 }
 
+/// One robot's first divergence of two recordings (`GET api/compare/diverge`, `xabsl diverge --json`).
+export interface Divergence {
+  agent: string;
+  seq: number;
+  t: number;
+  path_a: string[];
+  path_b: string[];
+  option: string | null;
+  why_a: { decided_in: string; target: string; stay: boolean } | null;
+  why_b: { decided_in: string; target: string; stay: boolean } | null;
+}
+
+interface DivergenceReport {
+  a: string;
+  b: string;
+  earliest: Divergence | null;
+  divergences: Record<string, Divergence | null>;
+}
+
+/// A decision as one phrase: `far → near`, `far stays`.
+function decided(why: Divergence["why_a"]): string {
+  return why ? (why.stay ? `${why.decided_in} stays` : `${why.decided_in} → ${why.target}`) : "?";
+}
+
 export class CompareView {
+  /// Where the two recordings first act differently (null: they do not, or none were chosen): the timeline marks it.
+  onDivergence: (divergence: Divergence | null) => void = () => undefined;
+  private readonly divergence: HTMLElement;
   readonly button: HTMLButtonElement;
   readonly element: HTMLDialogElement;
   private readonly programSelect: HTMLSelectElement;
@@ -124,6 +151,7 @@ export class CompareView {
     this.recordingSelect = h("select.compare-recording", { "aria-label": "recording of the new version" });
     this.againstSelect = h("select.compare-against", { "aria-label": "recording of the old version" });
     this.status = h("p.muted.compare-status");
+    this.divergence = h("div.compare-diverge");
     this.list = h("div.compare-list");
     this.machineTitle = h("h3.compare-machine-title");
     const form = h(
@@ -142,6 +170,7 @@ export class CompareView {
       h("h2", {}, "Compare versions"),
       form,
       this.status,
+      this.divergence,
       h(
         "div.compare-body",
         {},
@@ -194,6 +223,36 @@ export class CompareView {
       if (asked === this.asked) this.render([answer]);
     } catch (e) {
       if (asked === this.asked) this.status.textContent = `Compare: ${(e as Error).message}`;
+    }
+    if (asked === this.asked) await this.diverge(asked);
+  }
+
+  /// Where the two recordings chosen first act differently, per robot; the earliest is marked on the timeline.
+  private async diverge(asked: number): Promise<void> {
+    const recording = this.recordingSelect.value;
+    const against = this.againstSelect.value;
+    this.divergence.replaceChildren();
+    if (!recording || !against) {
+      this.onDivergence(null);
+      return;
+    }
+    try {
+      const q = new URLSearchParams({ recording, against });
+      const report = await apiJson<DivergenceReport>("GET", `compare/diverge?${q.toString()}`);
+      if (asked !== this.asked) return;
+      const first = report.earliest;
+      const rows = Object.values(report.divergences)
+        .filter((d): d is Divergence => d !== null)
+        .sort((x, y) => x.seq - y.seq)
+        .map((d) => h("li", {}, `${d.agent}: tick ${d.seq} (${formatClock(d.t)}), ${d.option ?? "?"}: ${report.a} ${decided(d.why_a)} · ${report.b} ${decided(d.why_b)}`));
+      this.divergence.replaceChildren(
+        h("strong", {}, first ? `First divergence: ${first.agent} at ${formatClock(first.t)} (tick ${first.seq})` : `${report.a} and ${report.b} act alike in every tick they share`),
+        h("ol.compare-diverge-list", {}, ...rows),
+      );
+      this.onDivergence(first);
+    } catch (e) {
+      if (asked === this.asked) this.divergence.textContent = `Divergence: ${(e as Error).message}`;
+      this.onDivergence(null);
     }
   }
 

@@ -1,7 +1,10 @@
 /// The option view: the state machine of one option (server SVG) with the active state and the
 /// transition that fired last highlighted, and "why": the decision leaf of this tick with the
 /// conditions on its path, their branch, and the values the decision read then (`explain`; `?`:
-/// a value the decision did not read, e.g. an operand after `&&` decided).
+/// a value the decision did not read, e.g. an operand after `&&` decided), and "why not": for a
+/// state the decision did not go to (picked in the pane, or "Why not …?" on a state's context
+/// menu), every route there with the condition that blocked it, from the same values
+/// (`explain` with `why_not`).
 import { graphSvg } from "../api";
 import type { Connection } from "../connection";
 import { type DescriptionIndex, leafPath, type Option, rangeText } from "../description";
@@ -15,6 +18,7 @@ import { SvgView } from "./svgview";
 type Why = Explanation;
 type WhyCondition = Explanation["conditions"][number];
 type WhyTree = Record<string, unknown>;
+type WhyNotAnswer = NonNullable<Explanation["why_not"]>;
 
 export class OptionView {
   readonly element: HTMLElement;
@@ -31,6 +35,11 @@ export class OptionView {
   private explanation: Explanation | null = null;
   private explaining = false;
   private lastWhy = "";
+  /// "Why not": the state asked about, and the answer with the decision it is for.
+  private whyNotState: number | null = null;
+  private whyNot: { key: string; answer: WhyNotAnswer } | null = null;
+  private whyNotError = "";
+  private whyNotAsking = "";
   private readonly transitions: HTMLElement;
   /// The active state last brought into view.
   private followed = "";
@@ -84,7 +93,8 @@ export class OptionView {
       ev.preventDefault();
       const item = (label: string, kind: "enter_state" | "leave_state"): HTMLElement =>
         h("button", { role: "menuitem", onclick: () => { this.menu.hidden = true; void this.breakpoints.add(kind, state.name); } }, label);
-      this.menu.replaceChildren(item(`Break on enter ${state.name}`, "enter_state"), item(`Break on leave ${state.name}`, "leave_state"));
+      const whyNot = h("button", { role: "menuitem", onclick: () => { this.menu.hidden = true; this.askWhyNot(state.id); } }, `Why not ${state.name}?`);
+      this.menu.replaceChildren(item(`Break on enter ${state.name}`, "enter_state"), item(`Break on leave ${state.name}`, "leave_state"), whyNot);
       this.menu.style.left = `${ev.clientX}px`;
       this.menu.style.top = `${ev.clientY}px`;
       this.menu.hidden = false;
@@ -138,6 +148,10 @@ export class OptionView {
     const k = option && program ? `${program}|${option.id}|${session.hello?.generation ?? 0}` : "";
     if (k !== this.key && k !== this.loading) {
       this.explanation = null;
+      // a state id of another option (or generation) would ask about the wrong state
+      this.whyNotState = null;
+      this.whyNot = null;
+      this.whyNotError = "";
       if (!option || !program) {
         this.key = k;
         this.view.clear(session.hello ? "No option to show." : "Connecting…");
@@ -266,7 +280,12 @@ export class OptionView {
     // explain history), the transition the info line names from the buffered ticks is shown
     // without values rather than contradicted by "no transition".
     const known = ex && !ex.last_transition ? this.lastTransition(option) : null;
-    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}|${known ? `${known.from}>${known.to}@${known.t}` : ""}`;
+    const decisionKey = this.decisionKey(option, node, seq);
+    const whyNot = this.whyNot && this.whyNot.key === `${decisionKey}|${this.whyNotState}` ? this.whyNot.answer : null;
+    // Another tick or decision in view: ask again about the same state, once per decision.
+    const asked = this.whyNotState;
+    if (asked !== null && !whyNot && this.whyNotAsking !== `${decisionKey}|${asked}`) queueMicrotask(() => this.askWhyNot(asked));
+    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}|${known ? `${known.from}>${known.to}@${known.t}` : ""}|${this.whyNotState}|${whyNot ? "answer" : this.whyNotError}`;
     if (key === this.lastWhy) return;
     this.lastWhy = key;
     const path = decided ? leafPath(decided.decision, node.leaf) : null;
@@ -277,6 +296,7 @@ export class OptionView {
     const parts: Array<Node | null> = [
       h("div.why-head", {}, h("strong", {}, "Decision of this tick: "), `${decided?.name ?? node.decidedIn} `, h("span.arrow", {}, stays ? "stays" : `→ ${target?.name ?? node.state}`), h("span.muted", {}, ` (leaf ${node.leaf})`)),
       rows.length ? h("ol.conditions", {}, ...rows) : h("div.muted", {}, "No condition: the decision always takes this leaf."),
+      this.whyNotView(option, node, whyNot),
       ex?.tree && "if" in ex.tree ? h("details.why-tree", { open: true }, h("summary", {}, "Decision tree, path taken"), this.treeView(ex.tree as WhyTree, name)) : null,
       last
         ? h(
@@ -301,6 +321,91 @@ export class OptionView {
     ];
     this.why.replaceChildren(...parts.filter((p): p is Node => p !== null));
     void index;
+  }
+
+  private decisionKey(option: Option, node: OptionNode, seq: number | null): string {
+    return `${this.session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}|${seq}`;
+  }
+
+  /// "Why not STATE": a picker of the states the decision did not go to, and for the one picked
+  /// each route there (the conditions it needs, their values, the one that blocked it: ✗).
+  private whyNotView(option: Option, node: OptionNode, answer: WhyNotAnswer | null): HTMLElement {
+    const picker = h(
+      "select.why-not-picker",
+      { "aria-label": "Why not this state", title: "Why did the decision not go to this state?" },
+      h("option", { value: "" }, "Why not…"),
+      ...option.states.filter((st) => st.id !== node.state).map((st) => h("option", { value: st.id }, st.name)),
+    );
+    picker.value = this.whyNotState !== null && this.whyNotState !== node.state ? String(this.whyNotState) : "";
+    picker.addEventListener("change", () => (picker.value === "" ? this.askWhyNot(null) : this.askWhyNot(Number(picker.value))));
+    const asked = this.whyNotState !== null ? option.states[this.whyNotState] : undefined;
+    const parts: Array<Node | null> = [picker];
+    if (asked && this.whyNotError) parts.push(h("div.muted.small", {}, `Why not ${asked.name}: ${this.whyNotError}`));
+    else if (asked && !answer) parts.push(h("div.muted.small", {}, `Asking why not ${asked.name}…`));
+    else if (asked && answer) {
+      const routes = answer.routes.map((route) => {
+        const rows = route.conditions.map((c, i) => {
+          const row = this.conditionRow(c.text || c.source, c.branch, c, null);
+          row.querySelector(".branch")?.replaceChildren(c.branch ? "needs" : "needs not");
+          if (i === route.blocked_at) row.classList.add("blocker");
+          return row;
+        });
+        const blocker = route.blocked_at === null ? null : route.conditions[route.blocked_at];
+        const head = blocker
+          ? `blocked by ${blocker.text || blocker.source} (${blocker.value === null ? "?" : String(blocker.value)})`
+          : route.parts_at === null
+            ? "the route taken"
+            : "nothing known blocks it (values the decision did not read: ?)";
+        return h("li.why-not-route", {}, h("div", {}, `leaf ${route.leaf} (${route.stay ? "stay" : `goto ${answer.target_name}`}): `, h("strong", {}, head)), h("ol.conditions", {}, ...rows));
+      });
+      parts.push(
+        h(
+          "div.why-not-answer",
+          {},
+          h("strong", {}, `Why not ${answer.target_name}: `),
+          answer.went
+            ? `the decision did go to ${answer.target_name}.`
+            : routes.length
+              ? `${routes.length} route${routes.length > 1 ? "s lead" : " leads"} there from ${option.states[node.decidedIn]?.name ?? node.decidedIn}.`
+              : `no transition of ${option.states[node.decidedIn]?.name ?? node.decidedIn} leads to ${answer.target_name}.`,
+          routes.length ? h("ol.why-not-routes", {}, ...routes) : null,
+        ),
+      );
+    }
+    return h("div.why-not", {}, ...parts.filter((p): p is Node => p !== null));
+  }
+
+  /// Ask why the decision in view did not go to state `state` (null: forget the question).
+  private askWhyNot(state: number | null): void {
+    const session = this.session;
+    const option = this.current();
+    this.whyNotState = state;
+    this.whyNot = null;
+    this.whyNotError = "";
+    this.lastWhy = "";
+    const node = option ? this.node(option) : null;
+    if (!option || !node || node.leaf < 0 || state === null) {
+      if (option) this.renderWhy(option, session.indexOf(session.selectedRobot));
+      return;
+    }
+    const seq = session.isLive ? null : (session.view?.seq ?? null);
+    const key = `${this.decisionKey(option, node, seq)}|${state}`;
+    this.whyNotAsking = key;
+    const args = seq === null ? { robot: session.selectedRobot, option: option.id, why_not: state } : { robot: session.selectedRobot, option: option.id, seq, why_not: state };
+    this.renderWhy(option, session.indexOf(session.selectedRobot));
+    this.connection
+      .command("explain", args)
+      .then((ex: Why) => {
+        if (ex.why_not) this.whyNot = { key, answer: ex.why_not };
+      })
+      .catch((error: Error) => {
+        this.whyNotError = error.message;
+      })
+      .finally(() => {
+        this.lastWhy = "";
+        const shown = this.current();
+        if (shown) this.renderWhy(shown, session.indexOf(session.selectedRobot));
+      });
   }
 
   private conditionRow(text: string, taken: boolean, values: WhyCondition | undefined, doc: string | null): HTMLElement {

@@ -41,6 +41,8 @@ export class TimelinePanel {
   /// Where a generation started in the buffered history (timeline time), as drawn; a fork is
   /// one (reason "fork"), so "Run from here" needs no mark of its own.
   private marks: Array<Mark & { x: number }> = [];
+  /// The first divergence of two compared recordings (a violet diamond and line at its tick).
+  private divergence: { seq: number; t: number; agent: string } | null = null;
   /// The dialog a click on a mark opens (in the page once the first mark is clicked).
   readonly changes = new ChangesDialog();
   /// The toolbar, for controls of other modules (panels/fork.ts).
@@ -62,6 +64,12 @@ export class TimelinePanel {
     new ResizeObserver(() => {
       this.dirty = true;
     }).observe(this.scroller);
+  }
+
+  /// Mark where two compared recordings first act differently (the Compare view's; null: none).
+  markDivergence(divergence: { seq: number; t: number; agent: string } | null): void {
+    this.divergence = divergence;
+    this.dirty = true;
   }
 
   /// Mark breakpoint hits (a red triangle and line at each hit's time).
@@ -270,6 +278,26 @@ export class TimelinePanel {
       ctx.stroke();
     }
     this.canvas.dataset.hits = String(this.hits.length);
+    // The divergence: at its tick where the buffer holds it (a replay of either recording), else its time.
+    const parted = this.divergence;
+    const partedAt = parted ? (session.buffer.bySeq(parted.seq)?.x ?? parted.t) : null;
+    if (parted && partedAt !== null && partedAt >= this.t0 && partedAt <= this.t1) {
+      const x = xOf(partedAt);
+      ctx.fillStyle = "#ab47bc";
+      ctx.strokeStyle = "rgba(171,71,188,0.8)";
+      ctx.beginPath();
+      ctx.moveTo(x, 0);
+      ctx.lineTo(x + 5, 5);
+      ctx.lineTo(x, 10);
+      ctx.lineTo(x - 5, 5);
+      ctx.closePath();
+      ctx.fill();
+      ctx.beginPath();
+      ctx.moveTo(x, 10);
+      ctx.lineTo(x, height);
+      ctx.stroke();
+      this.canvas.dataset.divergence = JSON.stringify({ seq: parted.seq, agent: parted.agent, px: Math.round(x) });
+    } else delete this.canvas.dataset.divergence;
     // Generation marks: a flag on the axis and a dashed line, coloured by reason.
     const drawn: Array<{ gen: number; reason: string; px: number }> = [];
     for (const mark of this.marks) {
