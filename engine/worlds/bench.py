@@ -64,7 +64,7 @@ from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Engine
 from xabsl_studio.engine.runtime.values import EnumValues, coerce
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.engine.worlds import benchmath
-from xabsl_studio.engine.worlds.benchfile import BenchFile, Entry, Getter, Resolver, find_bench_file
+from xabsl_studio.engine.worlds.benchfile import BenchFile, BenchFileError, Entry, Getter, Resolver, find_bench_file
 
 FIELD_X, FIELD_Y = 3000.0, 2000.0  # half lengths, mm
 VIEW_ANGLE, VIEW_DISTANCE = 30.0, 4000.0  # deg either side, mm
@@ -453,8 +453,11 @@ class BenchController:
                 bindings.input(
                     name, binding.kind, _recorded(agent, name, binding.read), params=binding.params, enum=binding.enum
                 )
-        #: the bench file's [pose], compiled against the program at the start
-        self.pose: dict[str, Getter] = self._pose(program)
+        try:  # the bench file's [pose] against this program
+            #: the bench file's [pose], compiled against the program at the start
+            self.pose: dict[str, Getter] = self._pose(program)
+        except BenchFileError as error:  # the robot stands; the banner says why
+            raise BenchInputError(str(error)) from None
         self.adopt(program)
         self.trace = trace
         self.trace_position = 0
@@ -468,12 +471,20 @@ class BenchController:
         Returns:
             the input bindings made, by name.
         """
-        agent, bindings, values = self.agent, self.bindings, self.agent.values
+        bindings = self.bindings
         for enum in program.enums.values():
             if not enum.internal and enum.name not in bindings.enums:
                 bindings.enum(enum.name, list(enum.elements))
         ours: dict[str, object] = {}
-        own = self._bench_entries(program)
+        try:
+            own = self._bench_entries(program)
+            return self._bind_inputs(program, own, ours)
+        except BenchFileError as error:  # the robot stands (or keeps its version); the banner says why
+            raise BenchInputError(str(error)) from None
+
+    def _bind_inputs(self, program: Program, own: dict[str, Entry], ours: dict[str, object]) -> dict[str, object]:
+        """Bind ``program``'s input symbols nobody bound yet (bench file, computed, by hand)."""
+        agent, bindings, values = self.agent, self.bindings, self.agent.values
         for symbol in program.inputs.values():
             if symbol.name in bindings.inputs:
                 continue

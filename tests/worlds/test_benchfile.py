@@ -11,7 +11,6 @@ import pytest
 from tests.worlds.test_bench import bench, command, simulation
 from xabsl_studio.engine.host import ExampleError
 from xabsl_studio.engine.worlds.bench import BenchExample, BenchWorld
-from xabsl_studio.engine.worlds.benchfile import BenchFileError
 from xabsl_studio.server.protocol.commands import ForceOption
 from xabsl_studio.server.simulation.worker import Simulation
 
@@ -113,7 +112,8 @@ def go_to(sim: Simulation, x: float, y: float) -> None:
 
 
 def state_of(sim: Simulation) -> str:
-    engine = sim.world.agents[0].controller.engine  # type: ignore[attr-defined]
+    engine = sim.engines[0]
+    assert engine is not None
     option = engine.program.options["go_to_spot"]
     return str(option.states[engine.active_states()[option.index]].name)
 
@@ -127,7 +127,8 @@ def test_go_to_point_leaves_stop_because_vector_abs_is_computed(tmp_path: Path) 
     assert state_of(sim) == "far_away", "vector.abs(1000, 0) = 1000 > 800"
     ((args, value),) = bench(sim)["calls"]["vector.abs"]
     assert args == [1000.0, 0.0] and value == 1000.0
-    engine = sim.world.agents[0].controller.engine  # type: ignore[attr-defined]
+    engine = sim.engines[0]
+    assert engine is not None
     assert engine.output("motion.walk_speed.x") == pytest.approx(1000.0), "atan2, normalize, cos computed too"
     assert engine.output("motion.walk_speed.rot") == pytest.approx(0.0)
     computed = sim.world.static_scene()["bench"]["computed"]
@@ -159,7 +160,8 @@ def test_a_bench_file_lets_the_robot_walk_to_the_point_without_python(tmp_path: 
     assert states[0] == "far_away" and states[-1] == "stop", "walked there, then stopped"
     assert math.dist((robot.x, robot.y), target) < 200.0 < math.dist(start, target)
     assert robot.values["robot_pose.x"] == pytest.approx(robot.x, abs=20.0), "the pose follows the robot"
-    engine = robot.controller.engine  # type: ignore[union-attr]
+    engine = sim.engines[0]
+    assert engine is not None
     assert engine.output("debug.helper") == 23.0, "team.helper from the bench file: a * 10 + b"
     scene = world.static_scene()["bench"]
     assert scene["computed"]["team.helper"] == "bench.toml: a * 10 + b"
@@ -209,9 +211,10 @@ def test_a_bench_file_that_does_not_fit_the_behavior_names_file_and_line(
     tmp_path: Path, text: str, where: int, message: str
 ) -> None:
     folder = team_set(tmp_path / "team", text)
-    with pytest.raises(BenchFileError) as raised:
-        simulation(BenchExample(folder, robots=1))
-    assert f"{folder / 'bench.toml'}:{where}: " in str(raised.value) and message in str(raised.value)
+    _, sim = simulation(BenchExample(folder, robots=1))
+    (error,) = sim.errors.values()  # the robots stand, the banner says why
+    assert error is not None and f"{folder / 'bench.toml'}:{where}: " in error and message in error, error
+    assert sim.engines == [None]
 
 
 def test_a_bench_file_given_by_path_wins_over_the_one_beside_the_agents(tmp_path: Path) -> None:
