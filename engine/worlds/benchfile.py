@@ -95,7 +95,7 @@ _COMPARE: dict[type[ast.cmpop], Callable[[Any, Any], bool]] = {
 }
 
 
-class ExpressionError(ValueError):
+class ExpressionError(BenchFileError):
     """An expression that does not compile (the caller adds file and line)."""
 
 
