@@ -148,11 +148,15 @@ def _root(program: Program, agent: str | None) -> tuple[str | None, str | None]:
     return chosen.root, chosen.name
 
 
+def program_option(program: Program, index: int) -> str | None:
+    """The name of the option with IR index ``index``."""
+    return next((o.name for o in program.options.values() if o.index == index), None)
+
+
 def _recorded(args: argparse.Namespace) -> tuple[str, str]:
     """The DOT of what ``--robot`` ran at ``--tick`` of ``--recording``, and what it shows."""
     from xabsl_studio.engine.docs.pictures import Ran, activation_graph, activation_machine
     from xabsl_studio.engine.record.reader import Recording, RecordingError
-    from xabsl_studio.engine.runtime.activation import OptionNode
 
     if not os.path.isfile(args.recording):
         raise UsageError(f"no such file: {args.recording}")
@@ -170,11 +174,14 @@ def _recorded(args: argparse.Namespace) -> tuple[str, str]:
             program = tick.program.program()
             if program is None:
                 raise UsageError(f"{args.recording} was recorded without the behavior's code (an older recording)")
-            tree = tick.tree()
+            path = tick.path
             seconds = view.t / 1000
     except RecordingError as error:
         raise UsageError(str(error)) from None
-    ran = Ran.of(tree)
+    try:
+        ran = Ran.from_path(program, path)
+    except ValueError as error:
+        raise UsageError(f"{args.recording} at tick {args.tick}: {error}") from None
     title = f"{robot} at tick {args.tick} ({seconds:.2f} s)"
     if args.machine is not None:
         option = _option(program, args.machine)
@@ -186,6 +193,6 @@ def _recorded(args: argparse.Namespace) -> tuple[str, str]:
         _option(program, args.option)
         root = args.option
     else:
-        roots = [node.option for node in tree if isinstance(node, OptionNode)]
+        roots = [program_option(program, node[2]) for node in path if node[0] == 0 and node[1] == 0]
         root = roots[0] if roots else _root(program, args.agent)[0]
     return activation_graph(program, ran, root, title), f"{robot}'s activation path at tick {args.tick}"

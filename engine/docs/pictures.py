@@ -22,11 +22,11 @@ import shutil
 import subprocess
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from xabsl_studio.engine import ir
 from xabsl_studio.engine.emit.dot import GraphvizMissing, option_graph, quote, state_machine
 from xabsl_studio.engine.errors import EmitError
-from xabsl_studio.engine.runtime.activation import BehaviorNode, Node, OptionNode
 
 #: Picture formats and their media types.
 FORMATS: dict[str, str] = {"svg": "image/svg+xml", "png": "image/png", "pdf": "application/pdf"}
@@ -67,7 +67,7 @@ def _with_edge_attributes(dot: str, ids: set[str], attributes: str) -> str:
 
 @dataclass(frozen=True, slots=True)
 class Ran:
-    """What ran in one tick, from an activation tree: options with their state, behaviors, calls."""
+    """What ran in one tick: options with their active state, basic behaviors, the calls made."""
 
     states: dict[str, str]
     behaviors: frozenset[str]
@@ -77,29 +77,44 @@ class Ran:
     decisions: dict[str, tuple[str, int]]
 
     @classmethod
-    def of(cls, tree: Sequence[Node]) -> Ran:
-        """What ran in ``tree`` (``Engine.activation()`` or ``AgentTick.tree()``)."""
+    def from_path(cls, program: ir.Program, path: Sequence[Sequence[Any]]) -> Ran:
+        """What ran in a compact activation path (a frame's or a recording's ``path``) of ``program``.
+
+        Nodes come in pre-order with their depth (docs/protocol.md, the path's layout): an option
+        ``[0, depth, option id, state, option time, state time, decided in, leaf, params]``, a
+        basic behavior ``[1, depth, behavior id, time, params]``; the caller of a node is the last
+        option one level up.
+
+        Raises:
+            ValueError: a node naming an option, state or behavior ``program`` does not have.
+        """
+        options = {o.index: o for o in program.options.values()}
+        behaviors = {b.index: b for b in program.behaviors.values()}
         states: dict[str, str] = {}
         decisions: dict[str, tuple[str, int]] = {}
-        behaviors: set[str] = set()
+        ran_behaviors: set[str] = set()
         calls: set[tuple[str, str, str]] = set()
-
-        def walk(node: Node, caller: str | None) -> None:
-            if isinstance(node, OptionNode):
-                states[node.option] = node.state
-                decisions[node.option] = (node.decided_in, node.leaf)
-                if caller is not None:
-                    calls.add((caller, "o", node.option))
-                for sub in node.sub:
-                    walk(sub, node.option)
-            elif isinstance(node, BehaviorNode):
-                behaviors.add(node.behavior)
-                if caller is not None:
-                    calls.add((caller, "b", node.behavior))
-
-        for root in tree:
-            walk(root, None)
-        return cls(states, frozenset(behaviors), frozenset(calls), decisions)
+        callers: list[str] = []  # the option at each depth on the way down
+        try:
+            for node in path:
+                kind, depth, index = int(node[0]), int(node[1]), int(node[2])
+                del callers[depth:]
+                caller = callers[depth - 1] if 0 < depth <= len(callers) else None
+                if kind == 0:
+                    option = options[index]
+                    states[option.name] = option.states[int(node[3])].name
+                    decisions[option.name] = (option.states[int(node[6])].name, int(node[7]))
+                    if caller is not None:
+                        calls.add((caller, "o", option.name))
+                    callers.append(option.name)
+                else:
+                    behavior = behaviors[index].name
+                    ran_behaviors.add(behavior)
+                    if caller is not None:
+                        calls.add((caller, "b", behavior))
+        except (KeyError, IndexError, TypeError, ValueError) as error:
+            raise ValueError(f"the path does not fit this behavior ({type(error).__name__}: {error})") from None
+        return cls(states, frozenset(ran_behaviors), frozenset(calls), decisions)
 
 
 def activation_graph(program: ir.Program, ran: Ran, root: str | None, title: str | None = None) -> str:
