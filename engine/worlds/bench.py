@@ -610,8 +610,7 @@ class BenchController:
         kind = symbol.kind
 
         def function(*args: Value) -> Value:
-            value = getter(args)
-            return bool(value) if kind is Kind.BOOLEAN else int(value) if kind is Kind.ENUM else float(value)
+            return _scalar(getter(args), kind)
 
         return function
 

@@ -36,6 +36,8 @@ from xabsl_studio.engine.worlds.benchmath import normalize_degrees
 
 #: The file the bench reads beside an agents file.
 BENCH_FILE = "bench.toml"
+#: The longest expression a bench file may hold (characters): a formula, not a program.
+MAX_EXPRESSION = 2000
 #: The keys of ``[pose]``.
 POSE_KEYS = ("forward", "sideways", "turn", "when")
 
@@ -115,11 +117,15 @@ def compile_expression(text: str, resolve: Resolver) -> Getter:
     Raises:
         ExpressionError: a syntax error, an unknown name or function, a construct not allowed.
     """
+    if len(text) > MAX_EXPRESSION:
+        raise ExpressionError(f"an expression of at most {MAX_EXPRESSION} characters")
     try:
         tree = ast.parse(text.strip(), mode="eval")
+        return _compile(tree.body, resolve)
     except SyntaxError as error:
         raise ExpressionError(f"not an expression: {error.msg} in {text!r}") from None
-    return _compile(tree.body, resolve)
+    except RecursionError:
+        raise ExpressionError("an expression nested too deeply") from None
 
 
 def _compile(node: ast.expr, resolve: Resolver) -> Getter:
@@ -227,9 +233,12 @@ class BenchFile:
                 if table == "pose" and key not in POSE_KEYS:
                     raise BenchFileError(f"{path}:{line}: unknown pose key {key!r} ({', '.join(POSE_KEYS)})")
                 try:  # the syntax now; names once the program is known
+                    if len(value) > MAX_EXPRESSION:
+                        raise BenchFileError(f"{path}:{line}: {table}.{key}: over {MAX_EXPRESSION} characters")
                     ast.parse(value.strip(), mode="eval")
-                except SyntaxError as error:
-                    raise BenchFileError(f"{path}:{line}: {table}.{key}: not an expression: {error.msg}") from None
+                except (SyntaxError, RecursionError, MemoryError) as error:
+                    reason = error.msg if isinstance(error, SyntaxError) else "nested too deeply"
+                    raise BenchFileError(f"{path}:{line}: {table}.{key}: not an expression: {reason}") from None
                 entries.append(Entry(key, value, line))
             tables[table] = tuple(entries)
         return cls(path, tables["functions"], tables["inputs"], tables["pose"])

@@ -183,6 +183,7 @@ def test_a_bench_file_lets_the_robot_walk_to_the_point_without_python(tmp_path: 
         ('[inputs]\n"robot_pose.x" = 3\n', 2, "the value is an expression in quotes"),
         ('[inputs]\n\n"robot_pose.x" = "robot.x +"\n', 3, "not an expression"),
         ("[inputs\n", 1, "not TOML"),
+        ('[inputs]\n"robot_pose.x" = "' + "(" * 3000 + '"\n', 2, "characters"),
         ('[outputs]\nx = "1"\n', 1, "unknown table 'outputs'"),
     ],
 )
@@ -205,6 +206,7 @@ def test_a_bad_bench_file_stops_the_start_with_file_and_line(
         ('[functions]\n"team.helper" = "a + c"\n', 2, "unknown name 'c'"),
         ('[functions]\n"team.helper" = "pow(a, b)"\n', 2, "unknown function 'pow'"),
         ('[functions]\n"team.helper" = "[a, b]"\n', 2, "not allowed in a bench expression"),
+        ('[functions]\n"team.helper" = "' + "-" * 1500 + 'a"\n', 2, "nested too deeply"),
     ],
 )
 def test_a_bench_file_that_does_not_fit_the_behavior_names_file_and_line(
