@@ -445,8 +445,8 @@ class BenchController:
         self.bound = sorted(name for name, binding in ours.items() if bindings.inputs.get(name) is not binding)
         for name in self.bound:  # the bindings module's own: not ours to compute
             self.computed.pop(name, None)
-            self.followers.pop(name, None)
-            self.followed.discard(name)
+            if self.followers.pop(name, None) is not None and name not in WORLD_INPUTS:
+                self.followed.discard(name)
         for name in self.bound:  # record the calls of the user's functions too
             binding = bindings.inputs[name]
             if binding.params:

@@ -196,6 +196,7 @@ def test_a_bindings_module_supplies_functions_plain_inputs_and_basic_behaviors(d
     _, sim = simulation(BenchExample(demo_dir, bindings=module))
     scene = sim.world.static_scene()["bench"]
     assert scene["bound"] == ["ball.time_since_seen", "clamp"] and scene["functions"] == []
+    assert scene["computed"] == {}, "the bindings module replaces the computed clamp"
     assert scene["bindings"] == str(module)
     sim.execute(_force(sim, "approach_ball", stop_at=100.0))
     sim.tick()
