@@ -225,3 +225,22 @@ def test_a_bench_file_given_by_path_wins_over_the_one_beside_the_agents(tmp_path
     other.write_text('[functions]\n"team.helper" = "a - b"\n', encoding="utf-8")
     _, sim = simulation(BenchExample(folder, robots=1, bench=str(other)))
     assert sim.world.static_scene()["bench"]["computed"]["team.helper"] == "elsewhere.toml: a - b"
+
+
+def test_the_documented_bench_file_reads_and_the_documented_table_is_the_bench_s(tmp_path: Path) -> None:
+    from xabsl_studio.engine.worlds.benchfile import BenchFile
+    from xabsl_studio.engine.worlds.benchmath import TABLE
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "bench.md").read_text(encoding="utf-8")
+    example = doc.split("```toml\n", 1)[1].split("```", 1)[0]
+    (tmp_path / "bench.toml").write_text(example, encoding="utf-8")
+    read = BenchFile.read(tmp_path / "bench.toml")
+    assert [e.key for e in read.inputs][:3] == [
+        "robot_pose.planned.x",
+        "robot_pose.planned.y",
+        "robot_pose.planned.rotation",
+    ]
+    assert [e.key for e in read.pose] == ["when", "forward", "sideways", "turn"]
+    table = doc.split("| name | parameters, in declaration order | computes |", 1)[1].split("\n\n", 1)[0]
+    documented = {name.strip("` ") for line in table.splitlines()[2:] for name in line.split("|")[1].split(",")}
+    assert documented == {row.name for row in TABLE}
