@@ -15,9 +15,11 @@ APT_INSTALL := DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no
 system-deps:
 	@command -v dot >/dev/null || { $(SUDO) apt-get update -q && $(APT_INSTALL) graphviz; }
 
-# Only the tests need a browser: the e2e tests drive Debian's chromium through Playwright.
+# Only the tests need a browser: the e2e tests drive Debian's chromium through Playwright;
+# and poppler's pdftoppm, a second program that opens the PDF pictures `xabsl picture` writes.
 test-deps: system-deps
 	@test -x /usr/bin/chromium || { $(SUDO) apt-get update -q && $(APT_INSTALL) chromium; }
+	@command -v pdftoppm >/dev/null || { $(SUDO) apt-get update -q && $(APT_INSTALL) poppler-utils; }
 
 # The studio UI (web/): `npm ci` when node_modules is missing or package-lock.json changed,
 # then a Vite build into web/dist, which `xabsl serve` serves at `/`.

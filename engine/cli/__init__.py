@@ -49,6 +49,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.diff",
         "compare two versions of a behavior set: options, states, transitions, symbols added, removed, changed",
     ),
+    "picture": (
+        "xabsl_studio.engine.cli.picture",
+        "draw the option graph, a state machine or a recorded tick's activation path as SVG, PNG or PDF",
+    ),
     "trace": (
         "xabsl_studio.engine.cli.trace",
         "run a behavior under the conformance host: input trace in, activation trace out",

@@ -8,7 +8,8 @@ Everything comes from the IR and the doc comments it keeps; the pictures are the
 (:mod:`xabsl_studio.engine.emit.dot`) laid out by Graphviz.
 
 Modules: :mod:`.xref` (cross references), :mod:`.graphs` (DOT with links, batched ``dot``),
-:mod:`.pages` (HTML), :mod:`.assets` (CSS and the search script), :mod:`.site` (the writer).
+:mod:`.pages` (HTML), :mod:`.assets` (CSS and the search script), :mod:`.site` (the writer);
+:mod:`.pictures` draws the same graphs as SVG, PNG or PDF to take away (``xabsl picture``).
 """
 
 from xabsl_studio.engine.docs.graphs import GraphLayoutError

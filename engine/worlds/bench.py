@@ -13,9 +13,15 @@ Every name of the program is bound (:class:`BenchController`), so *any* behavior
   every other one keeps the value last set by hand (world command ``set_input``) or by the input
   trace (``--inputs FILE.jsonl``, the ``xabsl trace`` format, played on the behavior clock so it
   pauses and scrubs with the session); a world input set so leaves the world's control;
-* input functions (input symbols with parameters) return the value set by hand for that symbol
-  (``set_function``; 0, false or the first element until then), never a made-up function of the
-  arguments; each tick's calls and their arguments are in the dynamic scene (``calls``);
+* input functions (input symbols with parameters) with a common mathematical meaning
+  (``abs(value)``, ``atan2(y, x)``, ``vector.abs(x, y)``…, matched by name and parameters in
+  ``xabsl_studio.engine.worlds.benchmath``) are computed; the others return the value set by hand
+  for that symbol (``set_function``; 0, false or the first element until then), never a made-up
+  function of the arguments; a computed one set by hand returns the value set until released
+  (``follow_world``); each tick's calls and their arguments are in the dynamic scene (``calls``);
+* a bench file (``bench.toml`` beside the agents file, ``xabsl_studio.engine.worlds.benchfile``)
+  computes further input functions and plain inputs by expression and drives the robot's pose
+  from output symbols;
 * basic behaviors ``walk(speed, direction)``, ``turn(rate)`` and ``kick(strength)`` move the
   robot, others run without effect;
 * a bindings module (``--bindings FILE.py``, docs/own-behaviors.md) replaces any of these with
@@ -53,10 +59,12 @@ from xabsl_studio.engine.host import (
     behavior_source,
     common_root,
 )
-from xabsl_studio.engine.ir.model import Program, short_name
+from xabsl_studio.engine.ir.model import InputSymbol, Program, short_name
 from xabsl_studio.engine.runtime import BasicBehavior, Bindings, Engine
 from xabsl_studio.engine.runtime.values import EnumValues, coerce
 from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.engine.worlds import benchmath
+from xabsl_studio.engine.worlds.benchfile import BenchFile, BenchFileError, Entry, Getter, Resolver, find_bench_file
 
 FIELD_X, FIELD_Y = 3000.0, 2000.0  # half lengths, mm
 VIEW_ANGLE, VIEW_DISTANCE = 30.0, 4000.0  # deg either side, mm
@@ -69,7 +77,8 @@ class BenchAgent:
 
     What a bindings module may use: ``name``, ``number``, ``x``, ``y`` (mm), ``heading`` (deg),
     ``now_ms``, ``world`` (``world.ball``: [x, y] mm), ``values`` (plain inputs by name) and the
-    commands ``speed`` (mm/s), ``rate`` (deg/s), ``turn_to`` (deg, relative), ``kick`` (0..1),
+    commands ``speed`` (mm/s), ``side`` (mm/s, to the left), ``rate`` (deg/s), ``turn_to`` (deg,
+    relative), ``kick`` (0..1),
     which the world applies after the tick.
     """
 
@@ -86,6 +95,7 @@ class BenchAgent:
         "now_ms",
         "number",
         "rate",
+        "side",
         "speed",
         "team",
         "turn_to",
@@ -116,6 +126,7 @@ class BenchAgent:
         self.heading = 90.0 * index
         self.last_seen_ms = -(10**9)
         self.speed = 0.0  # mm/s forward
+        self.side = 0.0  # mm/s to the left
         self.turn_to: float | None = None  # relative direction to turn towards, deg
         self.rate = 0.0  # deg/s
         self.kick = 0.0
@@ -142,7 +153,7 @@ class BenchAgent:
                 values[name] = value
         if self.calls:
             self.calls = {}
-        self.speed, self.turn_to, self.rate, self.kick = 0.0, None, 0.0, 0.0
+        self.speed, self.side, self.turn_to, self.rate, self.kick = 0.0, 0.0, None, 0.0, 0.0
 
     def act(self, now_ms: int) -> None:
         """Nothing to do: the basic behaviors set speed and turn, ``BenchWorld.step`` moves."""
@@ -194,8 +205,9 @@ class BenchWorld:
                 a.turn_to -= turn
             a.heading = _normalize(a.heading + a.rate * dt)
             rad = math.radians(a.heading)
-            a.x = max(-FIELD_X, min(FIELD_X, a.x + math.cos(rad) * a.speed * dt))
-            a.y = max(-FIELD_Y, min(FIELD_Y, a.y + math.sin(rad) * a.speed * dt))
+            cos, sin = math.cos(rad), math.sin(rad)
+            a.x = max(-FIELD_X, min(FIELD_X, a.x + (cos * a.speed - sin * a.side) * dt))
+            a.y = max(-FIELD_Y, min(FIELD_Y, a.y + (sin * a.speed + cos * a.side) * dt))
             if a.kick > 0.0 and math.hypot(self.ball[0] - a.x, self.ball[1] - a.y) < 350.0:
                 self.ball_velocity = [math.cos(rad) * 2000.0 * a.kick, math.sin(rad) * 2000.0 * a.kick]
                 self.kicks += 1
@@ -227,10 +239,13 @@ class BenchWorld:
             controller = controllers[0]  # every robot runs the same behavior set on the same bindings
             inputs = controller.program.inputs.values()
             scene["bench"] = {
-                "world_inputs": [s.name for s in inputs if s.name in WORLD_INPUTS and not s.params],
+                "world_inputs": [s.name for s in inputs if s.name in controller.followed and not s.params],
                 "bound": controller.bound,
                 "functions": [s.name for s in inputs if s.params and s.name not in controller.bound],
+                # what the bench computes itself, by input function: "abs(value)", "bench.toml: x - robot.x"
+                "computed": dict(controller.computed),
                 "bindings": str(self.bindings_file) if self.bindings_file is not None else None,
+                "bench_file": str(controller.bench_file.path) if controller.bench_file is not None else None,
                 "trace": {
                     "file": str(self.trace.path),
                     "lines": len(self.trace.lines),
@@ -298,7 +313,8 @@ class BenchWorld:
                 "name": "follow_world",
                 "label": "Follow the world",
                 "group": "bench",
-                "doc": "an input the world computes (ball.*, game.state) follows the world again",
+                "doc": "an input the world computes (ball.*, game.state, the bench file's) follows the world "
+                "again; a computed input function is computed again",
                 "args": [robot, symbol],
             },
         ]
@@ -322,10 +338,12 @@ class BenchWorld:
         if not isinstance(symbol, str):
             raise WorldCommandError(f"{name}: symbol must be an input symbol name")
         if name == "follow_world":
-            if symbol not in WORLD_INPUTS:
-                raise WorldCommandError(
-                    f"follow_world: the world does not compute {symbol!r} ({', '.join(WORLD_INPUTS)})"
-                )
+            if symbol in controller.computed:
+                agent.functions.pop(symbol, None)
+                return None
+            if symbol not in controller.followed:
+                known = sorted(controller.followed) + sorted(controller.computed)
+                raise WorldCommandError(f"follow_world: the bench does not compute {symbol!r} ({', '.join(known)})")
             agent.hand.discard(symbol)
             return None
         if "value" not in args:
@@ -390,11 +408,14 @@ class BenchController:
     """``AgentController`` of a bench robot: an engine on the bench's bindings and the user's.
 
     The bench binds every name of the program: external enumerations (element *i* has value
-    *i*), plain inputs (read from :attr:`BenchAgent.values`: set by the world, by hand or by the
-    input trace), input functions (a value set by hand per symbol, initially 0 / false / the
-    first element; every call is recorded with its arguments), outputs (engine storage) and basic
-    behaviors (``walk``, ``turn``, ``kick`` move the robot, others only run). A bindings module
-    (``--bindings``) then replaces any of these through the same ``xabsl_studio.engine.runtime.Bindings`` API.
+    *i*), plain inputs (read from :attr:`BenchAgent.values`: set by the world, by the bench file,
+    by hand or by the input trace), input functions (computed by the bench file's expression or
+    by their common mathematical meaning, else a value set by hand per symbol, initially 0 /
+    false / the first element; every call is recorded with its arguments), outputs (engine
+    storage) and basic behaviors (``walk``, ``turn``, ``kick`` move the robot, others only run).
+    A bindings module (``--bindings``) then replaces any of these through the same
+    ``xabsl_studio.engine.runtime.Bindings`` API. The bench file's ``[pose]`` drives the robot
+    after each tick.
     """
 
     def __init__(
@@ -403,10 +424,18 @@ class BenchController:
         program: Program,
         user: BindingsModule | None = None,
         trace: InputTrace | None = None,
+        bench_file: BenchFile | None = None,
     ) -> None:
         self.agent = agent
         self.program = program
         self.bindings = bindings = Bindings()
+        self.bench_file = bench_file
+        #: what the bench computes, by input function name: the studio's "computed: …"
+        self.computed: dict[str, str] = {}
+        #: plain inputs the bench file computes: getters of the robot, applied before each tick
+        self.followers: dict[str, Getter] = {}
+        #: the inputs that follow the world (or the bench file) until set by hand
+        self.followed: set[str] = set(WORLD_INPUTS)
         agent.values = {}
         agent.functions = {}
         ours = self._bind_missing(program)
@@ -414,12 +443,21 @@ class BenchController:
             user.bind(bindings, agent)
         #: names of the input symbols the bindings module supplies (not settable by hand)
         self.bound = sorted(name for name, binding in ours.items() if bindings.inputs.get(name) is not binding)
+        for name in self.bound:  # the bindings module's own: not ours to compute
+            self.computed.pop(name, None)
+            if self.followers.pop(name, None) is not None and name not in WORLD_INPUTS:
+                self.followed.discard(name)
         for name in self.bound:  # record the calls of the user's functions too
             binding = bindings.inputs[name]
             if binding.params:
                 bindings.input(
                     name, binding.kind, _recorded(agent, name, binding.read), params=binding.params, enum=binding.enum
                 )
+        try:  # the bench file's [pose] against this program
+            #: the bench file's [pose], compiled against the program at the start
+            self.pose: dict[str, Getter] = self._pose(program)
+        except BenchFileError as error:  # the robot stands; the banner says why
+            raise BenchInputError(str(error)) from None
         self.adopt(program)
         self.trace = trace
         self.trace_position = 0
@@ -433,19 +471,44 @@ class BenchController:
         Returns:
             the input bindings made, by name.
         """
-        agent, bindings, values = self.agent, self.bindings, self.agent.values
+        bindings = self.bindings
         for enum in program.enums.values():
             if not enum.internal and enum.name not in bindings.enums:
                 bindings.enum(enum.name, list(enum.elements))
         ours: dict[str, object] = {}
+        try:
+            own = self._bench_entries(program)
+            return self._bind_inputs(program, own, ours)
+        except BenchFileError as error:  # the robot stands (or keeps its version); the banner says why
+            raise BenchInputError(str(error)) from None
+
+    def _bind_inputs(self, program: Program, own: dict[str, Entry], ours: dict[str, object]) -> dict[str, object]:
+        """Bind ``program``'s input symbols nobody bound yet (bench file, computed, by hand)."""
+        agent, bindings, values = self.agent, self.bindings, self.agent.values
         for symbol in program.inputs.values():
             if symbol.name in bindings.inputs:
                 continue
+            entry = own.get(symbol.name)
             if symbol.params:
-                read: Callable[..., Value] = _hand_function(agent, symbol.name, _initial(symbol.kind))
+                read: Callable[..., Value]
+                computed = benchmath.match(symbol) if entry is None else None
+                if entry is not None:
+                    assert self.bench_file is not None
+                    function = self._function(symbol, self.bench_file.compiled(entry, self._resolver(program, symbol)))
+                    read = _computed_function(agent, symbol.name, function)
+                    self.computed[symbol.name] = f"{self.bench_file.path.name}: {entry.text.strip()}"
+                elif computed is not None:
+                    read = _computed_function(agent, symbol.name, computed.function)
+                    self.computed[symbol.name] = computed.description
+                else:
+                    read = _hand_function(agent, symbol.name, _initial(symbol.kind))
                 bindings.input(symbol.name, symbol.kind, read, params=symbol.params, enum=symbol.enum)
             else:
                 values[symbol.name] = _initial(symbol.kind)
+                if entry is not None:
+                    assert self.bench_file is not None
+                    self.followers[symbol.name] = self.bench_file.compiled(entry, self._resolver(program, None))
+                    self.followed.add(symbol.name)
                 bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
             ours[symbol.name] = bindings.inputs[symbol.name]
         for out in program.outputs.values():
@@ -465,6 +528,91 @@ class BenchController:
             )
             bindings.behavior(cls(agent))
         return ours
+
+    def _bench_entries(self, program: Program) -> dict[str, Entry]:
+        """The bench file's ``[functions]`` and ``[inputs]`` by symbol, checked against ``program``.
+
+        Raises:
+            BenchFileError: an entry for a symbol the program does not declare, or of the other sort.
+        """
+        found: dict[str, Entry] = {}
+        bench = self.bench_file
+        if bench is None:
+            return found
+        for entry in bench.functions:
+            symbol = program.inputs.get(entry.key)
+            if symbol is None or not symbol.params:
+                what = "declares no input symbol" if symbol is None else "declares it without parameters (see [inputs])"
+                raise bench.error(entry, f"the behavior {what}")
+            found[entry.key] = entry
+        for entry in bench.inputs:
+            symbol = program.inputs.get(entry.key)
+            if symbol is None or symbol.params:
+                what = "declares no input symbol" if symbol is None else "declares it with parameters (see [functions])"
+                raise bench.error(entry, f"the behavior {what}")
+            found[entry.key] = entry
+        return found
+
+    def _resolver(self, program: Program, function: InputSymbol | None) -> Resolver:
+        """The names of a bench-file expression.
+
+        A function's parameters (by declared name), the robot, the ball, ``now`` (ms), plain
+        inputs; in ``[pose]`` also outputs and enum elements (:meth:`_pose_resolver`).
+        """
+        params = {p.short_name: i for i, p in enumerate(function.params)} if function is not None else {}
+        agent = self.agent
+
+        def resolve(name: str) -> Getter | None:
+            if name in params:
+                index = params[name]
+                return lambda c: c[index]
+            robot = _ROBOT_NAMES.get(name)
+            if robot is not None:
+                return lambda c: robot(agent)
+            symbol = program.inputs.get(name)
+            if symbol is not None and not symbol.params:
+                values = agent.values
+                return lambda c: values.get(name, 0.0)
+            return None
+
+        return resolve
+
+    def _pose_resolver(self, program: Program) -> Resolver:
+        inner = self._resolver(program, None)
+        # external enumerations: element i is host value i unless the bindings module says otherwise
+        element_values = {
+            e: self.bindings.enums.get(enum.name, {}).get(e, i)
+            for enum in program.enums.values()
+            if not enum.internal
+            for i, e in enumerate(enum.elements)
+        }
+
+        def resolve(name: str) -> Getter | None:
+            out = program.outputs.get(name)
+            if out is not None:
+                return lambda engine: _output(engine, name)
+            if name in element_values:
+                value = element_values[name]
+                return lambda c: value
+            return inner(name)
+
+        return resolve
+
+    def _pose(self, program: Program) -> dict[str, Getter]:
+        """The bench file's ``[pose]`` compiled against ``program`` (evaluated with the engine)."""
+        if self.bench_file is None:
+            return {}
+        resolve = self._pose_resolver(program)
+        return {entry.key: self.bench_file.compiled(entry, resolve) for entry in self.bench_file.pose}
+
+    def _function(self, symbol: InputSymbol, getter: Getter) -> Callable[..., Value]:
+        """A bench-file expression as the host function of ``symbol`` (its result as the symbol's kind)."""
+        kind = symbol.kind
+
+        def function(*args: Value) -> Value:
+            return _scalar(getter(args), kind)
+
+        return function
 
     def adopt(self, program: Program) -> None:
         """``program`` is the one running: its enumerations' host values, the world's game states."""
@@ -522,7 +670,11 @@ class BenchController:
             raise BenchInputError(str(error)) from None
 
     def execute(self, now_ms: int) -> None:
-        """Apply the input trace up to ``now_ms``, then one engine tick."""
+        """Apply the bench file's inputs and the input trace up to ``now_ms``, one engine tick, the pose."""
+        agent = self.agent
+        for name, follow in self.followers.items():
+            if name not in agent.hand:
+                agent.values[name] = _scalar(follow(()), self.program.inputs[name].kind)
         if self.trace is not None:
             lines, agent = self.trace_lines, self.agent
             while self.trace_position < len(lines) and lines[self.trace_position][0] <= now_ms:
@@ -534,6 +686,21 @@ class BenchController:
                     agent.hand.add(name)
                 self.trace_position += 1
         self.engine.execute(now_ms)
+        if self.pose:
+            self._drive()
+
+    def _drive(self) -> None:
+        """Move the robot by the bench file's ``[pose]`` (over what the basic behaviors commanded)."""
+        pose, agent, engine = self.pose, self.agent, self.engine
+        when = pose.get("when")
+        if when is not None and not _finite_true(when(engine)):
+            return
+        for key, limit, attribute in _POSE_AXES:
+            getter = pose.get(key)
+            if getter is None:
+                continue
+            value = float(getter(engine))
+            setattr(agent, attribute, max(-limit, min(limit, value)) if math.isfinite(value) else 0.0)
 
     def index_of(self, symbol: str, value: Value) -> Value:
         """A host value as the studio shows it: enum values as element indexes (-1: no element)."""
@@ -558,6 +725,55 @@ class _BenchEngine(Engine):
         self.controller.before_reload(program)
         super().reload(program)
         self.controller.adopt(program)
+
+
+#: The fastest a bench file's pose moves a robot: mm/s along either axis, deg/s turning.
+MAX_SPEED, MAX_RATE = 1000.0, 360.0
+
+#: ``[pose]`` keys: their limit and the robot's command they set.
+_POSE_AXES = (("forward", MAX_SPEED, "speed"), ("sideways", MAX_SPEED, "side"), ("turn", MAX_RATE, "rate"))
+
+#: Names of the bench robot and the ball in a bench-file expression.
+_ROBOT_NAMES: dict[str, Callable[[BenchAgent], float]] = {
+    "robot.x": lambda a: a.x,
+    "robot.y": lambda a: a.y,
+    "robot.heading": lambda a: a.heading,
+    "robot.number": lambda a: float(a.number),
+    "ball.x": lambda a: a.world.ball[0],
+    "ball.y": lambda a: a.world.ball[1],
+    "now": lambda a: float(a.now_ms),
+}
+
+
+def _output(engine: Engine, name: str) -> Value:
+    try:
+        return engine.output(name)
+    except EngineError:  # gone after a hot reload: no motion from it
+        return math.nan
+
+
+def _finite_true(value: object) -> bool:
+    return bool(value) and not (isinstance(value, float) and math.isnan(value))
+
+
+def _scalar(value: float | bool | int, kind: Kind) -> Value:
+    if kind is Kind.BOOLEAN:
+        return bool(value)
+    if kind is Kind.ENUM:
+        return int(value)
+    return float(value)
+
+
+def _computed_function(agent: BenchAgent, name: str, function: Callable[..., Value]) -> Callable[..., Value]:
+    """An input function the bench computes: the value set by hand while there is one, else computed."""
+    functions = agent.functions
+
+    def read(*args: Value) -> Value:
+        value = functions[name] if name in functions else function(*args)
+        _note(agent, name, args, value)
+        return value
+
+    return read
 
 
 def _reader(values: dict[str, Value], name: str) -> Callable[[], Value]:
@@ -714,10 +930,11 @@ class BenchExample:
         robots: how many robots.
         bindings: a Python file whose ``bind(bindings, robot)`` supplies symbols and basic behaviors.
         inputs: an input trace (``xabsl trace`` format) that plays on every robot.
+        bench: a bench file (default: ``bench.toml`` beside the agents file, if there is one).
 
     Raises:
         ExampleError: no agents file at ``path``, a number of robots out of 1..20, a bindings
-            module that does not load, an input trace that does not read.
+            module that does not load, an input trace or a bench file that does not read.
     """
 
     preload: tuple[str, ...] = ("xabsl_studio.engine.worlds.bench",)
@@ -725,7 +942,12 @@ class BenchExample:
     physics_hz = DEFAULT_PHYSICS_HZ
 
     def __init__(
-        self, path: Path, robots: int = 2, bindings: str | Path | None = None, inputs: str | Path | None = None
+        self,
+        path: Path,
+        robots: int = 2,
+        bindings: str | Path | None = None,
+        inputs: str | Path | None = None,
+        bench: str | Path | None = None,
     ) -> None:
         path = path.resolve()
         agents_file = find_agents_file(path) if path.is_dir() else path
@@ -737,6 +959,8 @@ class BenchExample:
         self.name = self.sources[0].key
         self.bindings = BindingsModule(Path(bindings).expanduser().resolve()) if bindings is not None else None
         self.inputs = InputTrace.read(Path(inputs).expanduser().resolve()) if inputs is not None else None
+        bench_path = Path(bench).expanduser().resolve() if bench is not None else find_bench_file(agents_file)
+        self.bench_file = BenchFile.read(bench_path) if bench_path is not None else None
 
     def build_world(self, seed: int) -> World:
         """A bench world with ``robots`` robots."""
@@ -753,7 +977,7 @@ class BenchExample:
         """A :class:`BenchController` for a bench robot."""
         if not isinstance(agent, BenchAgent):
             raise TypeError("the bench world runs BenchWorld robots")
-        controller = BenchController(agent, program, self.bindings, self.inputs)
+        controller = BenchController(agent, program, self.bindings, self.inputs, self.bench_file)
         return controller, controller.engine
 
 
@@ -787,6 +1011,8 @@ def find_agents_file(folder: Path) -> Path:
     )
 
 
-def example(path: Path, robots: int = 2, bindings: str | None = None, inputs: str | None = None) -> BenchExample:
+def example(
+    path: Path, robots: int = 2, bindings: str | None = None, inputs: str | None = None, bench: str | None = None
+) -> BenchExample:
     """The world plug-in factory of the bench world (``xabsl serve PATH --world bench``)."""
-    return BenchExample(path, robots, bindings, inputs)
+    return BenchExample(path, robots, bindings, inputs, bench)

@@ -53,6 +53,7 @@ from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_
 from xabsl_studio.server.api.library import RecordingLibrary
 from xabsl_studio.server.api.library import router as library_router
 from xabsl_studio.server.api.openapi import ErrorBody, error_responses
+from xabsl_studio.server.api.pictures import router as pictures_router
 from xabsl_studio.server.api.profile import router as profile_router
 from xabsl_studio.server.api.security import PublicPaths, SecurityMiddleware, SecurityPolicy
 from xabsl_studio.server.api.studios import Studios, StudiosMiddleware
@@ -650,7 +651,16 @@ async def _command_error(request: Request, error: Exception) -> JSONResponse:
 
 def _routers() -> tuple[APIRouter, ...]:
     """The routers every studio app includes (``create_app``)."""
-    return (router, drafts_router, docs_router, profile_router, compare_router, fork_router, library_router)
+    return (
+        router,
+        drafts_router,
+        docs_router,
+        profile_router,
+        compare_router,
+        fork_router,
+        library_router,
+        pictures_router,
+    )
 
 
 def _allowed_methods(scope: Scope) -> set[str]:

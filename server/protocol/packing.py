@@ -3,7 +3,7 @@
 A description (``xabsl_studio.engine.emit.json``) places a span on every option, state, decision
 node, leaf, transition and action; as objects with the file path spelled out, spans are more
 than half of a description's bytes, and the description is the bulk of the first message of a
-session (``hello``; 186 KB for the soccer example, 2 MB for a 180-option team set). On the wire to
+session (``hello``; 186 KB for a 31-option set, 2 MB for a 180-option team set). On the wire to
 a browser each description therefore carries ``span_files`` (the paths, once) and every span
 becomes ``[file index, line, col, end_line, end_col, start, end]``; ``web/src/description.ts``
 ``unpackDescription`` restores the objects when the hello arrives, so no panel sees the packed

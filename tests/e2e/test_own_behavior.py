@@ -118,18 +118,26 @@ def test_a_hand_set_input_and_an_input_function_value_drive_a_forced_option(page
     page.keyboard.press("s")
     clamp = page.locator(".symbols-panel [data-symbol='clamp']")
     clamp.wait_for()
-    # walk(speed = clamp(...)): unbound, the function returns 0 until set by hand, and shows its call
-    wait_until(page, f"() => ({PATH})().includes('walk(0,' + {STUDIO}.session.live.robots[0].path[1].params[1] + ')')")
+    # walk(speed = clamp(...)): the demo declares clamp(value, lo, hi), so the bench computes it;
+    # the row says so, and the call's result is the clamped argument
+    clamp.locator(".by-hand", has_text="computed: clamp(value, lo, hi)").wait_for()
     wait_until(
         page,
-        "() => /clamp\\(\\d.*, 50, 250\\) = 0/"
-        ".test(document.querySelector(\"[data-symbol='clamp'] .calls\").textContent)",
+        "() => { const m = /clamp\\(([\\d.]+), 50, 250\\) = ([\\d.]+)/"
+        ".exec(document.querySelector(\"[data-symbol='clamp'] .calls\").textContent);"
+        " return m && Math.abs(Number(m[2]) - Math.max(50, Math.min(250, Number(m[1])))) < 0.01; }",
     )
     set_by_hand(page, "clamp", "120")
     wait_until(page, f"() => ({PATH})().some((n) => n.startsWith('walk(120,'))")
     wait_until(
         page, "() => document.querySelector(\".symbols-panel [data-symbol='clamp']\").innerText.includes('by hand')"
     )
+    # released, it is computed again
+    clamp.get_by_role("button", name="release clamp").click()
+    page.locator(".toast.ok", has_text="clamp is computed again").first.wait_for()
+    clamp.locator(".by-hand", has_text="computed: clamp(value, lo, hi)").wait_for()
+    wait_until(page, f"() => !({PATH})().some((n) => n.startsWith('walk(120,'))")
+    set_by_hand(page, "clamp", "120")
     # ball.distance and ball.angle by hand: close and in front, so approach_ball goes to kick
     set_by_hand(page, "ball.angle", "0")
     set_by_hand(page, "ball.distance", "10")

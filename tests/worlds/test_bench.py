@@ -33,16 +33,17 @@ def command(sim: Simulation, name: str, **args: Any) -> Any:
     return sim.world.command(name, args)  # type: ignore[attr-defined]
 
 
-def test_an_input_function_returns_the_hand_set_value_and_its_calls_are_listed(demo_dir: Path) -> None:
+def test_a_computed_input_function_can_be_set_by_hand_and_computed_again(demo_dir: Path) -> None:
     _, sim = simulation(BenchExample(demo_dir))
     sim.execute(_force(sim, "approach_ball", stop_at=100.0))
     sim.tick()
     calls = bench(sim)["calls"]["clamp"]
-    # clamp(value = ball.distance / 2, lo = 50, hi = max_speed): the arguments of the call, and 0 (not 1.5 * ...)
+    # clamp(value = ball.distance / 2, lo = 50, hi = max_speed): the demo declares clamp(value, lo, hi),
+    # so the bench computes it
     ((args, value),) = calls
-    assert args[1:] == [50.0, 250.0] and args[0] > 0 and value == 0.0
+    assert args[1:] == [50.0, 250.0] and value == max(50.0, min(250.0, args[0]))
     walk = [n for n in sim.samplers[0].path() if n[0] == 1]  # type: ignore[union-attr]
-    assert walk and walk[0][4][0] == 0.0, "walk got the function's value as its speed"
+    assert walk and walk[0][4][0] == value, "walk got the function's value as its speed"
     command(sim, "set_function", robot=0, symbol="clamp", value=120.0)
     sim.tick()
     assert bench(sim)["calls"]["clamp"][0][1] == 120.0 and bench(sim)["functions"] == {"clamp": 120.0}
@@ -51,7 +52,12 @@ def test_an_input_function_returns_the_hand_set_value_and_its_calls_are_listed(d
     assert bench(sim, 1)["functions"] == {}, "per robot"
     scene = sim.world.static_scene()
     assert scene["bench"]["functions"] == ["clamp"] and scene["bench"]["bound"] == []
+    assert scene["bench"]["computed"] == {"clamp": "clamp(value, lo, hi)"}
     assert {c["name"] for c in scene["commands"]} == {"set_input", "set_function", "follow_world"}
+    command(sim, "follow_world", robot=0, symbol="clamp")
+    sim.tick()
+    ((args, value),) = bench(sim)["calls"]["clamp"]
+    assert value == max(50.0, min(250.0, args[0])) and bench(sim)["functions"] == {}
 
 
 def _force(sim: Simulation, option: str, **params: Any) -> Any:
@@ -89,7 +95,7 @@ def test_a_plain_input_set_by_hand_stays_until_changed_and_a_world_input_can_fol
         ("set_input", {"robot": 0, "symbol": "game.state", "value": 9}, "no element 9"),
         ("set_input", {"robot": 5, "symbol": "ball.seen", "value": True}, "robot must be a robot id in 0..1"),
         ("set_input", {"robot": 0, "symbol": "ball.seen"}, "value is missing"),
-        ("follow_world", {"robot": 0, "symbol": "kicks"}, "the world does not compute 'kicks'"),
+        ("follow_world", {"robot": 0, "symbol": "kicks"}, "the bench does not compute 'kicks'"),
         ("teleport", {}, "unknown command 'teleport'"),
     ],
 )
@@ -190,6 +196,7 @@ def test_a_bindings_module_supplies_functions_plain_inputs_and_basic_behaviors(d
     _, sim = simulation(BenchExample(demo_dir, bindings=module))
     scene = sim.world.static_scene()["bench"]
     assert scene["bound"] == ["ball.time_since_seen", "clamp"] and scene["functions"] == []
+    assert scene["computed"] == {}, "the bindings module replaces the computed clamp"
     assert scene["bindings"] == str(module)
     sim.execute(_force(sim, "approach_ball", stop_at=100.0))
     sim.tick()

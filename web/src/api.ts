@@ -141,3 +141,23 @@ export async function generationDiff(n: number): Promise<GenerationDiff> {
   const { data } = await request<GenerationDiff>("GET", `generations/${n}/diff`);
   return data;
 }
+
+/// A file under `api/` (a picture): its bytes and the name the server gave it (Content-Disposition).
+export async function apiFile(path: string, params: Record<string, string | number | undefined>): Promise<{ blob: Blob; filename: string }> {
+  const query = new URLSearchParams();
+  for (const [key, value] of Object.entries(params)) if (value !== undefined) query.set(key, String(value));
+  const response = await fetch(`api/${path}?${query.toString()}`, { headers: headers() });
+  if (!response.ok) {
+    let detail = `GET ${path}: HTTP ${response.status}`;
+    try {
+      const body = (await response.json()) as { detail?: unknown };
+      if (typeof body.detail === "string") detail = body.detail;
+    } catch {
+      /* not JSON: keep the status */
+    }
+    throw new ApiError(detail, response.status, null);
+  }
+  const disposition = response.headers.get("Content-Disposition") ?? "";
+  const filename = /filename="([^"]+)"/.exec(disposition)?.[1] ?? `picture.${String(params.format ?? "svg")}`;
+  return { blob: await response.blob(), filename };
+}

@@ -6,6 +6,7 @@ import { graphSvg } from "../api";
 import { pathParents } from "../protocol";
 import type { Session, SessionEvent } from "../session";
 import { h } from "../ui";
+import { exportMenu, type PictureTarget } from "./exportmenu";
 import { SvgView } from "./svgview";
 
 export class GraphPanel {
@@ -50,6 +51,7 @@ export class GraphPanel {
       h("button", { title: "Fit (F)", onclick: () => this.view.fit() }, "Fit"),
       h("button", { title: "Zoom in (+)", onclick: () => this.view.zoomBy(1.25) }, "+"),
       h("button", { title: "Zoom out (−)", onclick: () => this.view.zoomBy(0.8) }, "−"),
+      exportMenu(() => this.pictureTarget(), "the option graph"),
       this.status,
       this.rootNote,
     );
@@ -114,6 +116,19 @@ export class GraphPanel {
     const agents = index.description.agents;
     const agent = agents.find((a) => a.root === rootName) ?? agents[0];
     return { program, agent: agent?.name };
+  }
+
+  /// The picture of the graph shown (Export): the agent's graph or the one below the forced root.
+  private pictureTarget(): PictureTarget | null {
+    const key = this.graphKey();
+    if (!key) return null;
+    const seq = this.session.view?.seq;
+    const robot = this.session.robotInView();
+    return {
+      path: `picture/${encodeURIComponent(key.program)}`,
+      params: key.root ? { root: key.root } : { agent: key.agent },
+      tick: robot?.path.length && seq !== undefined ? { robot: this.session.selectedRobot, seq } : undefined,
+    };
   }
 
   render(changes: Set<SessionEvent>): void {

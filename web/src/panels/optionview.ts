@@ -13,6 +13,7 @@ import type { Session, SessionEvent } from "../session";
 import { lastTransitionBefore, transitionsOf } from "../transitions";
 import { formatClock, formatMs, formatValue, h, setText, toggleClass } from "../ui";
 import { BreakpointsPanel } from "./breakpoints";
+import { exportMenu, type PictureTarget } from "./exportmenu";
 import { SvgView } from "./svgview";
 
 type Why = Explanation;
@@ -77,6 +78,7 @@ export class OptionView {
       h("button", { title: "Ask the engine again why (W)", onclick: () => this.explain(true) }, "Why?"),
       h("button", { title: "Fit: the whole machine, or at a legible size around the active state", onclick: () => this.view.fit() }, "Fit"),
       h("button", { title: "The whole machine, however small", onclick: () => this.view.fit(true) }, "Overview"),
+      exportMenu(() => this.pictureTarget(), "this state machine"),
     );
     this.breakpoints = new BreakpointsPanel(session, connection, () => this.current());
     const side = h("div.option-side", {}, this.doc, this.info, this.why, this.breakpoints.element, this.transitions);
@@ -123,6 +125,21 @@ export class OptionView {
   }
 
   /// The option shown: the one opened, else the root option of the selected robot.
+  /// The picture of the state machine shown (Export).
+  private pictureTarget(): PictureTarget | null {
+    const session = this.session;
+    const option = this.current();
+    const program = session.programOf(session.selectedRobot);
+    if (!option || !program) return null;
+    const seq = session.view?.seq;
+    const robot = session.robotInView();
+    return {
+      path: `picture/${encodeURIComponent(program)}/${encodeURIComponent(option.name)}`,
+      params: {},
+      tick: robot?.path.length && seq !== undefined ? { robot: session.selectedRobot, seq } : undefined,
+    };
+  }
+
   current(): Option | null {
     const session = this.session;
     const index = session.indexOf(session.selectedRobot);

@@ -5,6 +5,8 @@
 /// `bench`), "set…" sets the robot's own value of a plain input or of an input function
 /// without a binding (world commands `set_input`, `set_function`): it stays until set again and
 /// is marked "by hand"; inputs the user's bindings module supplies are overridden as elsewhere.
+/// An input function the bench computes (`abs(value)`, or an expression of the bench file) is
+/// marked "computed: abs(value)"; set by hand it reads the value set until released.
 /// Rows are built once per hello and robot; a tick only changes value texts.
 import type { Connection } from "../connection";
 import type { DescriptionIndex, InputSymbol, OutputSymbol } from "../description";
@@ -19,6 +21,8 @@ interface BenchInfo {
   world_inputs: string[];
   bound: string[];
   functions: string[];
+  /// what the bench computes, by input function: "abs(value)", "bench.toml: a * 10 + b"
+  computed?: Record<string, string>;
 }
 
 /// The bench world's per-robot part of a dynamic scene (`scene.bench[robot]`).
@@ -52,6 +56,8 @@ interface SymbolRow {
   /// the calls of an input function
   calls: HTMLElement | null;
   mode: SetMode;
+  /// what the bench computes for this input function (undefined: not computed)
+  computed: string | undefined;
   text: string;
 }
 
@@ -106,11 +112,13 @@ export class SymbolsPanel {
               "set…",
             )
           : null;
+        const computed = kind === "function" && mode === "set_function" ? bench?.computed?.[symbol.name] : undefined;
         const release =
-          kind === "input"
+          kind === "input" || computed !== undefined
             ? h("button.icon.release", { title: "Release the override: read the world's value again", "aria-label": `release ${symbol.name}`, hidden: true, onclick: () => this.releaseInput(symbol) }, "release")
             : null;
-        const mark = bench && kind !== "output" ? h("span.by-hand", { title: bound ? `from ${String((this.session.scene?.bench as { bindings?: string })?.bindings ?? "the bindings module")}` : "set by hand" }, bound ? "bound" : "") : null;
+        const markTitle = bound ? `from ${String((this.session.scene?.bench as { bindings?: string })?.bindings ?? "the bindings module")}` : computed !== undefined ? "the bench computes it; set… overrides it" : "set by hand";
+        const mark = bench && kind !== "output" ? h("span.by-hand", { title: markTitle }, bound ? "bound" : computed !== undefined ? `computed: ${computed}` : "") : null;
         const calls = kind === "function" ? h("span.calls") : null;
         const el = h(
           "div.symbol-row",
@@ -121,7 +129,7 @@ export class SymbolsPanel {
           calls,
           symbol.doc ? h("div.sdoc", {}, symbol.doc) : null,
         );
-        const row: SymbolRow = { kind, symbol, el, value, pin, release, mark, calls, mode, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
+        const row: SymbolRow = { kind, symbol, el, value, pin, release, mark, calls, mode, computed, text: `${symbol.name} ${symbol.doc ?? ""}`.toLowerCase() };
         this.rows.push(row);
         sections.push(el);
       }
@@ -160,9 +168,12 @@ export class SymbolsPanel {
       const format = (v: number | boolean | null | undefined): string => formatValue(v, symbol.type, symbol.enum, index);
       if (row.kind === "function") {
         const set = benchScene?.functions?.[symbol.name];
-        setText(row.value, row.mode === "set_function" ? format(set ?? (symbol.type === "boolean" ? false : 0)) : "");
+        // a computed function has no one value: its calls say what it answered
+        const shown = row.computed !== undefined && set === undefined ? "" : format(set ?? (symbol.type === "boolean" ? false : 0));
+        setText(row.value, row.mode === "set_function" ? shown : "");
         if (row.calls) setText(row.calls, benchScene ? callsText(symbol.name, benchScene.calls, format) : "not reported by this world");
-        if (row.mark && row.mode === "set_function") setText(row.mark, set !== undefined ? "by hand" : "");
+        if (row.mark && row.mode === "set_function") setText(row.mark, set !== undefined ? "by hand" : row.computed !== undefined ? `computed: ${row.computed}` : "");
+        if (row.release && row.computed !== undefined && row.release.hidden === (set !== undefined)) row.release.hidden = set === undefined;
         continue;
       }
       const values = row.kind === "input" ? robot?.inputs : robot?.outputs;
@@ -181,10 +192,11 @@ export class SymbolsPanel {
   /// Release the override of `symbol` on robot `robotId` (the selected one by default).
   private releaseInput(symbol: InputSymbol | OutputSymbol, robotId = this.session.selectedRobot): void {
     const overridden = String(symbol.id) in (this.session.robotInView()?.overrides ?? {});
-    if (!overridden && this.bench()?.world_inputs.includes(symbol.name)) {
+    const bench = this.bench();
+    if (!overridden && (bench?.world_inputs.includes(symbol.name) || bench?.computed?.[symbol.name] !== undefined)) {
       this.connection
         .command("world_command", { name: "follow_world", args: { robot: robotId, symbol: symbol.name } })
-        .then(() => toast(`${symbol.name} follows the world again`, "ok"))
+        .then(() => toast(bench?.computed?.[symbol.name] !== undefined ? `${symbol.name} is computed again` : `${symbol.name} follows the world again`, "ok"))
         .catch((e: Error) => toast(`Release failed: ${e.message}`, "error"));
       return;
     }
