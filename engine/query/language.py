@@ -30,6 +30,8 @@ behaviors and input functions the evaluation needs.
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -186,12 +188,35 @@ def symbol_program(description: dict[str, Any]) -> tuple[ir.Program, dict[str, P
     return program, predicates
 
 
+_NAMED = re.compile(r"no matching symbol found for '([^']+)'")
+_STATE_READ = re.compile(r"([A-Za-z_][A-Za-z0-9_.]*)\.(?:state|decided_in)\s*[!=]=\s*([A-Za-z_][A-Za-z0-9_.]*)")
+
+
+def _name_states(description: dict[str, Any], text: str, diagnostics: list[Diagnostic]) -> list[Diagnostic]:
+    """Diagnostics where a name compared with ``O.state`` that is no state of ``O`` says O's states.
+
+    The checker's own message would hint at enum elements of other enumerations; a query's
+    reader wants the states.
+    """
+    states = {o["name"]: [s["name"] for s in o["states"]] for o in description["options"]}
+    compared = {m.group(2): m.group(1) for m in _STATE_READ.finditer(text) if m.group(1) in states}
+    out: list[Diagnostic] = []
+    for diagnostic in diagnostics:
+        found = _NAMED.match(diagnostic.message)
+        option = compared.get(found.group(1)) if found else None
+        if found and option is not None:
+            message = f"option {option} has no state '{found.group(1)}' (states: {', '.join(states[option])})"
+            diagnostic = dataclasses.replace(diagnostic, message=message)
+        out.append(diagnostic)
+    return out
+
+
 def compile_query(description: dict[str, Any], text: str) -> CompiledQuery:
     """Check ``text`` against the program a recorded description describes (see the module docstring)."""
     program, predicates = symbol_program(description)
     checked: CheckedCondition = check_condition(program, text)
     if checked.expression is None:
-        return CompiledQuery(text, None, checked.diagnostics)
+        return CompiledQuery(text, None, _name_states(description, text, checked.diagnostics))
     symbols: set[str] = set()
     used: dict[str, Predicate] = {}
     functions: set[str] = set()
