@@ -82,6 +82,9 @@ def run(args: argparse.Namespace) -> int:
                 f"{interval.robot:<{width}}  {interval.first_seq:>7}  {interval.last_seq:>7}  "
                 f"{_seconds(interval.first_t_ms):>11}  {_seconds(interval.last_t_ms):>11}  {interval.ticks:>6}"
             )
+    by_reason: dict[str, list[str]] = {}
     for robot, why in result.skipped.items():
-        print(f"not evaluated for {robot}: {why}")
+        by_reason.setdefault(why, []).append(robot)
+    for why, robots in by_reason.items():
+        print(f"not evaluated for {', '.join(robots)}: {why}")
     return 0

@@ -391,9 +391,10 @@ class ColumnsBuilder:
         seq = np.asarray(self.seq, dtype=np.int64)
         values: dict[str, tuple[Floats, Mask]] = {}
         positions = np.arange(n)
+        enums = self._enum_tables()
         for name, (rows, recorded) in self._events.items():
             events = np.asarray(rows, dtype=np.int64)
-            raw = self._numbers(recorded)
+            raw = self._numbers(recorded, enums.get(name))
             known_event = np.fromiter((v is not None for v in raw), dtype=np.bool_, count=len(raw))
             event_values = np.fromiter((np.nan if v is None else v for v in raw), dtype=np.float64, count=len(raw))
             # the event in force at each tick: the last one at or before it (one per row and name)
@@ -416,11 +417,36 @@ class ColumnsBuilder:
             has_reads=self._has_reads,
         )
 
-    def _numbers(self, recorded: list[Any]) -> list[float | None]:
+    def _enum_tables(self) -> dict[str, dict[int, str]]:
+        """Per enum symbol: host value -> element, for recordings that hold enum values as numbers.
+
+        A live studio recording writes an enum symbol's value as its element's index (its header's
+        ``tables.enums`` names them); a headless one writes the element's name.
+        """
+        tables: dict[str, dict[int, str]] = {}
+        for program in self._programs.values():
+            description, enums = program.view.description, program.view.tables.get("enums", {})
+            for symbol in (*description["inputs"], *description["outputs"]):
+                enum = symbol.get("enum")
+                if enum and enum in enums and not symbol.get("params"):
+                    tables[symbol["name"]] = {int(v): e for v, e in enums[enum].items()}
+        return tables
+
+    def _numbers(self, recorded: list[Any], enum: dict[int, str] | None) -> list[float | None]:
         """Recorded values as numbers (see :func:`_scalar`); plain decimals pass as they are."""
         if all(type(v) is float for v in recorded):
             return recorded
         codes = self.codes
+        if enum is not None:
+            # an element index (live recordings) is its element; anything else not an element is unknown
+            return [
+                float(codes.code(enum[v]))
+                if type(v) is int and v in enum
+                else _scalar(v, codes)
+                if isinstance(v, str)
+                else None
+                for v in recorded
+            ]
         return [_scalar(v, codes) for v in recorded]
 
     def _collected(self) -> frozenset[str]:

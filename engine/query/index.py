@@ -84,15 +84,17 @@ class QueryIndex:
 
     @classmethod
     def from_recording(
-        cls, recording: Recording, robots: list[str] | None = None, functions: Iterable[str] = ()
+        cls, recording: Recording, robots: list[str] | None = None, selection: Selection | None = None
     ) -> QueryIndex:
         """Read ``robots`` (default: every XABSL agent) of an open recording into columns.
+
+        ``selection`` names what to read (default: everything; a query reads what is missing).
 
         Raises:
             RecordingError: a robot the recording does not have.
         """
         codes = Codes()
-        columns = _read_columns(recording, recording.agents if robots is None else robots, codes, functions)
+        columns = _read_columns(recording, recording.agents if robots is None else robots, codes, selection)
         decimals = recording.header.get("decimals")
         return cls(columns, codes, None if decimals is None else int(decimals), recording.path)
 
@@ -207,7 +209,9 @@ def needs(query: CompiledQuery) -> Selection:
 
 
 def _message(query: CompiledQuery) -> str:
-    return "; ".join(f"{d.span.line}:{d.span.col}: {d.message}" if d.span else d.message for d in query.errors())
+    """The first error, ``line:col: message`` (why a robot was not evaluated)."""
+    first = query.errors()[0]
+    return f"{first.span.line}:{first.span.col}: {first.message}" if first.span else first.message
 
 
 def _read_columns(

@@ -9,6 +9,7 @@ unknown count must be exactly the reference's.
 
 from __future__ import annotations
 
+import dataclasses
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -281,3 +282,24 @@ def test_an_index_answers_many_queries_and_reads_what_is_missing(match: Path) ->
         index = QueryIndex.from_recording(recording)
     for condition, *_rest in CASES:
         assert index.query(condition).intervals == query_recording(match, condition).intervals, condition
+
+
+def test_enum_values_as_indices_like_a_live_recording(views: list[TickView]) -> None:
+    """A studio recording holds enum values as element indices (its tables name them): same answer."""
+    condition = "game.state == playing && team.role != role.striker"
+    window = views[600:900]
+
+    def as_index(agent: AgentTick) -> AgentTick:
+        tables = agent.program.tables["enums"]
+        index = {enum: {e: int(v) for v, e in table.items()} for enum, table in tables.items()}
+        inputs = {**agent.inputs, "game.state": index["game.state"][str(agent.inputs["game.state"])]}
+        outputs = dict(agent.outputs)
+        if "team.role" in outputs:
+            outputs["team.role"] = index["role"][str(outputs["team.role"])]
+        return dataclasses.replace(agent, inputs=inputs, outputs=outputs)
+
+    numbered = [dataclasses.replace(v, agents={n: as_index(a) for n, a in v.agents.items()}) for v in window]
+    assert isinstance(numbered[0].agents["blue1"].inputs["game.state"], int)
+    expected = query_ticks(window, condition)
+    assert expected.matched > 0
+    assert query_ticks(numbered, condition).intervals == expected.intervals

@@ -40,7 +40,7 @@ def test_prints_every_interval(match: Path) -> None:
     ]
     first = expected.intervals[0]
     assert rows[0][3] == f"{first.first_t_ms / 1000:.3f}" and rows[0][5] == f"{first.last_t_ms / 1000:.3f}"
-    assert any(line.startswith("not evaluated for red1: chase: ") for line in lines)
+    assert any(line.startswith("not evaluated for red1, red2: chase: 1:1: ") for line in lines)
 
 
 def test_json_for_one_robot(match: Path) -> None:

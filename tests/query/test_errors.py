@@ -16,7 +16,7 @@ from xabsl_studio.engine.record import TickView
     [
         ("ball.distance >", 1, 16, "unexpected end of the condition"),
         ("ball.distanc > 3", 1, 1, "did you mean 'ball.distance'"),
-        ("ball.distance > 3 &&\n  striker.state == kik", 2, 20, "no matching symbol found for 'kik'"),
+        ("ball.distance > 3 &&\n  striker.state == kik", 2, 20, "option striker has no state 'kik' (states: approach"),
         ("striker.state == 3", 1, 15, "type mismatch"),
         ("ball.distance", 1, 1, "must be boolean"),
         ("ball.distance > 3 )", 1, 19, "syntax error"),
