@@ -54,6 +54,7 @@ from xabsl_studio.server.protocol.commands import (
     Fork,
     ListBreakpoints,
     Pause,
+    Query,
     RemoveBreakpoint,
     Reset,
     Resume,
@@ -449,13 +450,18 @@ class Session:
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand | Fork, owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand | BreakpointCommand | Fork | Query, owner: str | None = None) -> Any:
         """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
             CommandError: arguments that do not fit the world or program, or the simulation is
-                not running (crashed) and the command needs it.
+                not running (crashed) and the command needs it; ``query``, which needs a recording.
         """
+        if isinstance(command, Query):
+            raise CommandError(
+                "query answers over a recording: open one of the session's recordings (Recordings) "
+                "or xabsl query FILE.mcap; the live history is not queryable yet"
+            )
         if isinstance(command, Reset) and self.crash is not None and not self._stopping:
             return await self._restart(command)
         if isinstance(command, Status):
