@@ -371,8 +371,7 @@ class CheckCondition:
 class Query:
     """The intervals of ticks in which ``condition`` holds (docs/queries.md), for ``robot`` or every robot.
 
-    Over the recording of a replay; a live or attached session refuses it (its history is not
-    queryable yet).
+    A replay answers over its recording, a live or attached session over its history (the ring).
     """
 
     type: Literal["command"] = "command"

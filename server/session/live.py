@@ -84,6 +84,7 @@ from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.breakpoints import BreakpointStore, validate
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.generations import Generations
+from xabsl_studio.server.session.query import answer_history
 from xabsl_studio.server.session.recording import LiveRecorder
 from xabsl_studio.server.simulation import worker
 from xabsl_studio.server.simulation.forkstart import ForkStart
@@ -455,13 +456,10 @@ class Session:
 
         Raises:
             CommandError: arguments that do not fit the world or program, or the simulation is
-                not running (crashed) and the command needs it; ``query``, which needs a recording.
+                not running (crashed) and the command needs it; a bad ``query`` condition.
         """
         if isinstance(command, Query):
-            raise CommandError(
-                "query answers over a recording: open one of the session's recordings (Recordings) "
-                "or xabsl query FILE.mcap; the live history is not queryable yet"
-            )
+            return await answer_history(self.ring, command)
         if isinstance(command, Reset) and self.crash is not None and not self._stopping:
             return await self._restart(command)
         if isinstance(command, Status):

@@ -328,8 +328,7 @@ export interface ProgramCompile {
 /**
  * The intervals of ticks in which `condition` holds (docs/queries.md), for `robot` or every robot.
  *
- * Over the recording of a replay; a live or attached session refuses it (its history is not
- * queryable yet).
+ * A replay answers over its recording, a live or attached session over its history (the ring).
  */
 export interface Query {
   type: "command";

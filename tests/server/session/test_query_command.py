@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
+import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -76,9 +78,61 @@ def test_one_robot_and_refusals(replay: LiveServer, client_for: Any) -> None:
     assert not typo["ok"]  # an argument the command does not have is an error, not ignored
 
 
-def test_a_live_session_refuses_and_says_where_to_go(soccer_session: Session, client_for: Any) -> None:
+def _runs(ticks: list[dict[str, Any]], check: Any) -> list[tuple[str, int, int]]:
+    """(robot, first seq, last seq) of the runs of consecutive ticks where ``check(robot dict)`` holds."""
+    found: list[tuple[str, int, int]] = []
+    names = sorted({r["name"] for tick in ticks for r in tick["robots"] if r.get("path")})
+    for name in names:
+        start = last = None
+        for tick in [*ticks, None]:
+            robot = None if tick is None else next((r for r in tick["robots"] if r["name"] == name), None)
+            if tick is not None and robot is not None and robot.get("path") and check(robot):
+                if start is not None and tick["seq"] == last + 1:  # type: ignore[operator]
+                    last = tick["seq"]
+                    continue
+                if start is not None:
+                    found.append((name, start, last))  # type: ignore[arg-type]
+                start = last = tick["seq"]
+                continue
+            if start is not None:
+                found.append((name, start, last))  # type: ignore[arg-type]
+            start = last = None
+    return sorted(found, key=lambda r: (r[1], names.index(r[0])))
+
+
+def test_a_live_session_answers_over_its_history(soccer_session: Session, client_for: Any) -> None:
+    """Checked against the REST activation log (``/api/log``: the ring with names), read by an HTTP client."""
     with LiveServer(soccer_session) as server:
         client = client_for(server)
-        client.frame_after()
-        reply = client.command("query", condition="kick.active")
-        assert not reply["ok"] and "query answers over a recording" in reply["error"]
+        client.wait_frame(lambda f: f["seq"] >= 700, timeout=120)
+        assert client.command("pause")["ok"]
+        with urllib.request.urlopen(server.url + "/api/log", timeout=60) as response:
+            ticks = [json.loads(line) for line in response.read().splitlines()]
+        assert len(ticks) > 600
+        program = client.program(0)
+        playing = next(e["elements"] for e in program["enums"] if e["name"] == "game.state").index("game.state.playing")
+
+        def state(robot: dict[str, Any], option: str) -> str | None:
+            return next((n["state"] for n in robot["path"] if n.get("option") == option), None)
+
+        cases = {
+            "play_soccer.state == ready": lambda r: state(r, "play_soccer") == "ready",
+            "ball.distance < 1500 && game.state == playing": lambda r: (
+                r["inputs"]["ball.distance"] < 1500 and r["inputs"]["game.state"] == playing
+            ),
+            "go_to_position.active": lambda r: state(r, "go_to_position") is not None,
+        }
+        names = [r["name"] for r in client.hello["structure"]["robots"]]
+        for condition, check in cases.items():
+            reply = client.command("query", condition=condition)
+            assert reply["ok"], reply
+            TypeAdapter(QueryAnswer).validate_python(reply["result"])
+            shown = [(i["name"], i["first_seq"], i["last_seq"]) for i in reply["result"]["intervals"]]
+            home = {n for n in names if n.startswith("blue")}
+            expected = _runs(ticks, check)
+            if condition != "ball.distance < 1500 && game.state == playing":
+                expected = [e for e in expected if e[0] in home]  # the chase team has no such option
+            assert shown == expected, condition
+            assert shown, condition
+        bad = client.command("query", condition="ball.distance >")
+        assert not bad["ok"] and bad["error"].startswith("condition: 1:16: ")
