@@ -15,7 +15,7 @@ brute force / warm and brute force / cold, and whether both answered the same ti
 over the whole match takes minutes; ``--brute-ticks N`` times it over the first N ticks and scales
 the figure up (said so in the output).
 
-    .venv/bin/python benchmarks/query_speed.py [--seconds 600] [--file match.mcap] [--brute-ticks 3000]
+    .venv/bin/python benchmarks/query_speed.py [--seconds 600] [--file match.mcap] [--brute-ticks 3000] [--query Q]
 
 Never run from the test suite.
 """
@@ -186,6 +186,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--brute-ticks", type=int, default=None, help="brute force over the first N ticks only")
     parser.add_argument("--warm-runs", type=int, default=5, help="warm queries to time (best is printed)")
+    parser.add_argument("--query", action="append", help="a query to time (repeatable; default: five of soccer)")
     args = parser.parse_args()
     path = Path(args.file) if args.file else Path(tempfile.mkdtemp(prefix="query-speed-")) / "match.mcap"
     if not args.file:
@@ -200,7 +201,7 @@ def main() -> int:
         nothing = Selection(frozenset(), frozenset(), frozenset(), frozenset())
         index = QueryIndex.from_recording(recording, recording.agents, selection=nothing)
     print(f"{path}: {ticks} ticks, {robots} robots, {path.stat().st_size / 1e6:.1f} MB (load {os.getloadavg()[0]:.1f})")
-    for condition in QUERIES:
+    for condition in args.query or QUERIES:
         cold, cold_wall, cold_cpu = timed(lambda c=condition: query_recording(path, c))
         index.query(condition)  # reads the columns this query needs into the index
         warm_wall = warm_cpu = float("inf")

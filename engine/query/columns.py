@@ -82,6 +82,9 @@ class CallTable:
     args: list[tuple[float | None, ...]]
     result: Floats
     known: Mask
+    #: per argument precision: (row, arguments) -> index of the call's result (-1: calls disagree),
+    #: filled by the evaluator once (``xabsl_studio.engine.query.evaluate``)
+    keys: dict[int | None, dict[tuple[Any, ...], int]] = field(default_factory=dict, compare=False)
 
 
 @dataclass

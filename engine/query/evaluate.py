@@ -50,6 +50,7 @@ class _Evaluator:
         self.gen = gen
         self.query = query
         self.codes = codes
+        self.decimals = decimals
         self.scale = None if decimals is None else 10.0**decimals
         description = columns.programs[gen].description
         self.options = {o["name"]: o for o in description["options"]}
@@ -143,19 +144,28 @@ class _Evaluator:
             return value
         return round(value * self.scale) / self.scale
 
-    def _lookup(self, table: CallTable, args: list[Pair]) -> Pair:
-        results: dict[tuple[Any, ...], int] = {}
-        conflict = -1
+    def _keys(self, table: CallTable) -> dict[tuple[Any, ...], int]:
+        """(row, arguments at the recording's precision) -> the call's index, -1 where calls disagree."""
+        results = table.keys.get(self.decimals)
+        if results is not None:
+            return results
+        results = table.keys[self.decimals] = {}
         key = self._key
         for index, (row, recorded) in enumerate(zip(table.row.tolist(), table.args, strict=True)):
             k = (row, *(key(v) for v in recorded))
             previous = results.get(k)
             if previous is None:
                 results[k] = index
-            elif previous != conflict and (
+            elif previous != -1 and (
                 table.known[previous] != table.known[index] or table.result[previous] != table.result[index]
             ):
-                results[k] = conflict  # the same call gave two results in one tick: not knowable
+                results[k] = -1  # the same call gave two results in one tick: not knowable
+        return results
+
+    def _lookup(self, table: CallTable, args: list[Pair]) -> Pair:
+        results = self._keys(table)
+        conflict = -1
+        key = self._key
         values = np.zeros(self.n, dtype=np.float64)
         known = np.zeros(self.n, dtype=np.bool_)
         every = np.ones(self.n, dtype=np.bool_)
@@ -174,10 +184,10 @@ class _Evaluator:
 
     def __call__(self, node: ir.Expression) -> Pair:
         match node:
-            case ir.Number(value=value) | ir.Constant(value=value):
-                return self.constant(float(value))
-            case ir.BooleanLiteral(value=value):
-                return self.constant(1.0 if value else 0.0)
+            case ir.Number(value=number) | ir.Constant(value=number):
+                return self.constant(float(number))
+            case ir.BooleanLiteral(value=truth):
+                return self.constant(1.0 if truth else 0.0)
             case ir.EnumLiteral(element=element):
                 return self.constant(float(self.codes.code(element)))
             case ir.InputRef(symbol=symbol) if symbol in self.query.predicates:
@@ -248,8 +258,11 @@ class _Evaluator:
         return result, decided | every
 
 
-def evaluate(columns: RobotColumns, gen: int, query: CompiledQuery, codes: Codes, decimals: int | None) -> Pair:
-    """The query's value and whether it is known, per tick of ``columns`` (valid in the ticks of ``gen``)."""
+def evaluate(
+    columns: RobotColumns, gen: int, query: CompiledQuery, codes: Codes, decimals: int | None
+) -> tuple[Mask, Mask]:
+    """Whether the query is true and whether it is known, per tick of ``columns`` (valid in the ticks of ``gen``)."""
     assert query.expression is not None
     value, known = _Evaluator(columns, gen, query, codes, decimals)(query.expression)
-    return value != 0, known
+    true: Mask = value != 0
+    return true, known
