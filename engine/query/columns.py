@@ -15,7 +15,10 @@ the live history, an attached session's), and :meth:`ColumnsBuilder.finish` turn
 * optionally, for the input functions a query calls, every call the tick's decisions made (from
   ``reads``: arguments and result).
 
-Values are exactly what the recording holds (plain symbols at its precision, ``decimals``); no
+A :class:`Selection` limits what is kept to the names a query needs (the symbols it reads, the
+options and basic behaviors it names, the input functions it calls), which is what makes a cold
+query cheap. Values are exactly what the recording holds (plain symbols at its precision,
+``decimals``; enum symbols as element names, or as element indices in studio recordings); no
 value is carried over a key frame or guessed.
 """
 
@@ -440,17 +443,17 @@ class ColumnsBuilder:
         if all(type(v) is float for v in recorded):
             return recorded
         codes = self.codes
-        if enum is not None:
-            # an element index (live recordings) is its element; anything else not an element is unknown
-            return [
-                float(codes.code(enum[v]))
-                if type(v) is int and v in enum
-                else _scalar(v, codes)
-                if isinstance(v, str)
-                else None
-                for v in recorded
-            ]
-        return [_scalar(v, codes) for v in recorded]
+        if enum is None:
+            return [_scalar(v, codes) for v in recorded]
+        out: list[float | None] = []
+        for value in recorded:
+            if isinstance(value, str):  # an element's name (headless recordings)
+                out.append(float(codes.code(value)))
+            elif type(value) is int and value in enum:  # an element's index (studio recordings, frames)
+                out.append(float(codes.code(enum[value])))
+            else:  # anything else is no element: unknown
+                out.append(None)
+        return out
 
     def _collected(self) -> frozenset[str]:
         if self.functions is not None:
