@@ -99,10 +99,13 @@ class QueryIndex:
         return cls(columns, codes, None if decimals is None else int(decimals), recording.path)
 
     @classmethod
-    def from_ticks(cls, ticks: Iterable[TickView], decimals: int | None = None) -> QueryIndex:
+    def from_ticks(
+        cls, ticks: Iterable[TickView], decimals: int | None = None, selection: Selection | None = None
+    ) -> QueryIndex:
         """Columns of decoded tick views, in order (every robot that appears in them).
 
-        ``decimals`` is the precision of their plain values (None: exact, as the live session's).
+        ``decimals`` is the precision of their plain values (None: exact); ``selection`` what to
+        keep (default: everything; views are not read again, so a later query must need no more).
         """
         codes = Codes()
         builders: dict[str, ColumnsBuilder] = {}
@@ -116,7 +119,7 @@ class QueryIndex:
                 programs[(name, agent.gen)] = agent.program
                 builder = builders.get(name)
                 if builder is None:
-                    builder = builders[name] = ColumnsBuilder(name, program, codes)
+                    builder = builders[name] = ColumnsBuilder(name, program, codes, selection)
                 builder.view(view.seq, view.t, agent)
         return cls({name: b.finish() for name, b in builders.items()}, codes, decimals)
 
@@ -269,15 +272,19 @@ def query_recording(path: Path | str | os.PathLike[str], condition: str, robot: 
 
 
 def _precheck(recording: Recording, robots: list[str], condition: str) -> tuple[Selection, set[str]]:
-    """Check the condition against the robots' programs before reading ticks.
+    """Check the condition against the robots' programs before reading ticks (see :func:`selection_for`)."""
+    keys = {recording.program_key(name) for name in robots}
+    return selection_for([v for (key, _gen), v in recording.programs.items() if key in keys], condition)
 
-    Returns what the columns must hold and the program keys it checks against in some generation.
+
+def selection_for(views: Iterable[ProgramView], condition: str) -> tuple[Selection, set[str]]:
+    """What the columns must hold for ``condition`` over ticks of these program generations.
+
+    Returns the selection and the program keys it checks against in some generation.
 
     Raises:
-        QueryConditionError: a syntax error, or errors against every program the robots run.
+        QueryConditionError: a syntax error, or errors against every program.
     """
-    keys = {recording.program_key(name) for name in robots}
-    views = [v for (key, _gen), v in recording.programs.items() if key in keys]
     selection = Selection(frozenset(), frozenset(), frozenset(), frozenset())
     failure: CompiledQuery | None = None
     checked: set[str] = set()
@@ -295,11 +302,19 @@ def _precheck(recording: Recording, robots: list[str], condition: str) -> tuple[
     return selection, checked
 
 
-def query_ticks(ticks: Iterable[TickView], condition: str, robot: str | None = None) -> QueryResult:
+def query_ticks(
+    ticks: Iterable[TickView], condition: str, robot: str | None = None, *, decimals: int | None = None
+) -> QueryResult:
     """Every interval of the given tick views (in order) in which ``condition`` is true.
+
+    ``decimals``: the precision of the views' plain values, at which input functions' arguments are
+    compared (None: exact). Only the names the condition uses are read from the views.
 
     Raises:
         QueryConditionError: the condition has errors (line and column of the first).
         QueryError: ``robot`` appears in none of the ticks.
     """
-    return QueryIndex.from_ticks(ticks).query(condition, robot)
+    views = list(ticks)
+    programs = {(a.program.key, a.program.gen): a.program for v in views for a in v.agents.values()}
+    selection, _keys = selection_for(programs.values(), condition)
+    return QueryIndex.from_ticks(views, decimals, selection).query(condition, robot)

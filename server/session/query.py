@@ -24,7 +24,7 @@ from typing import Any
 import orjson
 
 from xabsl_studio.engine.errors import QueryError
-from xabsl_studio.engine.query import QueryIndex, QueryResult
+from xabsl_studio.engine.query import QueryIndex, QueryResult, query_ticks
 from xabsl_studio.engine.query.columns import Selection
 from xabsl_studio.engine.record import AgentTick, Recording, RecordingError, TickView
 from xabsl_studio.engine.record.reader import ProgramView
@@ -166,8 +166,7 @@ def _history_query(ring: Ring, condition: str, robot: int | None) -> tuple[Query
         name = next((n for n, i in ids.items() if i == robot), None)
         if name is None:
             raise CommandError(f"no XABSL robot {robot} in this session")
-    index = QueryIndex.from_ticks(views, FRAME_DECIMALS)
-    return index.query(condition, name), ids
+    return query_ticks(views, condition, name, decimals=FRAME_DECIMALS), ids
 
 
 async def answer_history(ring: Ring, command: Query) -> dict[str, Any]:
