@@ -36,8 +36,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from xabsl_studio.engine import ir  # noqa: E402
-from xabsl_studio.engine.query import QueryIndex, query_recording  # noqa: E402
-from xabsl_studio.engine.query.columns import Selection  # noqa: E402
+from xabsl_studio.engine.query import QueryIndex, Selection, query_recording  # noqa: E402
 from xabsl_studio.engine.query.language import CompiledQuery, compile_query  # noqa: E402
 from xabsl_studio.engine.record import AgentTick, Recording  # noqa: E402
 
@@ -198,8 +197,7 @@ def main() -> int:
     with Recording(path) as recording:
         ticks, robots = len(recording), len(recording.agents)
         # an index that holds no column yet: each query below reads what it needs into it once
-        nothing = Selection(frozenset(), frozenset(), frozenset(), frozenset())
-        index = QueryIndex.from_recording(recording, recording.agents, selection=nothing)
+        index = QueryIndex.from_recording(recording, recording.agents, selection=Selection.nothing())
     print(f"{path}: {ticks} ticks, {robots} robots, {path.stat().st_size / 1e6:.1f} MB (load {os.getloadavg()[0]:.1f})")
     for condition in args.query or QUERIES:
         cold, cold_wall, cold_cpu = timed(lambda c=condition: query_recording(path, c))

@@ -16,6 +16,7 @@ unknown and never matches. docs/queries.md is the user's description.
 from __future__ import annotations
 
 from xabsl_studio.engine.errors import QueryError
+from xabsl_studio.engine.query.columns import Selection
 from xabsl_studio.engine.query.index import QueryConditionError, QueryIndex, query_recording, query_ticks
 from xabsl_studio.engine.query.result import Interval, QueryResult
 
@@ -25,6 +26,7 @@ __all__ = [
     "QueryError",
     "QueryIndex",
     "QueryResult",
+    "Selection",
     "query_recording",
     "query_ticks",
 ]

@@ -173,6 +173,11 @@ class Selection:
     behaviors: frozenset[str] | None = None
     functions: frozenset[str] | None = None
 
+    @classmethod
+    def nothing(cls) -> Selection:
+        """Keep nothing: an index that reads each name when a query first needs it."""
+        return cls(frozenset(), frozenset(), frozenset(), frozenset())
+
     def covers(self, other: Selection) -> bool:
         """Whether everything ``other`` keeps is kept here."""
         return all(

@@ -191,7 +191,7 @@ class QueryIndex:
             return
         missing: dict[str, Selection] = {}
         for name, per_gen in compiled.items():
-            needed = Selection(frozenset(), frozenset(), frozenset(), frozenset())
+            needed = Selection.nothing()
             for query in per_gen.values():
                 needed = needed.union(needs(query))
             have = self.robots[name].selection
@@ -285,7 +285,7 @@ def selection_for(views: Iterable[ProgramView], condition: str) -> tuple[Selecti
     Raises:
         QueryConditionError: a syntax error, or errors against every program.
     """
-    selection = Selection(frozenset(), frozenset(), frozenset(), frozenset())
+    selection = Selection.nothing()
     failure: CompiledQuery | None = None
     checked: set[str] = set()
     for view in views:

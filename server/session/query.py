@@ -38,8 +38,6 @@ __all__ = ["RecordingQueries", "answer_history", "answer_json", "history_views"]
 #: The precision of a frame's decimal values (display values, docs/protocol.md).
 FRAME_DECIMALS = 3
 
-_NOTHING = Selection(frozenset(), frozenset(), frozenset(), frozenset())
-
 
 def answer_json(result: QueryResult, ids: dict[str, int]) -> dict[str, Any]:
     """The reply's result (``QueryAnswer``): intervals with robot ids and names."""
@@ -77,7 +75,7 @@ class RecordingQueries:
         with self._lock:  # one reader of the file at a time; the index grows under it
             if self._index is None:
                 with Recording(self.path) as recording:
-                    self._index = QueryIndex.from_recording(recording, selection=_NOTHING)
+                    self._index = QueryIndex.from_recording(recording, selection=Selection.nothing())
             return self._index.query(condition, robot)
 
     async def answer(self, command: Query) -> dict[str, Any]:
