@@ -21,6 +21,7 @@ them and derive from the stage's class here::
     ├── PlanningError         xabsl_studio.engine.planning: PDDL and fact rules (UnsupportedPDDLError, FactRuleError)
     ├── HostError             a host or world: an example folder, a team (ExampleError, TeamError)
     ├── RecordError           xabsl_studio.engine.record: recordings (RecordingError, RecordingFailed)
+    ├── QueryError            xabsl_studio.engine.query: a query over ticks (QueryConditionError)
     ├── BehaviorTestError     xabsl_studio.engine.testing: test files and selections (AssertionSpecError, ...)
     ├── CommandLineError      the ``xabsl`` command line (UsageError)
     └── ServerError           the studio server, defined by it (``xabsl_studio.server.protocol.errors``:
@@ -45,6 +46,7 @@ __all__ = [
     "LinkError",
     "LoadError",
     "PlanningError",
+    "QueryError",
     "ReadError",
     "RecordError",
     "TraceError",
@@ -123,6 +125,10 @@ class CommandLineError(XabslError):
 
 class RecordError(XabslError):
     """A recording that cannot be read, written or re-simulated."""
+
+
+class QueryError(XabslError):
+    """A query over recorded ticks that cannot be run: a bad condition, an unknown robot."""
 
 
 class BehaviorTestError(XabslError):

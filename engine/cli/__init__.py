@@ -65,6 +65,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.diverge",
         "the first tick where two recordings act differently, per robot: both paths and the why of each",
     ),
+    "query": (
+        "xabsl_studio.engine.cli.query",
+        "find the ticks of a recording where an XABSL condition holds (docs/queries.md)",
+    ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
     "run": (
         "xabsl_studio.engine.cli.run",

@@ -24,6 +24,7 @@ from xabsl_studio.engine.lang.check import OptionChecker
 from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics
 from xabsl_studio.engine.lang.parser import parse_file
 from xabsl_studio.engine.lang.symbols import OptionHeader, SymbolTable
+from xabsl_studio.engine.lang.tokens import TokenType, tokenize
 from xabsl_studio.engine.types import Kind, Span
 
 __all__ = ["CONDITION_FILE", "CheckedCondition", "check_condition"]
@@ -87,6 +88,11 @@ def check_condition(program: ir.Program, text: str) -> CheckedCondition:
             "syntax-error", f"the condition is longer than {MAX_CONDITION} characters", _span(text, 0, len(text))
         )
         return CheckedCondition(text, None, diagnostics.sorted())
+    unmatched = _unmatched_paren(text)
+    if unmatched is not None:
+        # the wrapper's own ')' would close the text's extra one and blame the end of the text
+        diagnostics.add("syntax-error", "syntax error: unexpected ')': no '(' to close", unmatched)
+        return CheckedCondition(text, None, diagnostics.sorted())
     wrapped = _PREFIX + text + _SUFFIX
     parsed = Diagnostics()
     source = parse_file(CONDITION_FILE, wrapped, parsed)
@@ -119,6 +125,21 @@ def check_condition(program: ir.Program, text: str) -> CheckedCondition:
     elif expression is not None:
         expression = _rebase(expression, text)
     return CheckedCondition(text, expression, diagnostics.sorted())
+
+
+def _unmatched_paren(text: str) -> Span | None:
+    """The span of the first ')' of ``text`` that closes no '(' (None: there is none)."""
+    depth = 0
+    for token in tokenize(text, CONDITION_FILE, Diagnostics()):
+        if token.type is not TokenType.OPERATOR:
+            continue
+        if token.text == "(":
+            depth += 1
+        elif token.text == ")":
+            depth -= 1
+            if depth < 0:
+                return token.span
+    return None
 
 
 def _condition_node(source: ast.SourceFile) -> ast.Expr | None:

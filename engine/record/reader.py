@@ -269,6 +269,11 @@ class Recording:
         schemas = self._summary.schemas
         return {ch.topic: schemas[ch.schema_id].name for ch in self._summary.channels.values()}
 
+    def program_key(self, agent: str) -> str | None:
+        """The key of the behavior set ``agent`` runs (None: no XABSL program)."""
+        key = self._program_of.get(agent)
+        return None if key is None else str(key)
+
     def program(self, agent: str, gen: int) -> ProgramView:
         """The program generation ``gen`` of ``agent``'s program key (the latest one at or before ``gen``)."""
         key = self._program_of[agent]
@@ -378,6 +383,35 @@ class Recording:
             if first <= log_time <= last:
                 message = loads(data)
                 yield message["seq"], message["t"], channels[channel], message["gen"], message["path"]
+
+    def agent_messages(
+        self, start: int = 0, stop: int | None = None, agents: list[str] | None = None
+    ) -> Iterator[tuple[str, dict[str, Any]]]:
+        """``(agent, message)`` per agent and tick in recorded order: the ``xabsl.AgentTick`` messages as JSON.
+
+        The pass for scans of whole recordings that need more than :meth:`paths` (the query
+        engine's columns): key frames and changes as recorded (docs/recordings.md), no views.
+
+        Raises:
+            RecordingError: an agent in ``agents`` is not a recorded XABSL agent.
+        """
+        names = self.agents if agents is None else agents
+        for name in names:
+            if name not in self.agents:
+                raise RecordingError(f"no agent {name!r} in {self.path} (agents: {', '.join(self.agents)})")
+        start = max(start, self.first)
+        stop = self.end if stop is None else min(stop, self.end)
+        if start >= stop:
+            return
+        wanted = {S.agent_topic(name): name for name in names}
+        channels = {cid: wanted[ch.topic] for cid, ch in self._summary.channels.items() if ch.topic in wanted}
+        # from the key frame at or before start, so that the first message yielded is a key frame
+        key = max(self.first, start - start % self.key_every)
+        first, last = self.time_ns(key), self.time_ns(stop - 1)
+        loads = orjson.loads
+        for channel, log_time, data in self._raw_messages(channels, first, last):
+            if first <= log_time <= last:
+                yield channels[channel], loads(data)
 
     def _raw_messages(self, channels: dict[int, str], first: int, last: int) -> Iterator[tuple[int, int, bytes]]:
         """``(channel id, log time, data)`` of the chunks overlapping ``first`` .. ``last``, file order.

@@ -372,6 +372,21 @@ class CheckCondition:
     condition: Annotated[str, Field(max_length=2000)]
 
 
+@with_config(STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Query:
+    """The intervals of ticks in which ``condition`` holds (docs/queries.md), for ``robot`` or every robot.
+
+    A replay answers over its recording, a live or attached session over its history (the ring).
+    """
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["query"]
+    condition: Annotated[str, Field(max_length=2000)]
+    robot: RobotId | None = None
+
+
 Command = Annotated[
     Pause
     | Resume
@@ -396,7 +411,8 @@ Command = Annotated[
     | ListBreakpoints
     | CheckCondition
     | Seek
-    | Fork,
+    | Fork
+    | Query,
     Discriminator("op"),
 ]
 #: Breakpoint commands: the server process keeps (and persists) breakpoints, the simulation checks them.

@@ -455,6 +455,36 @@ class ConditionCheck:
     diagnostics: list[dict[str, Any]]
 
 
+@with_config(SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class QueryInterval:
+    """Ticks ``first_seq`` .. ``last_seq`` of robot ``robot`` (id; ``name``) in which the query holds; times in ms."""
+
+    robot: int
+    name: str
+    first_seq: int
+    last_seq: int
+    first_t: int
+    last_t: int
+
+
+@with_config(SCHEMA)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class QueryAnswer:
+    """The result of ``query``: the intervals by first tick, the robot ticks evaluated, matching, unknown.
+
+    ``skipped``: per robot name, why the condition was not evaluated for it (its behavior lacks a
+    name the condition uses).
+    """
+
+    condition: str
+    intervals: list[QueryInterval]
+    ticks: int
+    matched: int
+    unknown: int
+    skipped: dict[str, str]
+
+
 #: The ``result`` of a successful reply, per op (None: no result; ``status``: the session status).
 RESULTS: dict[str, Any] = {
     "pause": PausedResult,
@@ -481,6 +511,7 @@ RESULTS: dict[str, Any] = {
     "enable_breakpoint": BreakpointList,
     "list_breakpoints": BreakpointList,
     "check_condition": ConditionCheck,
+    "query": QueryAnswer,
 }
 
 ServerEvent = FileEvent | CompileEvent | CrashEvent | BreakpointEvent

@@ -54,6 +54,7 @@ from xabsl_studio.server.protocol.commands import (
     Fork,
     ListBreakpoints,
     Pause,
+    Query,
     RemoveBreakpoint,
     Reset,
     Resume,
@@ -84,6 +85,7 @@ from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.breakpoints import BreakpointStore, validate
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.generations import Generations
+from xabsl_studio.server.session.query import answer_history
 from xabsl_studio.server.session.recording import LiveRecorder
 from xabsl_studio.server.simulation import worker
 from xabsl_studio.server.simulation.forkstart import ForkStart
@@ -470,13 +472,15 @@ class Session:
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand | Fork, owner: str | None = None) -> Any:
+    async def request(self, command: WorkerCommand | BreakpointCommand | Fork | Query, owner: str | None = None) -> Any:
         """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
             CommandError: arguments that do not fit the world or program, or the simulation is
-                not running (crashed) and the command needs it.
+                not running (crashed) and the command needs it; a bad ``query`` condition.
         """
+        if isinstance(command, Query):
+            return await answer_history(self.ring, command)
         if isinstance(command, Reset) and self.crash is not None and not self._stopping:
             return await self._restart(command)
         if isinstance(command, Status):

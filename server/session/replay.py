@@ -64,6 +64,7 @@ from xabsl_studio.server.protocol.commands import (
     Explain,
     Fork,
     Pause,
+    Query,
     Resume,
     Seek,
     Speed,
@@ -75,6 +76,7 @@ from xabsl_studio.server.protocol.rest import ReplayInfo
 from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.live import CommandError, Session
+from xabsl_studio.server.session.query import RecordingQueries
 from xabsl_studio.server.simulation.explain import explanation_result, tree_result, why_not_result
 from xabsl_studio.server.simulation.worker import check_speed
 
@@ -376,6 +378,8 @@ class ReplaySession(Session):
         #: behavior times of the first and the last tick (the UI's timeline extent)
         self.t_first = recording.tick(recording.first).t
         self.t_last = recording.tick(recording.end - 1).t
+        #: the ``query`` command over the file (docs/queries.md)
+        self.queries = RecordingQueries(recording.path, self.source.robots)
 
     # -- the session's lifetime ---------------------------------------------------------------------
 
@@ -478,8 +482,10 @@ class ReplaySession(Session):
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand | Fork, owner: str | None = None) -> Any:
-        """Playback commands, ``seek`` and ``explain``; anything needing a world is refused."""
+    async def request(self, command: WorkerCommand | BreakpointCommand | Fork | Query, owner: str | None = None) -> Any:
+        """Playback commands, ``seek``, ``explain`` and ``query``; anything needing a world is refused."""
+        if isinstance(command, Query):
+            return await self.queries.answer(command)
         if isinstance(command, Status):
             return await self.status()
         if isinstance(command, Seek):

@@ -67,6 +67,10 @@ export interface ConnectionOptions {
 
 const OPEN = 1;
 
+/// Ops whose reply may take long (ms to wait): the first `query` of a name reads it from the whole
+/// recording (seconds for a long match on a busy machine; docs/queries.md).
+const SLOW_OPS: Partial<Record<string, number>> = { query: 120000 };
+
 export class Connection {
   state: LinkState = "connecting";
   generation = -1;
@@ -273,7 +277,7 @@ export class Connection {
       const timer = setTimeout(() => {
         this.pending.delete(id);
         reject(new CommandError(`no reply to ${op}`));
-      }, this.options.commandTimeoutMs ?? 10000);
+      }, this.options.commandTimeoutMs ?? SLOW_OPS[op] ?? 10000);
       this.pending.set(id, { resolve: resolve as (v: unknown) => void, reject, timer });
     });
   }

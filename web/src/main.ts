@@ -17,6 +17,7 @@ import { PlotPanel } from "./panels/plot";
 import { SymbolsPanel } from "./panels/symbols";
 import { TeamStrip } from "./panels/teamstrip";
 import { TesterPanel } from "./panels/tester";
+import { SearchControls } from "./panels/search";
 import { TimelinePanel } from "./panels/timeline";
 import { ForkControls } from "./panels/fork";
 import { forkable, loadReplay, replayOf } from "./replay";
@@ -148,6 +149,7 @@ function main(): void {
       tester.choose({ kind: "option", name: option.name });
       right.activate("test");
     },
+    find: (option, state) => void search.find(`${option.name}.state == ${state}`),
   });
   const problems = new ProblemBanner((span) => {
     center.activate("editor");
@@ -156,6 +158,13 @@ function main(): void {
   const activation = new ActivationPanel(session, openOption);
   const symbols = new SymbolsPanel(session, connection, plot);
   const timeline = new TimelinePanel(session, openOption);
+  // Search the run (a query): in the timeline's toolbar, its matches marked on the timeline.
+  const search = new SearchControls(session, connection);
+  timeline.toolbar.append(search.element);
+  search.onMatches = (matches) => {
+    timeline.markMatches(matches);
+    pending.add("cursor"); // paused: no tick follows that would redraw
+  };
   const fork = new ForkControls(session, connection);
   timeline.toolbar.append(fork.button, fork.badge);
   activation.element.firstElementChild?.after(fork.original);
@@ -290,7 +299,7 @@ function main(): void {
   };
   const stats = { renderMs: 0, drawsPerSecond: 0 };
   // For e2e tests and curious users: how fast the UI draws.
-  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline, editor, recordings };
+  (window as unknown as { xabslStudio: unknown }).xabslStudio = { session, connection, stats, field, problems, plot, timeline, editor, recordings, search };
   layout.onResize(forceAll);
   window.addEventListener("resize", forceAll);
 

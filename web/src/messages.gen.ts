@@ -454,6 +454,44 @@ export interface ProgramStatus {
 }
 
 /**
+ * The intervals of ticks in which `condition` holds (docs/queries.md), for `robot` or every robot.
+ *
+ * A replay answers over its recording, a live or attached session over its history (the ring).
+ */
+export interface Query {
+  type: "command";
+  id?: number | string | null;
+  op: "query";
+  condition: string;
+  robot?: number | null;
+}
+
+/**
+ * The result of `query`: the intervals by first tick, the robot ticks evaluated, matching, unknown.
+ *
+ * `skipped`: per robot name, why the condition was not evaluated for it (its behavior lacks a
+ * name the condition uses).
+ */
+export interface QueryAnswer {
+  condition: string;
+  intervals: QueryInterval[];
+  ticks: number;
+  matched: number;
+  unknown: number;
+  skipped: Record<string, string>;
+}
+
+/** Ticks `first_seq` .. `last_seq` of robot `robot` (id; `name`) in which the query holds; times in ms. */
+export interface QueryInterval {
+  robot: number;
+  name: string;
+  first_seq: number;
+  last_seq: number;
+  first_t: number;
+  last_t: number;
+}
+
+/**
  * One behavior set compiled from disk after a change (`reload`'s `programs`, a save).
  *
  * `error`: why it was not swapped in (its diagnostics' errors, or the engine refused it).
@@ -805,7 +843,7 @@ export type PathNode = OptionNode | BehaviorNode;
 
 export type HelloReason = "connect" | "reload" | "reset" | "resync" | "fork";
 
-export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek | Fork;
+export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek | Fork | Query;
 
 export type ClientMessage = Subscribe | Resync | Command;
 
@@ -839,4 +877,5 @@ export interface CommandResults {
   enable_breakpoint: BreakpointList;
   list_breakpoints: BreakpointList;
   check_condition: ConditionCheck;
+  query: QueryAnswer;
 }

@@ -56,7 +56,7 @@ export class OptionView {
   constructor(
     private readonly session: Session,
     private readonly connection: Connection,
-    private readonly actions: { edit(option: Option): void; test(option: Option): void },
+    private readonly actions: { edit(option: Option): void; test(option: Option): void; find(option: Option, state: string): void },
   ) {
     this.title = h("strong.option-title");
     this.picker = h("select", { "aria-label": "Option", title: "Open another option" });
@@ -82,7 +82,7 @@ export class OptionView {
     );
     this.breakpoints = new BreakpointsPanel(session, connection, () => this.current());
     const side = h("div.option-side", {}, this.doc, this.info, this.why, this.breakpoints.element, this.transitions);
-    // The state context: right-click a state for "break on enter / leave".
+    // The state context: right-click a state for "break on enter / leave", or to find every tick in it.
     this.menu = h("div.context-menu", { role: "menu", hidden: true });
     document.addEventListener("pointerdown", (ev) => {
       if (!this.menu.contains(ev.target as Node)) this.menu.hidden = true;
@@ -95,8 +95,13 @@ export class OptionView {
       ev.preventDefault();
       const item = (label: string, kind: "enter_state" | "leave_state"): HTMLElement =>
         h("button", { role: "menuitem", onclick: () => { this.menu.hidden = true; void this.breakpoints.add(kind, state.name); } }, label);
+      const find = h(
+        "button.find-state",
+        { role: "menuitem", title: "Mark on the timeline every tick where this option is in this state (a query)", onclick: () => { this.menu.hidden = true; this.actions.find(option as Option, state.name); } },
+        `Every tick in ${state.name}`,
+      );
       const whyNot = h("button", { role: "menuitem", onclick: () => { this.menu.hidden = true; this.askWhyNot(state.id); } }, `Why not ${state.name}?`);
-      this.menu.replaceChildren(item(`Break on enter ${state.name}`, "enter_state"), item(`Break on leave ${state.name}`, "leave_state"), whyNot);
+      this.menu.replaceChildren(item(`Break on enter ${state.name}`, "enter_state"), item(`Break on leave ${state.name}`, "leave_state"), whyNot, find);
       this.menu.style.left = `${ev.clientX}px`;
       this.menu.style.top = `${ev.clientY}px`;
       this.menu.hidden = false;

@@ -5,11 +5,13 @@
 ///
 /// The history goes across hot reloads and resets (timeline times, `Tick.x`): each new
 /// generation is marked on the axis by its reason (reload, reset, fork, ...); clicking a mark
-/// shows what changed (panels/changes.ts).
+/// shows what changed (panels/changes.ts). The matches of a search (panels/search.ts) are green
+/// bands on the axis and on their robot's team row.
 import { buildRobotTimeline, buildTeamTimeline, segmentHue, type TimelineRow } from "../timeline";
 import type { Session, SessionEvent } from "../session";
 import { formatClock, formatMs, h } from "../ui";
 import { ChangesDialog, type Mark } from "./changes";
+import type { Match } from "./search";
 
 const LABEL_W = 150;
 const AXIS_H = 18;
@@ -38,6 +40,8 @@ export class TimelinePanel {
   private dirty = true;
   /// Breakpoint hits, marked on the axis (red) at their time.
   private hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }> = [];
+  /// The intervals a search found, drawn as green bands (panels/search.ts).
+  private matches: ReadonlyArray<Match> = [];
   /// Where a generation started in the buffered history (timeline time), as drawn; a fork is
   /// one (reason "fork"), so "Run from here" needs no mark of its own.
   private marks: Array<Mark & { x: number }> = [];
@@ -75,6 +79,12 @@ export class TimelinePanel {
   /// Mark breakpoint hits (a red triangle and line at each hit's time).
   markHits(hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }>): void {
     this.hits = hits;
+    this.dirty = true;
+  }
+
+  /// Mark the intervals of a search (an empty list removes the marks).
+  markMatches(matches: ReadonlyArray<Match>): void {
+    this.matches = matches;
     this.dirty = true;
   }
 
@@ -256,10 +266,30 @@ export class TimelinePanel {
     ctx.fillStyle = fg;
     ctx.fillText("Team (root option/state)", 4, top + GAP / 2);
     top += GAP;
+    const teamTop = new Map<number, number>();
     for (const row of this.team) {
       drawRow(row, top, TEAM_ROW, row.label, 0, row.id === session.selectedRobot);
+      teamTop.set(row.id, top);
       top += TEAM_ROW;
     }
+    // Search matches: a band under the axis, and over the robot's team row.
+    let drawnMatches = 0;
+    for (const match of this.matches) {
+      const from = session.buffer.bySeq(match.first_seq)?.x ?? match.first_t;
+      const to = session.buffer.bySeq(match.last_seq)?.x ?? match.last_t;
+      if (to < this.t0 || from > this.t1) continue;
+      const x0 = Math.max(LABEL_W, xOf(from) - 1);
+      const w = Math.max(2, Math.min(width - 6, xOf(to) + 1) - x0);
+      ctx.fillStyle = "#43a047";
+      ctx.fillRect(x0, AXIS_H - 5, w, 5);
+      const y = teamTop.get(match.robot);
+      if (y !== undefined) {
+        ctx.fillStyle = "rgba(67,160,71,0.55)";
+        ctx.fillRect(x0, y, w, TEAM_ROW);
+      }
+      drawnMatches += 1;
+    }
+    this.canvas.dataset.matches = String(drawnMatches);
     ctx.fillStyle = "#e53935";
     ctx.strokeStyle = "rgba(229,57,53,0.6)";
     for (const hit of this.hits) {
