@@ -128,6 +128,31 @@ def test_an_assistant_asks_why_not_and_where_two_runs_part(runs: Runs) -> None:
     anyio.run(session)
 
 
+def test_an_assistant_queries_every_tick_where_an_option_is_in_a_state(runs: Runs) -> None:
+    """The ``query`` tool: the ticks where blue2's approach_ball is in ``near``, as an independent scan finds them."""
+    with Recording(runs.edited) as recording:
+        expected = {v.seq for v in recording.ticks() if "approach_ball.near" in _states(v.agents["blue2"])}
+    assert expected, "the run never goes near: the check would prove nothing"
+
+    async def session() -> None:
+        params = StdioServerParameters(
+            command=sys.executable, args=server_command(runs.original.parent)[1:], env=environment()
+        )
+        async with stdio_client(params) as (read, write), ClientSession(read, write) as client:
+            await client.initialize()
+            answer = await call(
+                client, "query", recording="edited.mcap", condition="approach_ball.state == near", robot="blue2"
+            )
+            assert not answer.is_error, answer.content
+            intervals = answer.structured_content["intervals"]
+            found = {seq for i in intervals for seq in range(i["first_seq"], i["last_seq"] + 1)}
+            assert found == expected and {i["robot"] for i in intervals} == {"blue2"}
+            bad = await call(client, "query", recording="edited.mcap", condition="approach_ball.state == ")
+            assert bad.is_error and "1:24: syntax error" in bad.content[0].text
+
+    anyio.run(session)
+
+
 def test_compile_diagnostics_point_at_file_line_col(runs: Runs, tmp_path: Path) -> None:
     broken = tmp_path / "broken"
     (broken / "options").mkdir(parents=True)
