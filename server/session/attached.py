@@ -39,7 +39,9 @@ import orjson
 from xabsl_studio.engine.emit.ic import emit_ic
 from xabsl_studio.engine.host import BehaviorSource, World
 from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.runtime.debug import ReadValues, decision_reads, explain_decision, render
 from xabsl_studio.server.protocol.attach import (
     HEARTBEAT_SECONDS,
     HEARTBEAT_TIMEOUT,
@@ -56,7 +58,7 @@ from xabsl_studio.server.protocol.attach import (
     encode_attach,
     encode_from_studio,
 )
-from xabsl_studio.server.protocol.commands import Pause, Reset, Resume, RobotCommand, Status, Step
+from xabsl_studio.server.protocol.commands import Explain, Pause, Reset, Resume, RobotCommand, Status, Step
 from xabsl_studio.server.protocol.host import (
     ExplainRecorded,
     Hit,
@@ -71,6 +73,7 @@ from xabsl_studio.server.protocol.host import (
 )
 from xabsl_studio.server.protocol.types import HelloReason, WireValue
 from xabsl_studio.server.session.live import RING_SECONDS, CommandError, ProgramState, Session
+from xabsl_studio.server.simulation.explain import explanation_result, source_texts, tree_result
 
 __all__ = ["AttachedExample", "AttachedSession", "HostConnection", "parse_address"]
 
@@ -80,6 +83,18 @@ log = logging.getLogger("xabsl.server")
 RECONNECT_SECONDS = (0.5, 5.0)
 #: Seconds ``start`` waits for the named hosts before serving without those still missing.
 START_WAIT = 10.0
+
+
+def _explainers(message: HostGeneration) -> tuple[HostProgram | None, ...]:
+    """Per robot of a host generation: the program its engine runs, for explaining its decisions."""
+    structure = orjson.loads(message.generation.structure)
+    programs: dict[str, HostProgram] = {}
+    for key, ic in message.ics.items():
+        programs[key] = HostProgram.of(ic, structure["programs"].get(key), message.generation.enums.get(key, {}))
+    return tuple(
+        programs.get(robot["program"]) if robot.get("engine") and robot.get("program") else None
+        for robot in structure["robots"]
+    )
 
 
 def parse_address(text: str) -> tuple[str, int]:
@@ -119,6 +134,39 @@ class AttachedExample:
         raise CommandError("an attached session makes no controllers")
 
 
+@dataclass(frozen=True, slots=True)
+class HostProgram:
+    """What a host runs for one behavior set, as the studio explains its decisions from the reads.
+
+    ``program`` is read back from the host's intermediate code (None: the studio cannot read it);
+    reads name symbols by the host's ids, which its description gives by name.
+    """
+
+    program: Program | None
+    input_ids: dict[str, int]
+    output_ids: dict[str, int]
+    #: enum name -> host value -> qualified element (the raw enum values of reads)
+    enums: dict[str, dict[int, str]]
+    #: option id -> the option's description (its conditions' source texts)
+    options: dict[int, dict[str, Any]]
+
+    @classmethod
+    def of(cls, ic: str, description: dict[str, Any] | None, enums: dict[str, dict[int, str]]) -> HostProgram:
+        """The host program of a generation's IC and description (read once per host generation)."""
+        try:
+            program: Program | None = read_ic(ic)
+        except Exception:  # a host's IC the studio cannot read: "why" is unknown, the rest works
+            program = None
+        described = description or {}
+        return cls(
+            program,
+            {str(x["name"]): int(x["id"]) for x in described.get("inputs", ()) if isinstance(x, dict)},
+            {str(x["name"]): int(x["id"]) for x in described.get("outputs", ()) if isinstance(x, dict)},
+            enums,
+            {int(o["id"]): o for o in described.get("options", ()) if isinstance(o, dict)},
+        )
+
+
 @dataclass(eq=False)
 class HostConnection:
     """One host: its address, what it said last, its robots' place in the session."""
@@ -146,6 +194,8 @@ class HostConnection:
     #: where this host's robots start among the session's
     offset: int = 0
     robots: tuple[str, ...] = ()
+    #: per robot of the host's generation: what its engine runs (None: no engine)
+    explainers: tuple[HostProgram | None, ...] = ()
 
     def info(self, me: str | None) -> dict[str, Any]:
         """The host as the status shows it."""
@@ -196,8 +246,8 @@ class AttachedSession(Session):
         self._generation_number = 0
         self._t0 = time.monotonic()
         self._t = 0
-        #: per session generation: per host, the host's generation number (explain of past ticks)
-        self._host_generations: dict[int, dict[int, int]] = {}
+        #: per session generation: per robot, the program its host ran (explain of any tick in the ring)
+        self._explainers: dict[int, tuple[HostProgram | None, ...]] = {}
         self._closing = False
 
     # -- lifetime ---------------------------------------------------------------------------------------
@@ -311,6 +361,7 @@ class AttachedSession(Session):
             host.generation = message
             host.connected, host.gone = True, False
             host.last = None
+            host.explainers = _explainers(message)
             self._adopt_programs(host, message)
             reason: HelloReason = "reset" if first or message.generation.reason == "reset" else "reload"
             self._publish_generation("connect" if self._generation_number == 0 else reason)
@@ -364,19 +415,22 @@ class AttachedSession(Session):
         input_ids: list[tuple[int, ...]] = []
         output_ids: list[tuple[int, ...]] = []
         errors: dict[str, str | None] = {}
+        enums: dict[str, dict[str, dict[int, str]]] = {}
+        explainers: list[HostProgram | None] = []
         self._generation_number += 1
-        numbers: dict[int, int] = {}
-        for index, host in enumerate(self.hosts):
+        for host in self.hosts:
             host.offset = len(robots)
             gen = host.generation
             if gen is None:
                 continue
-            numbers[index] = gen.generation.number
+            explainers.extend(host.explainers)
             structure = orjson.loads(gen.generation.structure)
             for key, description in structure["programs"].items():
                 programs.setdefault(self._key(key), description)
             for key, error in gen.generation.errors.items():
                 errors[self._key(key)] = error
+            for key, tables in gen.generation.enums.items():
+                enums.setdefault(self._key(key), tables)
             for robot, ins, outs in zip(
                 structure["robots"], gen.generation.input_ids, gen.generation.output_ids, strict=True
             ):
@@ -396,9 +450,9 @@ class AttachedSession(Session):
                 )
                 input_ids.append(tuple(ins))
                 output_ids.append(tuple(outs))
-        self._host_generations[self._generation_number] = numbers
-        for old in [n for n in self._host_generations if n <= self._generation_number - 16]:
-            del self._host_generations[old]
+        self._explainers[self._generation_number] = tuple(explainers)
+        for old in [n for n in self._explainers if n <= self._generation_number - 16]:
+            del self._explainers[old]
         structure = {"programs": programs, "robots": robots}
         scene = {"attached": [h.info(None) for h in self.hosts]}
         message = NewGeneration(
@@ -410,6 +464,7 @@ class AttachedSession(Session):
             tuple(output_ids),
             0,
             errors,
+            enums=enums,
         )
         self.receive([message])
         self._tick(None)
@@ -423,6 +478,7 @@ class AttachedSession(Session):
         extras: list[bytes] = []
         inputs: list[tuple[WireValue, ...]] = []
         outputs: list[tuple[WireValue, ...]] = []
+        reads: list[bytes] = []
         paused = False
         for host in self.hosts:
             if host.generation is None:
@@ -436,12 +492,15 @@ class AttachedSession(Session):
                     extras.append(b"")
                     inputs.append((None,) * len(gen.input_ids[at]) if at < len(gen.input_ids) else ())
                     outputs.append((None,) * len(gen.output_ids[at]) if at < len(gen.output_ids) else ())
+                    reads.append(b"")
                 continue
             paused = paused or last.paused
             paths.extend(last.paths)
             extras.extend(last.extras)
             inputs.extend(last.inputs)
             outputs.extend(last.outputs)
+            # What each decision read in the host's tick, as the host's engine recorded it (b"": unknown).
+            reads.extend(last.reads if len(last.reads) == count else (b"",) * count)
         if len(paths) != len(gen.input_ids) or not paths:
             return  # a host changed its robots (its new generation follows), or none is known yet
         self._seq += 1
@@ -460,6 +519,7 @@ class AttachedSession(Session):
             tuple(outputs),
             b"{}",
             orjson.dumps(status),
+            tuple(reads),
         )
         self.receive([sample])
         if self._started is not None and not self._started.done():
@@ -471,11 +531,7 @@ class AttachedSession(Session):
         """Route a command to the host of its robot, or to every host (pause, resume, step, reset, status)."""
         robot = getattr(command, "robot", None)
         if isinstance(command, ExplainRecorded):
-            host, local = self._host_of(command.robot)
-            number = self._host_generations.get(command.generation, {}).get(self.hosts.index(host))
-            if number is None:
-                raise CommandError("that tick ran a version of the behavior this host no longer has")
-            return await self._ask(host, dataclasses.replace(command, robot=local, generation=number), owner)
+            return True, self._explain_recorded(command), None
         if robot is not None and isinstance(command, RobotCommand):
             host, local = self._host_of(robot)
             return await self._ask(host, dataclasses.replace(command, robot=local), owner)
@@ -559,6 +615,59 @@ class AttachedSession(Session):
         for host in self.hosts:
             if host.connected and host.writer is not None:
                 host.writer.write(encode_from_studio(Control(take=take)))
+
+    # -- why -----------------------------------------------------------------------------------------------
+
+    async def explain(self, command: Explain, owner: str | None) -> Any:
+        """``explain``, always from the ring: the live one is the latest tick's, what its decision read.
+
+        The host is never asked again: the values are those the host's engine recorded in that
+        tick (``Engine.reads()``, sent with every sample), so "why" works on a host that is gone,
+        and a value the decision did not read is unknown (``?``).
+        """
+        if command.seq is not None:
+            return await super().explain(command, owner)
+        latest = self.ring.latest
+        if latest is None:
+            raise CommandError("no tick has arrived from the hosts yet")
+        result = await super().explain(dataclasses.replace(command, seq=latest.seq), owner)
+        result["recorded"] = False  # the last tick's decision: the live why of the studio
+        return result
+
+    def _explain_recorded(self, command: ExplainRecorded) -> list[dict[str, Any]]:
+        """Decisions of past ticks explained here, from the reads the ring kept and the host's program."""
+        explainers = self._explainers.get(command.generation)
+        if explainers is None:
+            raise CommandError("that tick is older than the versions of the behavior this studio keeps")
+        if not 0 <= command.robot < len(explainers) or explainers[command.robot] is None:
+            raise CommandError(f"robot {command.robot} ran no XABSL engine in that tick")
+        running = explainers[command.robot]
+        assert running is not None
+        program = running.program
+        if program is None:
+            raise CommandError("the host's intermediate code does not read here: its decisions cannot be explained")
+        ir_option = program.options.get(command.option)
+        if ir_option is None:
+            raise CommandError(f"unknown option {command.option!r}")
+        results = []
+        for seq, t, decided, leaf, _, reads in command.ticks:
+            if not 0 <= decided < len(ir_option.states):
+                raise CommandError(f"option {ir_option.name} has no state {decided}")
+            state = ir_option.states[decided]
+            read = decision_reads(orjson.loads(reads), ir_option.index) if reads else None
+            values = ReadValues(program, ir_option, read, running.enums, running.input_ids, running.output_ids)
+            try:
+                explanation = explain_decision(ir_option, state, leaf, values, lambda c: render(c, ir_option.name))
+            except KeyError:
+                raise CommandError(f"state {ir_option.name}.{state.name} has no leaf {leaf}") from None
+            result = explanation_result(ir_option, explanation)
+            tree = tree_result(ir_option, state.name, leaf, values)
+            described = running.options.get(ir_option.index)
+            if described is not None and decided < len(described.get("states", ())):
+                source_texts(result, tree, described["states"][decided]["decision"])
+            result.update(seq=seq, t=t, recorded=True, tree=tree)
+            results.append(result)
+        return results
 
     # -- hot reload ----------------------------------------------------------------------------------------
 

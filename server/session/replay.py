@@ -73,7 +73,7 @@ from xabsl_studio.server.protocol.host import WorkerCommand
 from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.live import CommandError, Session
-from xabsl_studio.server.simulation.explain import explanation_result, tree_result
+from xabsl_studio.server.simulation.explain import explanation_result, source_texts, tree_result
 from xabsl_studio.server.simulation.worker import check_speed
 
 __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
@@ -780,7 +780,7 @@ def explain(
     result = explanation_result(ir_option, explanation)
     tree = tree_result(ir_option, decided.name, leaf, values)
     # The IC has no source text: show the conditions as they were written (the description's).
-    _source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
+    source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
     result.update(recorded=True, tree=tree, last_transition=None)
     return result
 
@@ -810,21 +810,3 @@ def _recorded_values(
     return TickValues(
         agent, _decision_outputs(agent, previous, ir_option.index), params, decision_state_time, float(option_time)
     )
-
-
-def _source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[str, Any]) -> None:
-    """Copy the description's condition texts onto the tree and the conditions (same shapes)."""
-
-    def copy(node: dict[str, Any], source: dict[str, Any]) -> None:
-        if "if" in node and "if" in source:
-            node["if"] = source["if"]
-            copy(node["then"], source["then"])
-            copy(node["else"], source["else"])
-
-    copy(tree, described)
-    node = described
-    for condition in result["conditions"]:
-        if "if" not in node:
-            break
-        condition["text"] = node["if"]
-        node = node["then"] if condition["branch"] else node["else"]

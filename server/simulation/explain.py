@@ -16,7 +16,7 @@ from typing import Any
 from xabsl_studio.engine.ir.model import If, Option, Transition, leaf_path
 from xabsl_studio.engine.runtime.debug import Explanation, Values, decision_tree, render
 
-__all__ = ["explanation_result", "if_text", "mark_values", "tree_result"]
+__all__ = ["explanation_result", "if_text", "mark_values", "source_texts", "tree_result"]
 
 
 def explanation_result(option: Option, explanation: Explanation) -> dict[str, Any]:
@@ -88,6 +88,27 @@ def mark_values(tree: dict[str, Any], explanation: Explanation) -> None:
             return
         node["value"] = condition.value if isinstance(condition.value, bool) else None
         node = node["then"] if condition.branch else node["else"]
+
+
+def source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[str, Any]) -> None:
+    """Copy the description's condition texts onto the tree and the conditions (same shapes).
+
+    A program read back from intermediate code has no source text: the description has it.
+    """
+
+    def copy(node: dict[str, Any], source: dict[str, Any]) -> None:
+        if "if" in node and "if" in source:
+            node["if"] = source["if"]
+            copy(node["then"], source["then"])
+            copy(node["else"], source["else"])
+
+    copy(tree, described)
+    node = described
+    for condition in result["conditions"]:
+        if "if" not in node:
+            break
+        condition["text"] = node["if"]
+        node = node["then"] if condition["branch"] else node["else"]
 
 
 def _plain(value: Any) -> Any:

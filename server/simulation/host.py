@@ -157,6 +157,7 @@ class HostEngines(EngineSet):
             output_ids,
             0,
             dict(self.errors),
+            enums={key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
         )
         return HostGeneration(message, {k: v[2] for k, v in self.running.items()})
 

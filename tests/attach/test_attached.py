@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 
-from xabsl_studio.examples.attach.robot import DEMO
+from xabsl_studio.examples.attach.robot import DEMO, GAME_STATES
 from xabsl_studio.server.protocol.attach import HEARTBEAT_TIMEOUT, Welcome
 from xabsl_studio.server.protocol.host import Sample
 
@@ -243,3 +243,53 @@ def test_five_robot_processes_in_one_session() -> None:
         studio.stop()
         for process, _ in robots:
             stop_robot(process)
+
+
+def _agrees(value: Any, logged: Any, symbol: str) -> bool:
+    """A value the decision read (exact) against the tick's logged display value (rounded, enums as indices)."""
+    if symbol == "game.state":
+        return value == GAME_STATES[logged]
+    if isinstance(logged, bool) or isinstance(value, bool):
+        return value is logged
+    return abs(float(value) - float(logged)) <= 1e-3
+
+
+def test_why_shows_the_values_the_robot_decision_read_and_works_with_the_host_gone(robot: tuple[Any, int]) -> None:
+    process, port = robot
+    studio = Studio(f"127.0.0.1:{port}", "--no-record")
+    try:
+        studio.until(lambda s: s["attached"][0]["received"] > 300)
+        ticks = {t["seq"]: t for t in studio.get("/api/log?t0=0")}
+        checked = 0
+        answers: dict[int, Any] = {}
+        for seq in sorted(ticks)[5::10]:
+            inputs = ticks[seq]["robots"][0]["inputs"]
+            code, reply = studio.command(op="explain", robot=0, option="play", seq=seq)
+            assert code == 200 and reply["ok"], reply
+            why = reply["result"]
+            assert why["recorded"] and why["seq"] == seq
+            assert why["decided_in_name"] == ticks[seq]["robots"][0]["path"][0]["decided_in"]
+            answers[seq] = why
+            for condition in why["conditions"]:
+                if condition["source"] in inputs:  # a bare boolean input: its value is the condition's
+                    assert condition["value"] is inputs[condition["source"]], (seq, condition)
+                    checked += 1
+                for comparison in condition["comparisons"]:
+                    if comparison["left"] in inputs:
+                        left = comparison["left"]
+                        assert _agrees(comparison["left_value"], inputs[left], left), (seq, comparison, inputs)
+                        checked += 1
+        assert checked >= 20
+        # The live why is the latest tick's decision, from what it read (recorded=False: "the last tick").
+        code, reply = studio.command(op="explain", robot=0, option="play")
+        assert code == 200 and reply["ok"] and reply["result"]["recorded"] is False, reply
+        assert reply["result"]["seq"] is not None and all(c["value"] is not None for c in reply["result"]["conditions"])
+        # The host goes away: why at the same ticks answers the same, from the studio's history alone.
+        process.kill()
+        studio.until(lambda s: s["attached"][0]["gone"])
+        for seq, why in answers.items():
+            code, reply = studio.command(op="explain", robot=0, option="play", seq=seq)
+            assert code == 200 and reply["ok"], reply
+            assert reply["result"]["conditions"] == why["conditions"]
+    finally:
+        studio.stop()
