@@ -181,7 +181,7 @@ def run_attach(args: argparse.Namespace) -> int:
     from xabsl_studio.server.api.transport import WebSocketProtocol
     from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
     from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
-    from xabsl_studio.server.session.recording import LiveRecorder, default_folder
+    from xabsl_studio.server.session.recording import LiveRecorder, cache_folder, default_folder
 
     try:
         addresses = [parse_address(a) for a in args.addresses]
@@ -203,13 +203,16 @@ def run_attach(args: argparse.Namespace) -> int:
     hosts = ", ".join(args.addresses)
     example = AttachedExample(f"attached: {hosts}", root, sources, behavior_hz=max(1, args.hz) * len(addresses))
     session = AttachedSession(addresses, example, args.token, args.name, control=not args.watch)
-    folder = Path(args.record_dir) if args.record_dir else default_folder()
+    # The hosts send what a recording needs (their programs' IC and description, their sources).
+    if args.record_dir:
+        folder = Path(args.record_dir)
+    elif sources:
+        folder = default_folder([s.agents_file for s in sources])
+    else:
+        folder = cache_folder() / "attached"
     recording = None
     if args.no_record:
         recording = "off (--no-record)"
-    elif not sources:
-        # The symbol tables of a recording come from the studio's compile of the behavior.
-        recording = "off: recording an attached session needs --behavior PATH"
     else:
         session.live_recorder = LiveRecorder(folder, example.name, example.behavior_hz, example.physics_hz)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST

@@ -131,6 +131,10 @@ class HostGeneration:
     #: per behavior key: the IC of the program its engines run (the studio reads it back for
     #: graphs, breakpoints and recordings)
     ics: dict[str, str]
+    #: per behavior key: its source files as the host read them (``xabsl_studio.engine.record.sources``:
+    #: ``{"agents": NAME, "files": {NAME: TEXT}}``), for recordings a fork can run again; absent
+    #: when the host cannot read them (a program loaded from intermediate code)
+    sources: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
 
 FromStudio = Attach | WorkerRequest | Control | Heartbeat
@@ -230,6 +234,7 @@ def encode_generation(message: HostGeneration) -> bytes:
                 "errors": gen.errors,
                 "ics": message.ics,
                 "enums": gen.enums,
+                "sources": message.sources,
             },
             option=orjson.OPT_NON_STR_KEYS,  # enum host values are integers
         )
@@ -537,7 +542,22 @@ def _generation(message: dict[str, Any]) -> HostGeneration:
         errors,
         enums=_enums(message.get("enums", {})),
     )
-    return HostGeneration(generation, ics)
+    return HostGeneration(generation, ics, _sources(message.get("sources", {})))
+
+
+def _sources(value: Any) -> dict[str, dict[str, Any]]:
+    """Per behavior set: ``{"agents": NAME, "files": {NAME: TEXT}}`` (the agents file among the files)."""
+    if not isinstance(value, dict):
+        raise WireError("generation: sources must be an object")
+    for key, sources in value.items():
+        files = sources.get("files") if isinstance(sources, dict) else None
+        if (
+            not isinstance(files, dict)
+            or not all(isinstance(n, str) and isinstance(t, str) for n, t in files.items())
+            or sources.get("agents") not in files
+        ):
+            raise WireError(f"generation: sources of {key} must be an agents file name and files of texts")
+    return value
 
 
 def _enums(value: Any) -> dict[str, dict[str, dict[int, str]]]:

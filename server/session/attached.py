@@ -39,7 +39,7 @@ import orjson
 from xabsl_studio.engine.emit.ic import emit_ic
 from xabsl_studio.engine.host import BehaviorSource, World
 from xabsl_studio.engine.ir.ic_reader import read_ic
-from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.ir.model import Enumeration, Program
 from xabsl_studio.engine.lang import Compilation
 from xabsl_studio.engine.runtime.debug import ReadValues, decision_reads, explain_decision, render
 from xabsl_studio.server.protocol.attach import (
@@ -85,13 +85,13 @@ RECONNECT_SECONDS = (0.5, 5.0)
 START_WAIT = 10.0
 
 
-def _explainers(message: HostGeneration) -> tuple[HostProgram | None, ...]:
-    """Per robot of a host generation: the program its engine runs, for explaining its decisions."""
+def _explainers(message: HostGeneration) -> tuple[dict[str, HostProgram], tuple[HostProgram | None, ...]]:
+    """A host generation's programs by key and, per robot, the one its engine runs (None: no engine)."""
     structure = orjson.loads(message.generation.structure)
     programs: dict[str, HostProgram] = {}
     for key, ic in message.ics.items():
         programs[key] = HostProgram.of(ic, structure["programs"].get(key), message.generation.enums.get(key, {}))
-    return tuple(
+    return programs, tuple(
         programs.get(robot["program"]) if robot.get("engine") and robot.get("program") else None
         for robot in structure["robots"]
     )
@@ -150,6 +150,10 @@ class HostProgram:
     #: option id -> the option's description (its conditions' source texts)
     options: dict[int, dict[str, Any]]
 
+    #: the program with its symbols in the host's order (the order of its samples' values): what
+    #: recordings are written with (None: the IC does not read, or lacks symbols the host samples)
+    recorded: Program | None = None
+
     @classmethod
     def of(cls, ic: str, description: dict[str, Any] | None, enums: dict[str, dict[int, str]]) -> HostProgram:
         """The host program of a generation's IC and description (read once per host generation)."""
@@ -158,13 +162,42 @@ class HostProgram:
         except Exception:  # a host's IC the studio cannot read: "why" is unknown, the rest works
             program = None
         described = description or {}
+        inputs = {str(x["name"]): int(x["id"]) for x in described.get("inputs", ()) if isinstance(x, dict)}
+        outputs = {str(x["name"]): int(x["id"]) for x in described.get("outputs", ()) if isinstance(x, dict)}
         return cls(
             program,
-            {str(x["name"]): int(x["id"]) for x in described.get("inputs", ()) if isinstance(x, dict)},
-            {str(x["name"]): int(x["id"]) for x in described.get("outputs", ()) if isinstance(x, dict)},
+            inputs,
+            outputs,
             enums,
             {int(o["id"]): o for o in described.get("options", ()) if isinstance(o, dict)},
+            _in_host_order(program, inputs, outputs, described.get("enums", ())) if program is not None else None,
         )
+
+
+def _in_host_order(
+    program: Program, inputs: dict[str, int], outputs: dict[str, int], enums: Sequence[Any]
+) -> Program | None:
+    """``program`` (read from IC) with the host's symbol order and the host's whole enumerations.
+
+    A host samples its symbols in its own program's order, and enum values as indices into its
+    enumerations' elements; the IC lists symbols in the order they are used and keeps only the
+    elements something uses, so tables built from it would put values under other names. None
+    when the names differ (nothing to align).
+    """
+    if set(program.inputs) != set(inputs) or set(program.outputs) != set(outputs):
+        return None
+    whole = dict(program.enums)
+    for enum in enums:
+        if isinstance(enum, dict) and isinstance(enum.get("name"), str) and isinstance(enum.get("elements"), list):
+            name = enum["name"]
+            known = whole.get(name) or Enumeration(name, ())
+            whole[name] = dataclasses.replace(known, elements=tuple(str(e) for e in enum["elements"]))
+    return dataclasses.replace(
+        program,
+        inputs={name: program.inputs[name] for name in sorted(inputs, key=inputs.__getitem__)},
+        outputs={name: program.outputs[name] for name in sorted(outputs, key=outputs.__getitem__)},
+        enums=whole,
+    )
 
 
 @dataclass(eq=False)
@@ -196,6 +229,8 @@ class HostConnection:
     robots: tuple[str, ...] = ()
     #: per robot of the host's generation: what its engine runs (None: no engine)
     explainers: tuple[HostProgram | None, ...] = ()
+    #: per behavior key of the host: what it runs
+    programs: dict[str, HostProgram] = field(default_factory=dict)
 
     def info(self, me: str | None) -> dict[str, Any]:
         """The host as the status shows it."""
@@ -306,18 +341,23 @@ class AttachedSession(Session):
             delay = min(delay * 2, RECONNECT_SECONDS[1])
 
     async def _attach(self, host: HostConnection) -> None:
-        reader, writer = await asyncio.wait_for(asyncio.open_connection(host.host, host.port), 5.0)
+        # asyncio.timeout, not wait_for: on Python 3.11 wait_for swallows a cancellation that
+        # arrives as the read completes (a host sends 100 times a second), and aclose would hang.
+        async with asyncio.timeout(5.0):
+            reader, writer = await asyncio.open_connection(host.host, host.port)
         host.writer = writer
         writer.write(encode_attach(Attach(self.token, self.studio, self.want_control, PROTOCOL)))
         await writer.drain()
         beat = asyncio.create_task(self._heartbeat(host, writer))
         try:
-            while True:
-                header = await asyncio.wait_for(reader.readexactly(4), HEARTBEAT_TIMEOUT)
+            while not self._closing:
+                async with asyncio.timeout(HEARTBEAT_TIMEOUT):
+                    header = await reader.readexactly(4)
                 size = int.from_bytes(header, "big")
                 if size > MAX_HOST_MESSAGE:
                     raise WireError(f"the host sent a message of {size} bytes")
-                data = await asyncio.wait_for(reader.readexactly(size), HEARTBEAT_TIMEOUT + 30.0)
+                async with asyncio.timeout(HEARTBEAT_TIMEOUT + 30.0):
+                    data = await reader.readexactly(size)
                 host.heard = time.monotonic()
                 self._from_host(host, decode_from_host(data))
         finally:
@@ -361,7 +401,7 @@ class AttachedSession(Session):
             host.generation = message
             host.connected, host.gone = True, False
             host.last = None
-            host.explainers = _explainers(message)
+            host.programs, host.explainers = _explainers(message)
             self._adopt_programs(host, message)
             reason: HelloReason = "reset" if first or message.generation.reason == "reset" else "reload"
             self._publish_generation("connect" if self._generation_number == 0 else reason)
@@ -417,6 +457,8 @@ class AttachedSession(Session):
         errors: dict[str, str | None] = {}
         enums: dict[str, dict[str, dict[int, str]]] = {}
         explainers: list[HostProgram | None] = []
+        recorded: dict[str, Program] = {}
+        sources: dict[str, dict[str, Any]] = {}
         self._generation_number += 1
         for host in self.hosts:
             host.offset = len(robots)
@@ -431,6 +473,12 @@ class AttachedSession(Session):
                 errors[self._key(key)] = error
             for key, tables in gen.generation.enums.items():
                 enums.setdefault(self._key(key), tables)
+            for key, running in host.programs.items():
+                # Recordings are written with what the hosts run, in their symbol order.
+                if running.recorded is not None:
+                    recorded.setdefault(self._key(key), running.recorded)
+                if key in gen.sources:
+                    sources.setdefault(self._key(key), gen.sources[key])
             for robot, ins, outs in zip(
                 structure["robots"], gen.generation.input_ids, gen.generation.output_ids, strict=True
             ):
@@ -466,7 +514,14 @@ class AttachedSession(Session):
             errors,
             enums=enums,
         )
-        self.receive([message])
+        if self.live_recorder is not None:
+            self.live_recorder.sources.update(sources)
+        self._incoming.update(recorded)
+        try:
+            self.receive([message])
+        finally:
+            for key in recorded:
+                self._incoming.pop(key, None)
         self._tick(None)
 
     def _tick(self, source: HostConnection | None) -> None:

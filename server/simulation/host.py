@@ -43,6 +43,7 @@ from xabsl_studio.engine.emit.json import program_to_json
 from xabsl_studio.engine.errors import XabslError
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record.sources import program_sources
 from xabsl_studio.engine.runtime import DebugError, Engine, EngineError
 from xabsl_studio.server.protocol.attach import (
     DEFAULT_PORT,
@@ -122,8 +123,8 @@ class HostEngines(EngineSet):
         self.generation_number = 0
         self.reason: HelloReason = "connect"
         self.errors: dict[str, str | None] = dict.fromkeys(k for k in self.keys if k is not None)
-        #: what this host runs per key: (program, its JSON description, its intermediate code)
-        self.running: dict[str, tuple[Program, dict[str, Any], str]] = {}
+        #: what this host runs per key: (program, its JSON description, its intermediate code, its sources)
+        self.running: dict[str, tuple[Program, dict[str, Any], str, dict[str, Any] | None]] = {}
         #: ticks still to run of a ``step`` (then paused again), and who waits for the answer
         self.steps = 0
         self.stepper: tuple[Any, int | None] | None = None
@@ -146,7 +147,7 @@ class HostEngines(EngineSet):
             program = self.program_of(key)
             have = self.running.get(key)
             if program is not None and (have is None or have[0] is not program):
-                self.running[key] = (program, program_to_json(program), emit_ic(program))
+                self.running[key] = (program, program_to_json(program), emit_ic(program), _sources(program))
         structure = {"programs": {k: v[1] for k, v in self.running.items()}, "robots": robots}
         message = NewGeneration(
             self.generation_number,
@@ -159,7 +160,11 @@ class HostEngines(EngineSet):
             dict(self.errors),
             enums={key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
         )
-        return HostGeneration(message, {k: v[2] for k, v in self.running.items()})
+        return HostGeneration(
+            message,
+            {k: v[2] for k, v in self.running.items()},
+            {k: v[3] for k, v in self.running.items() if v[3] is not None},
+        )
 
     def sample(self, t: int) -> Sample:
         """The sample of the tick just run (clock ``t`` ms)."""
@@ -706,6 +711,20 @@ class HostLink:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _sources(program: Program) -> dict[str, Any] | None:
+    """The program's source files read now (studios record them, so that a fork can run them again).
+
+    ``Program.files`` names them as the compiler did (relative to the working directory then),
+    the agents file last; a program read from intermediate code names none. None: not readable.
+    """
+    if not program.files:
+        return None
+    try:
+        return program_sources(program.files[-1], program.files)
+    except (OSError, ValueError):
+        return None
 
 
 def _family(host: str) -> socket.AddressFamily:
