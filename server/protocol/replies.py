@@ -461,6 +461,7 @@ RESULTS: dict[str, Any] = {
     "enable_breakpoint": BreakpointList,
     "list_breakpoints": BreakpointList,
     "check_condition": ConditionCheck,
+    "attach_host": dict[str, Any],
 }
 
 ServerEvent = FileEvent | CompileEvent | CrashEvent | BreakpointEvent

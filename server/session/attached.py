@@ -58,7 +58,7 @@ from xabsl_studio.server.protocol.attach import (
     encode_attach,
     encode_from_studio,
 )
-from xabsl_studio.server.protocol.commands import Explain, Pause, Reset, Resume, RobotCommand, Status, Step
+from xabsl_studio.server.protocol.commands import AttachHost, Explain, Pause, Reset, Resume, RobotCommand, Status, Step
 from xabsl_studio.server.protocol.host import (
     ExplainRecorded,
     Hit,
@@ -83,6 +83,25 @@ log = logging.getLogger("xabsl.server")
 RECONNECT_SECONDS = (0.5, 5.0)
 #: Seconds ``start`` waits for the named hosts before serving without those still missing.
 START_WAIT = 10.0
+#: Seconds ``attach_host`` waits for the new host before answering (it keeps trying after).
+CONNECT_WAIT = 5.0
+#: Hosts one session attaches at most.
+MAX_HOSTS = 64
+
+
+async def _read_within(reader: asyncio.StreamReader, size: int, seconds: float) -> bytes:
+    """``size`` bytes, or TimeoutError when the host said nothing for ``seconds``.
+
+    After the loop itself stood still (a long compile, a page loading) the deadline has passed
+    although the host's bytes wait in the socket: one short second try reads them, so only a
+    host that is really silent counts as gone.
+    """
+    try:
+        async with asyncio.timeout(seconds):
+            return await reader.readexactly(size)
+    except TimeoutError:
+        async with asyncio.timeout(0.5):
+            return await reader.readexactly(size)
 
 
 def _explainers(message: HostGeneration) -> tuple[dict[str, HostProgram], tuple[HostProgram | None, ...]]:
@@ -231,6 +250,8 @@ class HostConnection:
     explainers: tuple[HostProgram | None, ...] = ()
     #: per behavior key of the host: what it runs
     programs: dict[str, HostProgram] = field(default_factory=dict)
+    #: the token this host requires (None: the session's)
+    token: str | None = None
 
     def info(self, me: str | None) -> dict[str, Any]:
         """The host as the status shows it."""
@@ -260,6 +281,7 @@ class AttachedSession(Session):
         token: the hosts' token.
         studio: how hosts show this studio.
         control: ask each host for control when attaching (else watch until a command takes it).
+        allow_connect: let the studio's users attach more hosts (``attach_host``, Connect…).
     """
 
     def __init__(
@@ -271,9 +293,11 @@ class AttachedSession(Session):
         control: bool = True,
         ring_seconds: float = RING_SECONDS,
         state_dir: Path | None = None,
+        allow_connect: bool = True,
     ) -> None:
         super().__init__(example, behavior_hz=example.behavior_hz, ring_seconds=ring_seconds, state_dir=state_dir)
         self.hosts = [HostConnection(h, p, f"{h}:{p}") for h, p in addresses]
+        self.allow_connect = allow_connect
         self.token = token
         self.studio = studio or f"studio@{socket.gethostname()}:{os.getpid()}"
         self.want_control = control
@@ -346,13 +370,13 @@ class AttachedSession(Session):
         async with asyncio.timeout(5.0):
             reader, writer = await asyncio.open_connection(host.host, host.port)
         host.writer = writer
-        writer.write(encode_attach(Attach(self.token, self.studio, self.want_control, PROTOCOL)))
+        token = host.token if host.token is not None else self.token
+        writer.write(encode_attach(Attach(token, self.studio, self.want_control, PROTOCOL)))
         await writer.drain()
         beat = asyncio.create_task(self._heartbeat(host, writer))
         try:
             while not self._closing:
-                async with asyncio.timeout(HEARTBEAT_TIMEOUT):
-                    header = await reader.readexactly(4)
+                header = await _read_within(reader, 4, HEARTBEAT_TIMEOUT)
                 size = int.from_bytes(header, "big")
                 if size > MAX_HOST_MESSAGE:
                     raise WireError(f"the host sent a message of {size} bytes")
@@ -384,7 +408,7 @@ class AttachedSession(Session):
             host.gone = True
             host.last = None
             if not self._closing:
-                self._publish_generation("reset")
+                self._publish_generation("host_gone")
 
     def _from_host(self, host: HostConnection, message: Any) -> None:
         if isinstance(message, Sample):
@@ -392,18 +416,22 @@ class AttachedSession(Session):
                 return
             if host.seq >= 0 and message.seq > host.seq + 1:
                 host.missed += message.seq - host.seq - 1
+                log.warning("host %s: ticks %d..%d did not arrive", host.label, host.seq + 1, message.seq - 1)
             host.seq = message.seq
             host.received += 1
             host.last = message
             self._tick(host)
         elif isinstance(message, HostGeneration):
             first = host.generation is None or not host.connected
+            back = host.gone
             host.generation = message
             host.connected, host.gone = True, False
             host.last = None
             host.programs, host.explainers = _explainers(message)
             self._adopt_programs(host, message)
             reason: HelloReason = "reset" if first or message.generation.reason == "reset" else "reload"
+            if back:
+                reason = "host_back"  # the timeline marks where a host came back
             self._publish_generation("connect" if self._generation_number == 0 else reason)
         elif isinstance(message, WorkerReply):
             future = host.pending.pop(message.ident, None) if message.ident is not None else None
@@ -560,7 +588,7 @@ class AttachedSession(Session):
             return  # a host changed its robots (its new generation follows), or none is known yet
         self._seq += 1
         self._t = max(self._t, round((time.monotonic() - self._t0) * 1000))
-        status = {"attached": [h.info(h.peer) for h in self.hosts]}
+        status = {"attached": [h.info(h.peer) for h in self.hosts], "connect": self.allow_connect}
         sample = Sample(
             self._seq,
             gen.number,
@@ -670,6 +698,38 @@ class AttachedSession(Session):
         for host in self.hosts:
             if host.connected and host.writer is not None:
                 host.writer.write(encode_from_studio(Control(take=take)))
+
+    # -- Connect… ----------------------------------------------------------------------------------------
+
+    async def attach_host(self, command: AttachHost) -> dict[str, Any]:
+        """Attach one more host (its robots are listed after the others'); the host as the status shows it.
+
+        Answers once the host sent its first generation, refused, or :data:`CONNECT_WAIT` passed
+        (it is then retried as any host that is not there).
+
+        Raises:
+            CommandError: this studio does not allow it, or the address is not HOST:PORT.
+        """
+        if not self.allow_connect:
+            raise CommandError("this studio does not attach more hosts (xabsl attach --no-connect)")
+        try:
+            address, port = parse_address(command.address)
+        except ValueError as error:
+            raise CommandError(str(error)) from None
+        host = next((h for h in self.hosts if (h.host, h.port) == (address, port)), None)
+        if host is None:
+            if len(self.hosts) >= MAX_HOSTS:
+                raise CommandError(f"a studio attaches {MAX_HOSTS} hosts at most")
+            host = HostConnection(address, port, f"{address}:{port}", token=command.token)
+            self.hosts.append(host)
+            host.task = asyncio.create_task(self._run_host(host))
+        elif host.refused is not None and (host.task is None or host.task.done()):
+            host.token, host.refused = command.token, None  # a new token: try again
+            host.task = asyncio.create_task(self._run_host(host))
+        deadline = time.monotonic() + CONNECT_WAIT
+        while time.monotonic() < deadline and not (host.connected or host.refused):
+            await asyncio.sleep(0.05)
+        return host.info(host.peer)
 
     # -- why -----------------------------------------------------------------------------------------------
 

@@ -59,6 +59,7 @@ from xabsl_studio.engine.runtime.debug import (
 )
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.server.protocol.commands import (
+    AttachHost,
     BreakpointCommand,
     Explain,
     Fork,
@@ -464,7 +465,9 @@ class ReplaySession(Session):
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand | Fork, owner: str | None = None) -> Any:
+    async def request(
+        self, command: WorkerCommand | BreakpointCommand | Fork | AttachHost, owner: str | None = None
+    ) -> Any:
         """Playback commands, ``seek`` and ``explain``; anything needing a world is refused."""
         if isinstance(command, Status):
             return await self.status()
