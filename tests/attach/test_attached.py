@@ -293,3 +293,34 @@ def test_why_shows_the_values_the_robot_decision_read_and_works_with_the_host_go
             assert reply["result"]["conditions"] == why["conditions"]
     finally:
         studio.stop()
+
+
+def test_attach_host_adds_a_robot_process_and_refuses_what_is_not_an_address(robot: tuple[Any, int]) -> None:
+    studio = Studio(f"127.0.0.1:{robot[1]}", "--no-record")
+    other, port = start_robot("--hz", "50", "--name", "robot9")
+    try:
+        studio.until(lambda s: s["attached"][0]["connected"])
+        code, reply = studio.command(op="attach_host", address="not an address")
+        assert code == 400 and "address" in json.dumps(reply), reply
+        code, reply = studio.command(op="attach_host", address=f"127.0.0.1:{port}")
+        assert code == 200 and reply["ok"] and reply["result"]["connected"], reply
+        assert reply["result"]["robots"] == ["robot9"]
+        status = studio.until(lambda s: len(s["attached"]) == 2 and s["attached"][1]["received"] > 10)
+        assert status["attached"][1]["missed"] == 0
+        assert [r["name"] for r in studio.get("/api/structure")["robots"]] == ["robot1", "robot9"]
+        code, reply = studio.command(op="force_option", robot=1, option="search_ball", params={})
+        assert code == 200 and reply["ok"], reply
+    finally:
+        studio.stop()
+        stop_robot(other)
+
+
+def test_attach_host_is_refused_when_the_studio_does_not_allow_it(robot: tuple[Any, int]) -> None:
+    studio = Studio(f"127.0.0.1:{robot[1]}", "--no-record", "--no-connect")
+    try:
+        studio.until(lambda s: s["attached"][0]["connected"])
+        code, reply = studio.command(op="attach_host", address="127.0.0.1:9")
+        assert not reply.get("ok") and "--no-connect" in json.dumps(reply), (code, reply)
+        assert len(studio.status()["attached"]) == 1
+    finally:
+        studio.stop()
