@@ -45,7 +45,7 @@ def test_reads_arrive_as_the_host_sent_them_and_null_is_unknown() -> None:
 
 @pytest.mark.parametrize("reads", ["x", [1.5], [[0, {"deep": 1}]], [True]])
 def test_reads_of_another_shape_are_refused(reads: Any) -> None:
-    with pytest.raises(WireError, match="reads|read"):
+    with pytest.raises(WireError, match="read"):
         decode_from_host(sample(reads))
 
 
