@@ -154,6 +154,9 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         help="the token of this studio's web UI (generated off loopback)",
     )
     parser.add_argument("--watch", action="store_true", help="attach without taking control (a command takes it)")
+    parser.add_argument(
+        "--no-connect", action="store_true", help="the studio's users may not attach more hosts (Connect…)"
+    )
     parser.add_argument("--name", default=None, help="how the hosts show this studio")
     parser.add_argument("--hz", type=int, default=100, help="the hosts' tick rate, for sizing the history (100)")
     parser.add_argument("--host", default="127.0.0.1", help="address the studio binds (default 127.0.0.1)")
@@ -170,6 +173,7 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
 def run_attach(args: argparse.Namespace) -> int:
     """Attach to the hosts and serve the studio until interrupted."""
     import logging  # here, not at the top: `xabsl --help` imports this module
+    import tempfile
 
     import uvicorn
 
@@ -181,7 +185,7 @@ def run_attach(args: argparse.Namespace) -> int:
     from xabsl_studio.server.api.transport import WebSocketProtocol
     from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
     from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
-    from xabsl_studio.server.session.recording import LiveRecorder, default_folder
+    from xabsl_studio.server.session.recording import LiveRecorder, cache_folder, default_folder
 
     try:
         addresses = [parse_address(a) for a in args.addresses]
@@ -199,17 +203,24 @@ def run_attach(args: argparse.Namespace) -> int:
             sources = (behavior_source(agents),)
         except ExampleError as error:
             raise UsageError(f"--behavior: {error}") from None
-    root = common_root(sources) if sources else Path.cwd()
+    # Without --behavior the studio serves no files: its root is an empty folder of its own (the
+    # working directory would have the language server look through whatever lies there).
+    root = common_root(sources) if sources else Path(tempfile.mkdtemp(prefix="xabsl-attach-"))
     hosts = ", ".join(args.addresses)
     example = AttachedExample(f"attached: {hosts}", root, sources, behavior_hz=max(1, args.hz) * len(addresses))
-    session = AttachedSession(addresses, example, args.token, args.name, control=not args.watch)
-    folder = Path(args.record_dir) if args.record_dir else default_folder()
+    session = AttachedSession(
+        addresses, example, args.token, args.name, control=not args.watch, allow_connect=not args.no_connect
+    )
+    # The hosts send what a recording needs (their programs' IC and description, their sources).
+    if args.record_dir:
+        folder = Path(args.record_dir)
+    elif sources:
+        folder = default_folder([s.agents_file for s in sources])
+    else:
+        folder = cache_folder() / "attached"
     recording = None
     if args.no_record:
         recording = "off (--no-record)"
-    elif not sources:
-        # The symbol tables of a recording come from the studio's compile of the behavior.
-        recording = "off: recording an attached session needs --behavior PATH"
     else:
         session.live_recorder = LiveRecorder(folder, example.name, example.behavior_hz, example.physics_hz)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
@@ -226,6 +237,8 @@ def run_attach(args: argparse.Namespace) -> int:
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
+    for name in ("pygls", "lsprotocol", "xabsl_studio.lsp"):  # as xabsl serve: /lsp logs every message at INFO
+        logging.getLogger(name).setLevel(logging.WARNING)
     print(f"xabsl studio: attached to {hosts}")
     print(f"  open  http://{shown}:{args.port}{query}")
     if session.live_recorder is not None:

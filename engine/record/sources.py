@@ -21,7 +21,7 @@ from typing import Any
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record.reader import RecordingError
 
-__all__ = ["compile_sources", "program_sources", "same_sources"]
+__all__ = ["compile_sources", "program_sources", "same_sources", "write_sources"]
 
 
 def program_sources(
@@ -62,6 +62,23 @@ def compile_sources(sources: Mapping[str, Any], what: str = "the recorded behavi
     """
     from xabsl_studio.engine.lang import compile_file  # the compiler only when a fork needs it
 
+    with tempfile.TemporaryDirectory(prefix="xabsl-fork-") as tmp:
+        base, agents_file = write_sources(sources, Path(tmp), what)
+        compilation = compile_file(str(agents_file), str(base))
+    if compilation.program is None:
+        errors = "; ".join(str(d) for d in compilation.errors[:3])
+        raise RecordingError(f"{what} does not compile again: {errors}")
+    return compilation.program
+
+
+def write_sources(sources: Mapping[str, Any], folder: Path, what: str = "the recorded behavior") -> tuple[Path, Path]:
+    """Write recorded ``sources`` under ``folder`` with the recorded layout: (their base folder, the agents file).
+
+    Names may climb out of the agents file's folder (``../shared/x.xabsl``), never out of ``folder``.
+
+    Raises:
+        RecordingError: malformed ``sources`` (names leaving their folder, texts that are not text).
+    """
     files = sources.get("files")
     agents = sources.get("agents")
     if not isinstance(files, dict) or not isinstance(agents, str) or agents not in files:
@@ -76,14 +93,9 @@ def compile_sources(sources: Mapping[str, Any], what: str = "the recorded behavi
             raise RecordingError(f"{what}: malformed source file name {name!r}")
         depth = max(depth, ups)
         normal[clean] = text
-    with tempfile.TemporaryDirectory(prefix="xabsl-fork-") as tmp:
-        folder = Path(tmp).joinpath(*(["up"] * depth), "_xabsl_fork_agents")
-        for name, text in normal.items():
-            path = Path(os.path.normpath(folder / name))
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text, encoding="utf-8")
-        compilation = compile_file(str(folder / posixpath.normpath(agents)), str(folder))
-    if compilation.program is None:
-        errors = "; ".join(str(d) for d in compilation.errors[:3])
-        raise RecordingError(f"{what} does not compile again: {errors}")
-    return compilation.program
+    base = folder.joinpath(*(["up"] * depth), "_xabsl_fork_agents")
+    for name, text in normal.items():
+        path = Path(os.path.normpath(base / name))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    return base, base / posixpath.normpath(agents)

@@ -1,8 +1,9 @@
 """The team case: five robot processes (``examples/attach/robot.py``), each its own program and port.
 
 ``python -m xabsl_studio.examples.attach.team --port 7411`` starts robot1..robot5 on ports
-7411..7415 and waits; ``xabsl attach 127.0.0.1:7411 127.0.0.1:7412 ...`` debugs them in one
-studio session. Ctrl+C stops them all.
+7411..7415 (printing ``robotN pid PID port PORT`` for each) and waits;
+``xabsl attach 127.0.0.1:7411 127.0.0.1:7412 ...`` debugs them in one studio session. Ctrl+C
+stops them all.
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.pausable:
             command.append("--pausable")
         processes.append(subprocess.Popen(command))
+        # One line per robot: a tester (or a user) may stop one robot and start it again.
+        print(f"robot{number} pid {processes[-1].pid} port {args.port + number - 1}", flush=True)
     addresses = " ".join(f"127.0.0.1:{args.port + i}" for i in range(args.robots))
     print(f"attach with: xabsl attach {addresses}", flush=True)
     try:

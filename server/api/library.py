@@ -178,7 +178,9 @@ async def fork_recording(studio: StudioDep, body: ForkBody) -> dict[str, Any]:
     The new session's simulation re-simulates the recording to ``seq`` (its first ticks are the
     recording's) and goes on live with the behaviors on disk (those of the main studio's example
     folder when it serves the recorded example, else the installed example's); it is served
-    beside this one (``/fork/ID/``). 409: this is not
+    beside this one (``/fork/ID/``). A recording that cannot be re-simulated but holds its
+    behavior's sources (an attached session's, docs/attach.md) forks robot ``robot`` into the
+    bench world instead, fed its recorded inputs from ``seq`` on. 409: this is not
     a replay, or too many forks run; 422: the recording cannot be forked (not deterministic, no
     such example on this machine, a tick outside it).
     """
@@ -188,7 +190,7 @@ async def fork_recording(studio: StudioDep, body: ForkBody) -> dict[str, Any]:
     if recording is None:
         raise HTTPException(409, "run from here forks a replay; this studio runs live")
     try:
-        forked = await asyncio.to_thread(fork_session, recording, body.seq, _studios(studio).home_example)
+        forked = await asyncio.to_thread(fork_session, recording, body.seq, _studios(studio).home_example, body.robot)
     except ForkError as error:
         raise HTTPException(422, str(error)) from None
     name = Path(recording.path).name

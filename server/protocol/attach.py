@@ -131,6 +131,10 @@ class HostGeneration:
     #: per behavior key: the IC of the program its engines run (the studio reads it back for
     #: graphs, breakpoints and recordings)
     ics: dict[str, str]
+    #: per behavior key: its source files as the host read them (``xabsl_studio.engine.record.sources``:
+    #: ``{"agents": NAME, "files": {NAME: TEXT}}``), for recordings a fork can run again; absent
+    #: when the host cannot read them (a program loaded from intermediate code)
+    sources: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
 
 FromStudio = Attach | WorkerRequest | Control | Heartbeat
@@ -182,9 +186,18 @@ class FrameReader:
 def encode_sample(sample: Sample) -> bytes:
     """A tick as one framed message (the paths, scene and status are JSON already: spliced in)."""
     fragment = orjson.Fragment
+    reads = sample.reads or (b"",) * len(sample.paths)
     robots = [
-        [fragment(path), fragment(b"{" + extra[1:] + b"}") if extra else None, inputs, outputs]
-        for path, extra, inputs, outputs in zip(sample.paths, sample.extras, sample.inputs, sample.outputs, strict=True)
+        [
+            fragment(path),
+            fragment(b"{" + extra[1:] + b"}") if extra else None,
+            inputs,
+            outputs,
+            fragment(read) if read else None,
+        ]
+        for path, extra, inputs, outputs, read in zip(
+            sample.paths, sample.extras, sample.inputs, sample.outputs, reads, strict=True
+        )
     ]
     return frame(
         orjson.dumps(
@@ -220,7 +233,10 @@ def encode_generation(message: HostGeneration) -> bytes:
                 "seed": gen.seed,
                 "errors": gen.errors,
                 "ics": message.ics,
-            }
+                "enums": gen.enums,
+                "sources": message.sources,
+            },
+            option=orjson.OPT_NON_STR_KEYS,  # enum host values are integers
         )
     )
 
@@ -432,10 +448,12 @@ def _sample(message: dict[str, Any]) -> Sample:
     extras: list[bytes] = []
     inputs: list[tuple[WireValue, ...]] = []
     outputs: list[tuple[WireValue, ...]] = []
+    reads: list[bytes] = []
     for robot in robots:
-        if not isinstance(robot, list) or len(robot) != 4:
-            raise WireError("sample: a robot must be [path, extras, inputs, outputs]")
-        path, extra, ins, outs = robot
+        if not isinstance(robot, list) or len(robot) not in (4, 5):
+            raise WireError("sample: a robot must be [path, extras, inputs, outputs, reads]")
+        path, extra, ins, outs = robot[:4]
+        reads.append(_reads(robot[4]) if len(robot) == 5 else b"")
         if not isinstance(path, list):
             raise WireError("sample: a path must be a list")
         paths.append(dumps(path))
@@ -463,7 +481,23 @@ def _sample(message: dict[str, Any]) -> Sample:
         tuple(outputs),
         dumps(scene),
         dumps(status),
+        tuple(reads),
     )
+
+
+def _reads(value: Any) -> bytes:
+    """A robot's reads (``Engine.reads()``: option ids, each followed by its decision's read tuples), or b''."""
+    if value is None:
+        return b""
+    if not isinstance(value, list):
+        raise WireError("sample: reads must be a list or null")
+    for item in value:
+        if isinstance(item, list):
+            if not all(v is None or isinstance(v, bool | int | float | str) for v in item):
+                raise WireError("sample: a read must be a list of numbers, booleans, strings or null")
+        elif not _is_int(item):
+            raise WireError("sample: reads must hold option ids and read lists")
+    return orjson.dumps(value)
 
 
 def _values(values: Any) -> tuple[WireValue, ...]:
@@ -513,8 +547,43 @@ def _generation(message: dict[str, Any]) -> HostGeneration:
         tuple(tuple(row) for row in ids[1]),  # type: ignore[union-attr]
         _int(message, "seed"),
         errors,
+        enums=_enums(message.get("enums", {})),
     )
-    return HostGeneration(generation, ics)
+    return HostGeneration(generation, ics, _sources(message.get("sources", {})))
+
+
+def _sources(value: Any) -> dict[str, dict[str, Any]]:
+    """Per behavior set: ``{"agents": NAME, "files": {NAME: TEXT}}`` (the agents file among the files)."""
+    if not isinstance(value, dict):
+        raise WireError("generation: sources must be an object")
+    for key, sources in value.items():
+        files = sources.get("files") if isinstance(sources, dict) else None
+        if (
+            not isinstance(files, dict)
+            or not all(isinstance(n, str) and isinstance(t, str) for n, t in files.items())
+            or sources.get("agents") not in files
+        ):
+            raise WireError(f"generation: sources of {key} must be an agents file name and files of texts")
+    return value
+
+
+def _enums(value: Any) -> dict[str, dict[str, dict[int, str]]]:
+    """Per behavior set: enum name -> host value -> qualified element (what the raw enum values of reads mean)."""
+    if not isinstance(value, dict):
+        raise WireError("generation: enums must be an object")
+    enums: dict[str, dict[str, dict[int, str]]] = {}
+    for key, tables in value.items():
+        if not isinstance(tables, dict):
+            raise WireError("generation: enums must map behavior sets to enum tables")
+        enums[key] = {}
+        for name, table in tables.items():
+            if not isinstance(table, dict) or not all(isinstance(e, str) for e in table.values()):
+                raise WireError("generation: an enum table must map host values to element names")
+            try:
+                enums[key][name] = {int(v): e for v, e in table.items()}
+            except ValueError:
+                raise WireError("generation: an enum's host values must be integers") from None
+    return enums
 
 
 # -- fields ---------------------------------------------------------------------------------------------

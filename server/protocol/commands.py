@@ -296,6 +296,23 @@ class Fork:
     seq: Annotated[int, Field(ge=0, le=2**62), INTEGRAL]
 
 
+@with_config(STRICT)
+@dataclass(frozen=True, slots=True, kw_only=True)
+class AttachHost:
+    """Attach one more host to an attached session (``xabsl attach``, docs/attach.md): Connect… in the studio.
+
+    ``address`` is ``HOST:PORT`` (``[::1]:7410`` for IPv6), ``token`` what that host requires
+    (None: the session's ``--token``). The reply's result is the host as ``attached[]`` in the
+    status shows it, once it answered (or refused) or a few seconds passed.
+    """
+
+    type: Literal["command"] = "command"
+    id: CommandId | None = None
+    op: Literal["attach_host"]
+    address: Annotated[str, Field(min_length=3, max_length=300, pattern=r"^[^\s/]+:[0-9]{1,5}$")]
+    token: Annotated[str, Field(min_length=1, max_length=200)] | None = None
+
+
 #: A breakpoint kind (``xabsl_studio.engine.runtime.breakpoints``).
 BreakpointKindName = Literal["enter_option", "leave_option", "enter_state", "leave_state", "leaf", "condition"]
 #: A breakpoint's id within its behavior set.
@@ -412,7 +429,8 @@ Command = Annotated[
     | CheckCondition
     | Seek
     | Fork
-    | Query,
+    | Query
+    | AttachHost,
     Discriminator("op"),
 ]
 #: Breakpoint commands: the server process keeps (and persists) breakpoints, the simulation checks them.

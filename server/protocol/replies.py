@@ -512,6 +512,7 @@ RESULTS: dict[str, Any] = {
     "list_breakpoints": BreakpointList,
     "check_condition": ConditionCheck,
     "query": QueryAnswer,
+    "attach_host": dict[str, Any],
 }
 
 ServerEvent = FileEvent | CompileEvent | CrashEvent | BreakpointEvent

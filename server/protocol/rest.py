@@ -110,6 +110,12 @@ class ForkBody(BaseModel):
     """Run from here: the tick of the replay to start the live session from."""
 
     seq: int = Field(ge=1, le=2**40, description="the fork tick (the first tick the new session runs)")
+    robot: int = Field(
+        default=0,
+        ge=0,
+        le=1000,
+        description="a recording that cannot run again (an attached session's): the robot forked into the bench world",
+    )
 
 
 # -- results ---------------------------------------------------------------------------------------

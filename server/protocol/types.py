@@ -59,7 +59,8 @@ Ref = Annotated[int, Field(ge=0, le=2**31), INTEGRAL] | str
 #: Behavior time in ms.
 Ms = Annotated[int, Field(ge=0, le=2**62), INTEGRAL]
 
-HelloReason = Literal["connect", "reload", "reset", "resync", "fork"]
+#: ``host_gone`` / ``host_back``: a host of an attached session went away / attached again (docs/attach.md)
+HelloReason = Literal["connect", "reload", "reset", "resync", "fork", "host_gone", "host_back"]
 
 
 class ProtocolError(ServerError, ValueError):

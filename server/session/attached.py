@@ -39,7 +39,9 @@ import orjson
 from xabsl_studio.engine.emit.ic import emit_ic
 from xabsl_studio.engine.host import BehaviorSource, World
 from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.ir.model import Enumeration, Program
 from xabsl_studio.engine.lang import Compilation
+from xabsl_studio.engine.runtime.debug import ReadValues, decision_reads, explain_decision, render
 from xabsl_studio.server.protocol.attach import (
     HEARTBEAT_SECONDS,
     HEARTBEAT_TIMEOUT,
@@ -56,7 +58,7 @@ from xabsl_studio.server.protocol.attach import (
     encode_attach,
     encode_from_studio,
 )
-from xabsl_studio.server.protocol.commands import Pause, Reset, Resume, RobotCommand, Status, Step
+from xabsl_studio.server.protocol.commands import AttachHost, Explain, Pause, Reset, Resume, RobotCommand, Status, Step
 from xabsl_studio.server.protocol.host import (
     ExplainRecorded,
     Hit,
@@ -71,6 +73,7 @@ from xabsl_studio.server.protocol.host import (
 )
 from xabsl_studio.server.protocol.types import HelloReason, WireValue
 from xabsl_studio.server.session.live import RING_SECONDS, CommandError, ProgramState, Session
+from xabsl_studio.server.simulation.explain import explanation_result, source_texts, tree_result
 
 __all__ = ["AttachedExample", "AttachedSession", "HostConnection", "parse_address"]
 
@@ -80,6 +83,37 @@ log = logging.getLogger("xabsl.server")
 RECONNECT_SECONDS = (0.5, 5.0)
 #: Seconds ``start`` waits for the named hosts before serving without those still missing.
 START_WAIT = 10.0
+#: Seconds ``attach_host`` waits for the new host before answering (it keeps trying after).
+CONNECT_WAIT = 5.0
+#: Hosts one session attaches at most.
+MAX_HOSTS = 64
+
+
+async def _read_within(reader: asyncio.StreamReader, size: int, seconds: float) -> bytes:
+    """``size`` bytes, or TimeoutError when the host said nothing for ``seconds``.
+
+    After the loop itself stood still (a long compile, a page loading) the deadline has passed
+    although the host's bytes wait in the socket: one short second try reads them, so only a
+    host that is really silent counts as gone.
+    """
+    try:
+        async with asyncio.timeout(seconds):
+            return await reader.readexactly(size)
+    except TimeoutError:
+        async with asyncio.timeout(0.5):
+            return await reader.readexactly(size)
+
+
+def _explainers(message: HostGeneration) -> tuple[dict[str, HostProgram], tuple[HostProgram | None, ...]]:
+    """A host generation's programs by key and, per robot, the one its engine runs (None: no engine)."""
+    structure = orjson.loads(message.generation.structure)
+    programs: dict[str, HostProgram] = {}
+    for key, ic in message.ics.items():
+        programs[key] = HostProgram.of(ic, structure["programs"].get(key), message.generation.enums.get(key, {}))
+    return programs, tuple(
+        programs.get(robot["program"]) if robot.get("engine") and robot.get("program") else None
+        for robot in structure["robots"]
+    )
 
 
 def parse_address(text: str) -> tuple[str, int]:
@@ -119,6 +153,72 @@ class AttachedExample:
         raise CommandError("an attached session makes no controllers")
 
 
+@dataclass(frozen=True, slots=True)
+class HostProgram:
+    """What a host runs for one behavior set, as the studio explains its decisions from the reads.
+
+    ``program`` is read back from the host's intermediate code (None: the studio cannot read it);
+    reads name symbols by the host's ids, which its description gives by name.
+    """
+
+    program: Program | None
+    input_ids: dict[str, int]
+    output_ids: dict[str, int]
+    #: enum name -> host value -> qualified element (the raw enum values of reads)
+    enums: dict[str, dict[int, str]]
+    #: option id -> the option's description (its conditions' source texts)
+    options: dict[int, dict[str, Any]]
+
+    #: the program with its symbols in the host's order (the order of its samples' values): what
+    #: recordings are written with (None: the IC does not read, or lacks symbols the host samples)
+    recorded: Program | None = None
+
+    @classmethod
+    def of(cls, ic: str, description: dict[str, Any] | None, enums: dict[str, dict[int, str]]) -> HostProgram:
+        """The host program of a generation's IC and description (read once per host generation)."""
+        try:
+            program: Program | None = read_ic(ic)
+        except Exception:  # a host's IC the studio cannot read: "why" is unknown, the rest works
+            program = None
+        described = description or {}
+        inputs = {str(x["name"]): int(x["id"]) for x in described.get("inputs", ()) if isinstance(x, dict)}
+        outputs = {str(x["name"]): int(x["id"]) for x in described.get("outputs", ()) if isinstance(x, dict)}
+        return cls(
+            program,
+            inputs,
+            outputs,
+            enums,
+            {int(o["id"]): o for o in described.get("options", ()) if isinstance(o, dict)},
+            _in_host_order(program, inputs, outputs, described.get("enums", ())) if program is not None else None,
+        )
+
+
+def _in_host_order(
+    program: Program, inputs: dict[str, int], outputs: dict[str, int], enums: Sequence[Any]
+) -> Program | None:
+    """``program`` (read from IC) with the host's symbol order and the host's whole enumerations.
+
+    A host samples its symbols in its own program's order, and enum values as indices into its
+    enumerations' elements; the IC lists symbols in the order they are used and keeps only the
+    elements something uses, so tables built from it would put values under other names. None
+    when the names differ (nothing to align).
+    """
+    if set(program.inputs) != set(inputs) or set(program.outputs) != set(outputs):
+        return None
+    whole = dict(program.enums)
+    for enum in enums:
+        if isinstance(enum, dict) and isinstance(enum.get("name"), str) and isinstance(enum.get("elements"), list):
+            name = enum["name"]
+            known = whole.get(name) or Enumeration(name, ())
+            whole[name] = dataclasses.replace(known, elements=tuple(str(e) for e in enum["elements"]))
+    return dataclasses.replace(
+        program,
+        inputs={name: program.inputs[name] for name in sorted(inputs, key=inputs.__getitem__)},
+        outputs={name: program.outputs[name] for name in sorted(outputs, key=outputs.__getitem__)},
+        enums=whole,
+    )
+
+
 @dataclass(eq=False)
 class HostConnection:
     """One host: its address, what it said last, its robots' place in the session."""
@@ -146,6 +246,12 @@ class HostConnection:
     #: where this host's robots start among the session's
     offset: int = 0
     robots: tuple[str, ...] = ()
+    #: per robot of the host's generation: what its engine runs (None: no engine)
+    explainers: tuple[HostProgram | None, ...] = ()
+    #: per behavior key of the host: what it runs
+    programs: dict[str, HostProgram] = field(default_factory=dict)
+    #: the token this host requires (None: the session's)
+    token: str | None = None
 
     def info(self, me: str | None) -> dict[str, Any]:
         """The host as the status shows it."""
@@ -175,6 +281,7 @@ class AttachedSession(Session):
         token: the hosts' token.
         studio: how hosts show this studio.
         control: ask each host for control when attaching (else watch until a command takes it).
+        allow_connect: let the studio's users attach more hosts (``attach_host``, Connect…).
     """
 
     def __init__(
@@ -186,9 +293,11 @@ class AttachedSession(Session):
         control: bool = True,
         ring_seconds: float = RING_SECONDS,
         state_dir: Path | None = None,
+        allow_connect: bool = True,
     ) -> None:
         super().__init__(example, behavior_hz=example.behavior_hz, ring_seconds=ring_seconds, state_dir=state_dir)
         self.hosts = [HostConnection(h, p, f"{h}:{p}") for h, p in addresses]
+        self.allow_connect = allow_connect
         self.token = token
         self.studio = studio or f"studio@{socket.gethostname()}:{os.getpid()}"
         self.want_control = control
@@ -196,8 +305,8 @@ class AttachedSession(Session):
         self._generation_number = 0
         self._t0 = time.monotonic()
         self._t = 0
-        #: per session generation: per host, the host's generation number (explain of past ticks)
-        self._host_generations: dict[int, dict[int, int]] = {}
+        #: per session generation: per robot, the program its host ran (explain of any tick in the ring)
+        self._explainers: dict[int, tuple[HostProgram | None, ...]] = {}
         self._closing = False
 
     # -- lifetime ---------------------------------------------------------------------------------------
@@ -256,18 +365,23 @@ class AttachedSession(Session):
             delay = min(delay * 2, RECONNECT_SECONDS[1])
 
     async def _attach(self, host: HostConnection) -> None:
-        reader, writer = await asyncio.wait_for(asyncio.open_connection(host.host, host.port), 5.0)
+        # asyncio.timeout, not wait_for: on Python 3.11 wait_for swallows a cancellation that
+        # arrives as the read completes (a host sends 100 times a second), and aclose would hang.
+        async with asyncio.timeout(5.0):
+            reader, writer = await asyncio.open_connection(host.host, host.port)
         host.writer = writer
-        writer.write(encode_attach(Attach(self.token, self.studio, self.want_control, PROTOCOL)))
+        token = host.token if host.token is not None else self.token
+        writer.write(encode_attach(Attach(token, self.studio, self.want_control, PROTOCOL)))
         await writer.drain()
         beat = asyncio.create_task(self._heartbeat(host, writer))
         try:
-            while True:
-                header = await asyncio.wait_for(reader.readexactly(4), HEARTBEAT_TIMEOUT)
+            while not self._closing:
+                header = await _read_within(reader, 4, HEARTBEAT_TIMEOUT)
                 size = int.from_bytes(header, "big")
                 if size > MAX_HOST_MESSAGE:
                     raise WireError(f"the host sent a message of {size} bytes")
-                data = await asyncio.wait_for(reader.readexactly(size), HEARTBEAT_TIMEOUT + 30.0)
+                async with asyncio.timeout(HEARTBEAT_TIMEOUT + 30.0):
+                    data = await reader.readexactly(size)
                 host.heard = time.monotonic()
                 self._from_host(host, decode_from_host(data))
         finally:
@@ -294,7 +408,7 @@ class AttachedSession(Session):
             host.gone = True
             host.last = None
             if not self._closing:
-                self._publish_generation("reset")
+                self._publish_generation("host_gone")
 
     def _from_host(self, host: HostConnection, message: Any) -> None:
         if isinstance(message, Sample):
@@ -302,17 +416,22 @@ class AttachedSession(Session):
                 return
             if host.seq >= 0 and message.seq > host.seq + 1:
                 host.missed += message.seq - host.seq - 1
+                log.warning("host %s: ticks %d..%d did not arrive", host.label, host.seq + 1, message.seq - 1)
             host.seq = message.seq
             host.received += 1
             host.last = message
             self._tick(host)
         elif isinstance(message, HostGeneration):
             first = host.generation is None or not host.connected
+            back = host.gone
             host.generation = message
             host.connected, host.gone = True, False
             host.last = None
+            host.programs, host.explainers = _explainers(message)
             self._adopt_programs(host, message)
             reason: HelloReason = "reset" if first or message.generation.reason == "reset" else "reload"
+            if back:
+                reason = "host_back"  # the timeline marks where a host came back
             self._publish_generation("connect" if self._generation_number == 0 else reason)
         elif isinstance(message, WorkerReply):
             future = host.pending.pop(message.ident, None) if message.ident is not None else None
@@ -364,19 +483,30 @@ class AttachedSession(Session):
         input_ids: list[tuple[int, ...]] = []
         output_ids: list[tuple[int, ...]] = []
         errors: dict[str, str | None] = {}
+        enums: dict[str, dict[str, dict[int, str]]] = {}
+        explainers: list[HostProgram | None] = []
+        recorded: dict[str, Program] = {}
+        sources: dict[str, dict[str, Any]] = {}
         self._generation_number += 1
-        numbers: dict[int, int] = {}
-        for index, host in enumerate(self.hosts):
+        for host in self.hosts:
             host.offset = len(robots)
             gen = host.generation
             if gen is None:
                 continue
-            numbers[index] = gen.generation.number
+            explainers.extend(host.explainers)
             structure = orjson.loads(gen.generation.structure)
             for key, description in structure["programs"].items():
                 programs.setdefault(self._key(key), description)
             for key, error in gen.generation.errors.items():
                 errors[self._key(key)] = error
+            for key, tables in gen.generation.enums.items():
+                enums.setdefault(self._key(key), tables)
+            for key, running in host.programs.items():
+                # Recordings are written with what the hosts run, in their symbol order.
+                if running.recorded is not None:
+                    recorded.setdefault(self._key(key), running.recorded)
+                if key in gen.sources:
+                    sources.setdefault(self._key(key), gen.sources[key])
             for robot, ins, outs in zip(
                 structure["robots"], gen.generation.input_ids, gen.generation.output_ids, strict=True
             ):
@@ -396,9 +526,9 @@ class AttachedSession(Session):
                 )
                 input_ids.append(tuple(ins))
                 output_ids.append(tuple(outs))
-        self._host_generations[self._generation_number] = numbers
-        for old in [n for n in self._host_generations if n <= self._generation_number - 16]:
-            del self._host_generations[old]
+        self._explainers[self._generation_number] = tuple(explainers)
+        for old in [n for n in self._explainers if n <= self._generation_number - 16]:
+            del self._explainers[old]
         structure = {"programs": programs, "robots": robots}
         scene = {"attached": [h.info(None) for h in self.hosts]}
         message = NewGeneration(
@@ -410,8 +540,16 @@ class AttachedSession(Session):
             tuple(output_ids),
             0,
             errors,
+            enums=enums,
         )
-        self.receive([message])
+        if self.live_recorder is not None:
+            self.live_recorder.sources.update(sources)
+        self._incoming.update(recorded)
+        try:
+            self.receive([message])
+        finally:
+            for key in recorded:
+                self._incoming.pop(key, None)
         self._tick(None)
 
     def _tick(self, source: HostConnection | None) -> None:
@@ -423,6 +561,7 @@ class AttachedSession(Session):
         extras: list[bytes] = []
         inputs: list[tuple[WireValue, ...]] = []
         outputs: list[tuple[WireValue, ...]] = []
+        reads: list[bytes] = []
         paused = False
         for host in self.hosts:
             if host.generation is None:
@@ -436,17 +575,20 @@ class AttachedSession(Session):
                     extras.append(b"")
                     inputs.append((None,) * len(gen.input_ids[at]) if at < len(gen.input_ids) else ())
                     outputs.append((None,) * len(gen.output_ids[at]) if at < len(gen.output_ids) else ())
+                    reads.append(b"")
                 continue
             paused = paused or last.paused
             paths.extend(last.paths)
             extras.extend(last.extras)
             inputs.extend(last.inputs)
             outputs.extend(last.outputs)
+            # What each decision read in the host's tick, as the host's engine recorded it (b"": unknown).
+            reads.extend(last.reads if len(last.reads) == count else (b"",) * count)
         if len(paths) != len(gen.input_ids) or not paths:
             return  # a host changed its robots (its new generation follows), or none is known yet
         self._seq += 1
         self._t = max(self._t, round((time.monotonic() - self._t0) * 1000))
-        status = {"attached": [h.info(h.peer) for h in self.hosts]}
+        status = {"attached": [h.info(h.peer) for h in self.hosts], "connect": self.allow_connect}
         sample = Sample(
             self._seq,
             gen.number,
@@ -460,6 +602,7 @@ class AttachedSession(Session):
             tuple(outputs),
             b"{}",
             orjson.dumps(status),
+            tuple(reads),
         )
         self.receive([sample])
         if self._started is not None and not self._started.done():
@@ -471,11 +614,7 @@ class AttachedSession(Session):
         """Route a command to the host of its robot, or to every host (pause, resume, step, reset, status)."""
         robot = getattr(command, "robot", None)
         if isinstance(command, ExplainRecorded):
-            host, local = self._host_of(command.robot)
-            number = self._host_generations.get(command.generation, {}).get(self.hosts.index(host))
-            if number is None:
-                raise CommandError("that tick ran a version of the behavior this host no longer has")
-            return await self._ask(host, dataclasses.replace(command, robot=local, generation=number), owner)
+            return True, self._explain_recorded(command), None
         if robot is not None and isinstance(command, RobotCommand):
             host, local = self._host_of(robot)
             return await self._ask(host, dataclasses.replace(command, robot=local), owner)
@@ -559,6 +698,91 @@ class AttachedSession(Session):
         for host in self.hosts:
             if host.connected and host.writer is not None:
                 host.writer.write(encode_from_studio(Control(take=take)))
+
+    # -- Connect… ----------------------------------------------------------------------------------------
+
+    async def attach_host(self, command: AttachHost) -> dict[str, Any]:
+        """Attach one more host (its robots are listed after the others'); the host as the status shows it.
+
+        Answers once the host sent its first generation, refused, or :data:`CONNECT_WAIT` passed
+        (it is then retried as any host that is not there).
+
+        Raises:
+            CommandError: this studio does not allow it, or the address is not HOST:PORT.
+        """
+        if not self.allow_connect:
+            raise CommandError("this studio does not attach more hosts (xabsl attach --no-connect)")
+        try:
+            address, port = parse_address(command.address)
+        except ValueError as error:
+            raise CommandError(str(error)) from None
+        host = next((h for h in self.hosts if (h.host, h.port) == (address, port)), None)
+        if host is None:
+            if len(self.hosts) >= MAX_HOSTS:
+                raise CommandError(f"a studio attaches {MAX_HOSTS} hosts at most")
+            host = HostConnection(address, port, f"{address}:{port}", token=command.token)
+            self.hosts.append(host)
+            host.task = asyncio.create_task(self._run_host(host))
+        elif host.refused is not None and (host.task is None or host.task.done()):
+            host.token, host.refused = command.token, None  # a new token: try again
+            host.task = asyncio.create_task(self._run_host(host))
+        deadline = time.monotonic() + CONNECT_WAIT
+        while time.monotonic() < deadline and not (host.connected or host.refused):
+            await asyncio.sleep(0.05)
+        return host.info(host.peer)
+
+    # -- why -----------------------------------------------------------------------------------------------
+
+    async def explain(self, command: Explain, owner: str | None) -> Any:
+        """``explain``, always from the ring: the live one is the latest tick's, what its decision read.
+
+        The host is never asked again: the values are those the host's engine recorded in that
+        tick (``Engine.reads()``, sent with every sample), so "why" works on a host that is gone,
+        and a value the decision did not read is unknown (``?``).
+        """
+        if command.seq is not None:
+            return await super().explain(command, owner)
+        latest = self.ring.latest
+        if latest is None:
+            raise CommandError("no tick has arrived from the hosts yet")
+        result = await super().explain(dataclasses.replace(command, seq=latest.seq), owner)
+        result["recorded"] = False  # the last tick's decision: the live why of the studio
+        return result
+
+    def _explain_recorded(self, command: ExplainRecorded) -> list[dict[str, Any]]:
+        """Decisions of past ticks explained here, from the reads the ring kept and the host's program."""
+        explainers = self._explainers.get(command.generation)
+        if explainers is None:
+            raise CommandError("that tick is older than the versions of the behavior this studio keeps")
+        if not 0 <= command.robot < len(explainers) or explainers[command.robot] is None:
+            raise CommandError(f"robot {command.robot} ran no XABSL engine in that tick")
+        running = explainers[command.robot]
+        assert running is not None
+        program = running.program
+        if program is None:
+            raise CommandError("the host's intermediate code does not read here: its decisions cannot be explained")
+        ir_option = program.options.get(command.option)
+        if ir_option is None:
+            raise CommandError(f"unknown option {command.option!r}")
+        results = []
+        for seq, t, decided, leaf, _, reads in command.ticks:
+            if not 0 <= decided < len(ir_option.states):
+                raise CommandError(f"option {ir_option.name} has no state {decided}")
+            state = ir_option.states[decided]
+            read = decision_reads(orjson.loads(reads), ir_option.index) if reads else None
+            values = ReadValues(program, ir_option, read, running.enums, running.input_ids, running.output_ids)
+            try:
+                explanation = explain_decision(ir_option, state, leaf, values, lambda c: render(c, ir_option.name))
+            except KeyError:
+                raise CommandError(f"state {ir_option.name}.{state.name} has no leaf {leaf}") from None
+            result = explanation_result(ir_option, explanation)
+            tree = tree_result(ir_option, state.name, leaf, values)
+            described = running.options.get(ir_option.index)
+            if described is not None and decided < len(described.get("states", ())):
+                source_texts(result, tree, described["states"][decided]["decision"])
+            result.update(seq=seq, t=t, recorded=True, tree=tree)
+            results.append(result)
+        return results
 
     # -- hot reload ----------------------------------------------------------------------------------------
 

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import xabsl_studio
 from xabsl_studio.engine.worlds.loader import ExampleError, load_example
 from xabsl_studio.server.protocol.errors import ServerError
+from xabsl_studio.server.session.benchfork import BenchForkError, bench_fork
 from xabsl_studio.server.session.live import Session
 from xabsl_studio.server.simulation.forkstart import ForkStart
 
@@ -38,17 +39,25 @@ def _example_folder(name: str) -> Path:
     return folder
 
 
-def fork_session(recording: Recording, at: int, home: tuple[Path, str | None] | None = None) -> Session:
+def fork_session(recording: Recording, at: int, home: tuple[Path, str | None] | None = None, robot: int = 0) -> Session:
     """A live session that will start at tick ``at`` of ``recording`` (not started yet).
 
     ``home``: the main studio's example as ``(path, world)``; when it is the recorded example,
-    the fork runs its behaviors, otherwise those of the installed example of that name.
+    the fork runs its behaviors, otherwise those of the installed example of that name. A
+    recording that is not deterministic but holds its behavior's sources (an attached session's)
+    forks robot ``robot`` into the bench world on its recorded inputs
+    (``xabsl_studio.server.session.benchfork``).
 
     Raises:
-        ForkError: not deterministic, itself a fork, ``at`` outside it, its example or world
-            options missing here.
+        ForkError: not deterministic (and no sources), itself a fork, ``at`` outside it, its
+            example or world options missing here.
     """
     header = recording.header
+    if not header.get("deterministic") and any(v.sources is not None for v in recording.programs.values()):
+        try:
+            return bench_fork(recording, at, robot)
+        except BenchForkError as error:
+            raise ForkError(str(error)) from None
     if not header.get("deterministic"):
         raise ForkError(f"{Path(recording.path).name} is not a recording of a deterministic run (a live session?)")
     if recording.first:

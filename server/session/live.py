@@ -47,6 +47,7 @@ from xabsl_studio.engine.lang.condition import check_condition
 from xabsl_studio.engine.runtime.breakpoints import Breakpoint, BreakpointError
 from xabsl_studio.server.protocol.channel import Channel, ChannelClosed
 from xabsl_studio.server.protocol.commands import (
+    AttachHost,
     BreakpointCommand,
     CheckCondition,
     EnableBreakpoint,
@@ -472,7 +473,9 @@ class Session:
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand | Fork | Query, owner: str | None = None) -> Any:
+    async def request(
+        self, command: WorkerCommand | BreakpointCommand | Fork | Query | AttachHost, owner: str | None = None
+    ) -> Any:
         """Carry out a command in the simulation (docs/protocol.md); its result.
 
         Raises:
@@ -489,6 +492,8 @@ class Session:
             return await self.breakpoint_command(command)
         if isinstance(command, Explain):
             return await self.explain(command, owner)
+        if isinstance(command, AttachHost):
+            return await self.attach_host(command)
         if isinstance(command, Fork):
             command = fork_request(self.ring, command.seq)
         ok, result, error = await self._send(command, owner)
@@ -500,6 +505,14 @@ class Session:
             # a paused simulation sends no sample that would carry the new state: mirror the answer
             self.paused = bool(result["paused"])
         return result
+
+    async def attach_host(self, command: AttachHost) -> dict[str, Any]:
+        """Connect… (``attach_host``): only a studio on hosts elsewhere attaches more of them.
+
+        Raises:
+            CommandError: always here (``xabsl_studio.server.session.attached`` answers it).
+        """
+        raise CommandError("this studio runs its own world: attach to hosts with xabsl attach HOST:PORT")
 
     async def _send(self, command: WorkerCommand, owner: str | None) -> tuple[bool, Any, str | None]:
         channel, loop = self._channel, self._loop

@@ -149,6 +149,10 @@ class LiveRecorder:
         self._t = 0
         #: seconds spent encoding samples (the server process's cost of recording)
         self.seconds = 0.0
+        #: per behavior key: its source files (``xabsl_studio.engine.record.sources``), written with
+        #: its program so that a fork can run the recorded behavior again (an attached session's
+        #: hosts send them); keys without: no sources recorded
+        self.sources: dict[str, dict[str, Any]] = {}
 
     # -- from the session ------------------------------------------------------------------------
 
@@ -391,7 +395,9 @@ class LiveRecorder:
     def _write_program(
         self, key: str, description: dict[str, Any], reason: str, files: list[str], program: Program | None
     ) -> None:
-        ic = {"ic": emit_ic(program)} if program is not None else {}
+        ic: dict[str, Any] = {"ic": emit_ic(program)} if program is not None else {}
+        if key in self.sources:
+            ic["sources"] = self.sources[key]
         self._message(
             S.PROGRAM,
             "xabsl.Program",

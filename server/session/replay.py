@@ -60,6 +60,7 @@ from xabsl_studio.engine.runtime.debug import (
 )
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.server.protocol.commands import (
+    AttachHost,
     BreakpointCommand,
     Explain,
     Fork,
@@ -77,7 +78,13 @@ from xabsl_studio.server.session import frames
 from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation, Ring
 from xabsl_studio.server.session.live import CommandError, Session
 from xabsl_studio.server.session.query import RecordingQueries
-from xabsl_studio.server.simulation.explain import explanation_result, tree_result, why_not_result
+from xabsl_studio.server.simulation.explain import (
+    copy_texts,
+    explanation_result,
+    source_texts,
+    tree_result,
+    why_not_result,
+)
 from xabsl_studio.server.simulation.worker import check_speed
 
 __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
@@ -482,7 +489,9 @@ class ReplaySession(Session):
 
     # -- commands ----------------------------------------------------------------------------------
 
-    async def request(self, command: WorkerCommand | BreakpointCommand | Fork | Query, owner: str | None = None) -> Any:
+    async def request(
+        self, command: WorkerCommand | BreakpointCommand | Fork | Query | AttachHost, owner: str | None = None
+    ) -> Any:
         """Playback commands, ``seek``, ``explain`` and ``query``; anything needing a world is refused."""
         if isinstance(command, Query):
             return await self.queries.answer(command)
@@ -807,7 +816,7 @@ def explain(
     result = explanation_result(ir_option, explanation)
     tree = tree_result(ir_option, decided.name, leaf, values)
     # The IC has no source text: show the conditions as they were written (the description's).
-    _source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
+    source_texts(result, tree, agent.program.option(ir_option.index)["states"][decided_in]["decision"])
     result.update(recorded=True, tree=tree, last_transition=None)
     if why_not is not None:
         try:
@@ -818,7 +827,7 @@ def explain(
             raise CommandError(str(error)) from None
         described = agent.program.option(ir_option.index)["states"][decided_in]["decision"]
         for route in result["why_not"]["routes"]:
-            _copy_texts(route["conditions"], described)
+            copy_texts(route["conditions"], described)
     return result
 
 
@@ -847,26 +856,3 @@ def _recorded_values(
     return TickValues(
         agent, _decision_outputs(agent, previous, ir_option.index), params, decision_state_time, float(option_time)
     )
-
-
-def _source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[str, Any]) -> None:
-    """Copy the description's condition texts onto the tree and the conditions (same shapes)."""
-
-    def copy(node: dict[str, Any], source: dict[str, Any]) -> None:
-        if "if" in node and "if" in source:
-            node["if"] = source["if"]
-            copy(node["then"], source["then"])
-            copy(node["else"], source["else"])
-
-    copy(tree, described)
-    _copy_texts(result["conditions"], described)
-
-
-def _copy_texts(conditions: list[dict[str, Any]], described: dict[str, Any]) -> None:
-    """The description's texts onto the conditions of one path down ``described``, by their branches."""
-    node = described
-    for condition in conditions:
-        if "if" not in node:
-            break
-        condition["text"] = node["if"]
-        node = node["then"] if condition["branch"] else node["else"]

@@ -24,9 +24,11 @@ from xabsl_studio.engine.types import SpanJson
 
 __all__ = [
     "condition_result",
+    "copy_texts",
     "explanation_result",
     "if_text",
     "mark_values",
+    "source_texts",
     "tree_result",
     "why_not_result",
     "why_not_state",
@@ -138,6 +140,32 @@ def mark_values(tree: dict[str, Any], explanation: Explanation) -> None:
             return
         node["value"] = condition.value if isinstance(condition.value, bool) else None
         node = node["then"] if condition.branch else node["else"]
+
+
+def source_texts(result: dict[str, Any], tree: dict[str, Any], described: dict[str, Any]) -> None:
+    """Copy the description's condition texts onto the tree and the conditions (same shapes).
+
+    A program read back from intermediate code has no source text: the description has it.
+    """
+
+    def copy(node: dict[str, Any], source: dict[str, Any]) -> None:
+        if "if" in node and "if" in source:
+            node["if"] = source["if"]
+            copy(node["then"], source["then"])
+            copy(node["else"], source["else"])
+
+    copy(tree, described)
+    copy_texts(result["conditions"], described)
+
+
+def copy_texts(conditions: list[dict[str, Any]], described: dict[str, Any]) -> None:
+    """The description's texts onto the conditions of one path down ``described``, by their branches."""
+    node = described
+    for condition in conditions:
+        if "if" not in node:
+            break
+        condition["text"] = node["if"]
+        node = node["then"] if condition["branch"] else node["else"]
 
 
 def _plain(value: Any) -> Any:

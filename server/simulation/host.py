@@ -43,6 +43,7 @@ from xabsl_studio.engine.emit.json import program_to_json
 from xabsl_studio.engine.errors import XabslError
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record.sources import program_sources
 from xabsl_studio.engine.runtime import DebugError, Engine, EngineError
 from xabsl_studio.server.protocol.attach import (
     DEFAULT_PORT,
@@ -88,6 +89,14 @@ log = logging.getLogger("xabsl.attach")
 READ_ONLY_OPS = frozenset({"explain", "explain_recorded", "status"})
 #: Seconds the link's thread sleeps at most between two looks at its timers.
 _POLL = 0.2
+#: While ticks stream: seconds between two flushes of what the program's thread queued (its
+#: latency; the program's thread then writes no socket and wakes nobody per tick).
+_FLUSH = 0.004
+#: Seconds after the last queued tick during which the link's thread keeps flushing that often.
+_STREAMING = 0.25
+#: Bytes of queued ticks past which the program's thread sends them itself (a fast program
+#: would outrun the link's thread, which waits for the GIL): one system call per this many.
+_SEND_BYTES = 16 * 1024
 
 
 class HostEngines(EngineSet):
@@ -122,11 +131,17 @@ class HostEngines(EngineSet):
         self.generation_number = 0
         self.reason: HelloReason = "connect"
         self.errors: dict[str, str | None] = dict.fromkeys(k for k in self.keys if k is not None)
-        #: what this host runs per key: (program, its JSON description, its intermediate code)
-        self.running: dict[str, tuple[Program, dict[str, Any], str]] = {}
+        #: what this host runs per key: (program, its JSON description, its intermediate code, its sources)
+        self.running: dict[str, tuple[Program, dict[str, Any], str, dict[str, Any] | None]] = {}
         #: ticks still to run of a ``step`` (then paused again), and who waits for the answer
         self.steps = 0
         self.stepper: tuple[Any, int | None] | None = None
+
+    def record_reads(self, on: bool) -> None:
+        """Let every engine's decisions record what they read (``Engine.record_reads``), or not."""
+        for engine in self.engines:
+            if engine is not None:
+                engine.record_reads = on
 
     def program_of(self, key: str) -> Program | None:
         """The program the engines of ``key`` run."""
@@ -146,7 +161,7 @@ class HostEngines(EngineSet):
             program = self.program_of(key)
             have = self.running.get(key)
             if program is not None and (have is None or have[0] is not program):
-                self.running[key] = (program, program_to_json(program), emit_ic(program))
+                self.running[key] = (program, program_to_json(program), emit_ic(program), _sources(program))
         structure = {"programs": {k: v[1] for k, v in self.running.items()}, "robots": robots}
         message = NewGeneration(
             self.generation_number,
@@ -157,8 +172,13 @@ class HostEngines(EngineSet):
             output_ids,
             0,
             dict(self.errors),
+            enums={key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
         )
-        return HostGeneration(message, {k: v[2] for k, v in self.running.items()})
+        return HostGeneration(
+            message,
+            {k: v[2] for k, v in self.running.items()},
+            {k: v[3] for k, v in self.running.items() if v[3] is not None},
+        )
 
     def sample(self, t: int) -> Sample:
         """The sample of the tick just run (clock ``t`` ms)."""
@@ -266,6 +286,10 @@ class _Peer:
     sent: int = 0
     queued: int = 0
     closed: bool = False
+    #: a thread is sending ``out`` (the other does not, so bytes keep their order)
+    sending: bool = False
+    #: the socket took nothing last time: wait for the link's thread to see it writable
+    blocked: bool = False
 
 
 class HostLink:
@@ -309,6 +333,13 @@ class HostLink:
         self._generation = encode_generation(engines.generation("connect"))
         self._last_sample: bytes | None = None
         self._last_seq = -1
+        #: when the program's thread last queued a tick; whether the link's thread flushes often now
+        self._queued = 0.0
+        self._streaming = False
+        #: whether the decisions record their reads (only while a studio watches; the samplers
+        #: of a generation switch it on)
+        self._reading = False
+        engines.record_reads(False)
         #: ticks published; samples written, dropped for slow studios
         self.ticks = 0
         self._thread = threading.Thread(target=self._serve, name="xabsl-attach", daemon=True)
@@ -340,13 +371,22 @@ class HostLink:
         """
         self.ticks += 1
         engines = self.engines
-        if self._attached:
+        if not (self._attached or self._inbox or self._gone or self._reading or engines.paused):
+            engines.seq += 1  # the tick happened; nobody watches it (the whole cost with no studio)
+            return
+        watched = bool(self._attached)
+        if watched:
             self._publish_tick()
         else:
             engines.seq += 1  # the tick happened; nobody watches it
         # Commands after the tick's sample: what they change shows from the next tick on.
         if self._inbox or self._gone:
             self._serve_commands()
+        if watched != self._reading:
+            # Decisions record their reads only while a studio watches (with none the tick costs
+            # what it costs without the library); switched between two ticks, as the engine wants.
+            self._reading = watched
+            engines.record_reads(watched)
         if not self._attached and not engines.paused:
             return
         if engines.steps:
@@ -425,6 +465,7 @@ class HostLink:
     def _new_generation(self, reason: HelloReason) -> None:
         engines = self.engines
         data = encode_generation(engines.generation(reason))
+        engines.record_reads(self._reading)
         sample = encode_sample(engines.sample(next((e.now for e in engines.engines if e is not None), 0)))
         with self._lock:
             self._generation = data
@@ -451,16 +492,35 @@ class HostLink:
     # -- writing (both threads) ---------------------------------------------------------------------
 
     def _write(self, peer: _Peer, data: bytes, droppable: bool = False) -> None:
-        """Send ``data`` now or queue it; a droppable tick is dropped past the backlog cap."""
+        """Send ``data`` now or queue it; a droppable tick is queued (dropped past the backlog cap).
+
+        Ticks are only queued: the link's thread sends them every ``_FLUSH`` s while they stream,
+        so a tick costs the program's thread no system call (it wakes the link's thread only when
+        that one sleeps long). Everything else goes out at once unless bytes wait before it.
+        """
         with peer.lock:
             if peer.closed:
                 return
-            if peer.out:
-                if droppable and len(peer.out) > self.backlog_bytes:
+            if droppable or peer.out or peer.sending:
+                out = peer.out
+                if droppable and len(out) > self.backlog_bytes:
                     peer.dropped += 1
                     return
-                peer.out += data
+                out += data
                 peer.sent += 1
+                if droppable:
+                    self._queued = time.monotonic()
+                    if len(out) >= _SEND_BYTES and not peer.sending and not peer.blocked:
+                        try:
+                            written = peer.sock.send(out)
+                        except BlockingIOError:
+                            written, peer.blocked = 0, True
+                        except OSError:
+                            return  # the link's thread notices the closed socket
+                        del out[:written]
+                        peer.said = time.monotonic()
+                if not self._streaming:
+                    self._wake()
                 return
             try:
                 written = peer.sock.send(data)
@@ -485,7 +545,11 @@ class HostLink:
         selector.register(self._listener, selectors.EVENT_READ, "listen")
         selector.register(self._wake_r, selectors.EVENT_READ, "wake")
         while not self._stopping:
-            for key, events in selector.select(_POLL):
+            # Streaming: flush often; idle: sleep long (set before looking, see _write).
+            self._streaming = time.monotonic() - self._queued < _STREAMING
+            if not self._streaming and any(p.out for p in self._attached):
+                self._streaming = True
+            for key, events in selector.select(_FLUSH if self._streaming else _POLL):
                 if key.data == "listen":
                     self._accept()
                 elif key.data == "wake":
@@ -497,6 +561,9 @@ class HostLink:
                         self._read(peer)
                     if events & selectors.EVENT_WRITE and not peer.closed:
                         self._flush(peer)
+            for peer in self._attached:  # the ticks queued since the last look
+                if peer.out and not peer.closed:
+                    self._flush(peer)
             self._timers()
             self._watch_writes()
         deadline = time.monotonic() + 2.0
@@ -615,17 +682,29 @@ class HostLink:
             self._write(peer, data)
 
     def _flush(self, peer: _Peer) -> None:
-        with peer.lock:
-            while peer.out:
-                try:
-                    written = peer.sock.send(peer.out)
-                except BlockingIOError:
+        """Send what waits for ``peer``, outside its lock (the program's thread queues meanwhile)."""
+        while True:
+            with peer.lock:
+                if not peer.out or peer.closed or peer.sending:
                     return
-                except OSError:
-                    peer.out.clear()
-                    break
-                del peer.out[:written]
-                peer.said = time.monotonic()
+                chunk, peer.out = peer.out, bytearray()
+                peer.sending = True
+            try:
+                written = peer.sock.send(chunk)
+            except BlockingIOError:
+                written = 0
+            except OSError:
+                written = -1  # closed: the read side notices and drops the peer
+            with peer.lock:
+                peer.sending = False
+                if written < 0:
+                    return
+                if written:
+                    peer.said = time.monotonic()
+                    peer.blocked = False
+                if written < len(chunk):
+                    peer.out[:0] = memoryview(chunk)[written:]
+                    return
 
     def _drain(self, peer: _Peer, deadline: float) -> None:
         """Push what still waits for ``peer`` (stopping: its last ticks must arrive too), until ``deadline``."""
@@ -705,6 +784,20 @@ class HostLink:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _sources(program: Program) -> dict[str, Any] | None:
+    """The program's source files read now (studios record them, so that a fork can run them again).
+
+    ``Program.files`` names them as the compiler did (relative to the working directory then),
+    the agents file last; a program read from intermediate code names none. None: not readable.
+    """
+    if not program.files:
+        return None
+    try:
+        return program_sources(program.files[-1], program.files)
+    except (OSError, ValueError):
+        return None
 
 
 def _family(host: str) -> socket.AddressFamily:

@@ -171,8 +171,12 @@ class FrameSampler:
         return _display(self._output_converters, values, unread)
 
     def reads(self) -> bytes:
-        """What the robot's decisions read in the tick, exact, as JSON (docs/recordings.md ``reads``)."""
-        return reads_json(self.reader.reads())
+        """What the robot's decisions read in the tick, exact, as JSON (docs/recordings.md ``reads``).
+
+        b'' (unknown) when the engine does not record reads (an attach host with no studio until
+        this tick).
+        """
+        return reads_json(self.reader.reads()) if self.engine.record_reads else b""
 
     def extras(self) -> bytes:
         """``,"fault":...,"forced":...,"overrides":...`` for the robot's object, or b''."""

@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 
-from xabsl_studio.examples.attach.robot import DEMO
+from xabsl_studio.examples.attach.robot import DEMO, GAME_STATES
 from xabsl_studio.server.protocol.attach import HEARTBEAT_TIMEOUT, Welcome
 from xabsl_studio.server.protocol.host import Sample
 
@@ -243,3 +243,84 @@ def test_five_robot_processes_in_one_session() -> None:
         studio.stop()
         for process, _ in robots:
             stop_robot(process)
+
+
+def _agrees(value: Any, logged: Any, symbol: str) -> bool:
+    """A value the decision read (exact) against the tick's logged display value (rounded, enums as indices)."""
+    if symbol == "game.state":
+        return value == GAME_STATES[logged]
+    if isinstance(logged, bool) or isinstance(value, bool):
+        return value is logged
+    return abs(float(value) - float(logged)) <= 1e-3
+
+
+def test_why_shows_the_values_the_robot_decision_read_and_works_with_the_host_gone(robot: tuple[Any, int]) -> None:
+    process, port = robot
+    studio = Studio(f"127.0.0.1:{port}", "--no-record")
+    try:
+        studio.until(lambda s: s["attached"][0]["received"] > 300)
+        ticks = {t["seq"]: t for t in studio.get("/api/log?t0=0")}
+        checked = 0
+        answers: dict[int, Any] = {}
+        for seq in sorted(ticks)[5::10]:
+            inputs = ticks[seq]["robots"][0]["inputs"]
+            code, reply = studio.command(op="explain", robot=0, option="play", seq=seq)
+            assert code == 200 and reply["ok"], reply
+            why = reply["result"]
+            assert why["recorded"] and why["seq"] == seq
+            assert why["decided_in_name"] == ticks[seq]["robots"][0]["path"][0]["decided_in"]
+            answers[seq] = why
+            for condition in why["conditions"]:
+                if condition["source"] in inputs:  # a bare boolean input: its value is the condition's
+                    assert condition["value"] is inputs[condition["source"]], (seq, condition)
+                    checked += 1
+                for comparison in condition["comparisons"]:
+                    if comparison["left"] in inputs:
+                        left = comparison["left"]
+                        assert _agrees(comparison["left_value"], inputs[left], left), (seq, comparison, inputs)
+                        checked += 1
+        assert checked >= 20
+        # The live why is the latest tick's decision, from what it read (recorded=False: "the last tick").
+        code, reply = studio.command(op="explain", robot=0, option="play")
+        assert code == 200 and reply["ok"] and reply["result"]["recorded"] is False, reply
+        assert reply["result"]["seq"] is not None and all(c["value"] is not None for c in reply["result"]["conditions"])
+        # The host goes away: why at the same ticks answers the same, from the studio's history alone.
+        process.kill()
+        studio.until(lambda s: s["attached"][0]["gone"])
+        for seq, why in answers.items():
+            code, reply = studio.command(op="explain", robot=0, option="play", seq=seq)
+            assert code == 200 and reply["ok"], reply
+            assert reply["result"]["conditions"] == why["conditions"]
+    finally:
+        studio.stop()
+
+
+def test_attach_host_adds_a_robot_process_and_refuses_what_is_not_an_address(robot: tuple[Any, int]) -> None:
+    studio = Studio(f"127.0.0.1:{robot[1]}", "--no-record")
+    other, port = start_robot("--hz", "50", "--name", "robot9")
+    try:
+        studio.until(lambda s: s["attached"][0]["connected"])
+        code, reply = studio.command(op="attach_host", address="not an address")
+        assert code == 400 and "address" in json.dumps(reply), reply
+        code, reply = studio.command(op="attach_host", address=f"127.0.0.1:{port}")
+        assert code == 200 and reply["ok"] and reply["result"]["connected"], reply
+        assert reply["result"]["robots"] == ["robot9"]
+        status = studio.until(lambda s: len(s["attached"]) == 2 and s["attached"][1]["received"] > 10)
+        assert status["attached"][1]["missed"] == 0
+        assert [r["name"] for r in studio.get("/api/structure")["robots"]] == ["robot1", "robot9"]
+        code, reply = studio.command(op="force_option", robot=1, option="search_ball", params={})
+        assert code == 200 and reply["ok"], reply
+    finally:
+        studio.stop()
+        stop_robot(other)
+
+
+def test_attach_host_is_refused_when_the_studio_does_not_allow_it(robot: tuple[Any, int]) -> None:
+    studio = Studio(f"127.0.0.1:{robot[1]}", "--no-record", "--no-connect")
+    try:
+        studio.until(lambda s: s["attached"][0]["connected"])
+        code, reply = studio.command(op="attach_host", address="127.0.0.1:9")
+        assert not reply.get("ok") and "--no-connect" in json.dumps(reply), (code, reply)
+        assert len(studio.status()["attached"]) == 1
+    finally:
+        studio.stop()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -232,3 +233,44 @@ def test_a_studio_that_never_reads_does_not_block_the_host_and_the_others_get_ev
         slow.close()
         fast.close()
         link.close()
+
+
+def test_samples_carry_what_each_decision_read_as_plain_json(robot: int) -> None:
+    """Read as a program written from docs/attach.md would: raw frames, json.loads, no project decoder."""
+    import json
+    import socket
+    import struct
+
+    sock = socket.create_connection(("127.0.0.1", robot), timeout=10)
+    body = json.dumps({"type": "attach", "protocol": 1, "token": None, "studio": "raw", "control": False}).encode()
+    sock.sendall(struct.pack(">I", len(body)) + body)
+    buffer = b""
+    messages: list[dict[str, object]] = []
+    try:
+        while sum(m["type"] == "sample" for m in messages) < 50:
+            buffer += sock.recv(1 << 16)
+            while len(buffer) >= 4 and len(buffer) >= 4 + struct.unpack(">I", buffer[:4])[0]:
+                size = struct.unpack(">I", buffer[:4])[0]
+                messages.append(json.loads(buffer[4 : 4 + size]))
+                buffer = buffer[4 + size :]
+    finally:
+        sock.close()
+    generation = next(m for m in messages if m["type"] == "generation")
+    structure: dict[str, Any] = generation["structure"]  # type: ignore[assignment]
+    enums: dict[str, Any] = generation["enums"]  # type: ignore[assignment]
+    # game.state's host values (the robot's own numbering) name its elements
+    assert set(enums["behavior"]["game.state"].values()) >= {"game.state.playing", "game.state.ready"}
+    options = {o["id"]: o["name"] for o in structure["programs"]["behavior"]["options"]}
+    inputs = {s["id"]: s["name"] for s in structure["programs"]["behavior"]["inputs"]}
+    samples = [m for m in messages if m["type"] == "sample"]
+    # The decisions record their reads from the first tick a studio watches: null (unknown) before.
+    unknown = [s for s in samples if s["robots"][0][4] is None]  # type: ignore[index]
+    assert unknown == samples[: len(unknown)] and len(unknown) <= 2
+    for sample in samples[len(unknown) :]:
+        [path, _, _, _, reads] = sample["robots"][0]  # type: ignore[index]
+        assert isinstance(reads, list) and reads and reads[0] == path[0][2]  # the root option decides first
+        ran = {n[2] for n in path if n[0] == 0}
+        assert {r for r in reads if isinstance(r, int)} <= ran
+        read_inputs = {inputs[r[0]] for r in reads if isinstance(r, list) and r[0] in inputs and len(r) == 2}
+        assert "game.state" in read_inputs  # play's common decision reads it every tick
+        assert all(options[r] for r in reads if isinstance(r, int))

@@ -16,6 +16,7 @@ import { OptionView } from "./panels/optionview";
 import { PlotPanel } from "./panels/plot";
 import { SymbolsPanel } from "./panels/symbols";
 import { TeamStrip } from "./panels/teamstrip";
+import { AttachBar } from "./panels/attach";
 import { TesterPanel } from "./panels/tester";
 import { SearchControls } from "./panels/search";
 import { TimelinePanel } from "./panels/timeline";
@@ -136,6 +137,9 @@ function main(): void {
   const topbar = new TopBar(session, connection, { toggleTheme: () => layout.toggleTheme(), help: () => help.showModal() });
   const field = new FieldPanel(session);
   const team = new TeamStrip(session);
+  // Attached hosts and Connect… (xabsl attach only; hidden otherwise), under the top bar's controls
+  const attachBar = new AttachBar(session, connection);
+  topbar.element.append(attachBar.element);
   const graph = new GraphPanel(session, openOption, openBehavior);
   const plot = new PlotPanel(session);
   const editor = new EditorPanel(session);
@@ -270,6 +274,7 @@ function main(): void {
       topbar.render(changes);
       field.render(changes);
       team.render(changes);
+      attachBar.render(changes);
       if (center.isActive("graph")) graph.render(changes);
       if (center.isActive("option")) optionView.render(changes);
       if (center.isActive("editor")) editor.render(changes);

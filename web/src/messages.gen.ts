@@ -3,6 +3,21 @@
 
 export const PROTOCOL_VERSION = 1;
 
+/**
+ * Attach one more host to an attached session (`xabsl attach`, docs/attach.md): Connect… in the studio.
+ *
+ * `address` is `HOST:PORT` (`[::1]:7410` for IPv6), `token` what that host requires
+ * (None: the session's `--token`). The reply's result is the host as `attached[]` in the
+ * status shows it, once it answered (or refused) or a few seconds passed.
+ */
+export interface AttachHost {
+  type: "command";
+  id?: number | string | null;
+  op: "attach_host";
+  address: string;
+  token?: string | null;
+}
+
 /** A breakpoint hit: the simulation paused after tick `seq` (time `t`) of robot `robot`. */
 export interface BreakpointEvent {
   type: "event";
@@ -271,6 +286,7 @@ export interface Fork {
 /** Run from here: the tick of the replay to start the live session from. */
 export interface ForkBody {
   seq: number;
+  robot?: number;
 }
 
 /**
@@ -841,9 +857,9 @@ export type BehaviorNode = [1, number, number, number, (WireValue)[]];
 
 export type PathNode = OptionNode | BehaviorNode;
 
-export type HelloReason = "connect" | "reload" | "reset" | "resync" | "fork";
+export type HelloReason = "connect" | "reload" | "reset" | "resync" | "fork" | "host_gone" | "host_back";
 
-export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek | Fork | Query;
+export type Command = Pause | Resume | Step | Speed | Reset | SelectAgent | ForceOption | ForceBehavior | Release | OverrideInput | ReleaseInput | ResetAgent | Reload | Explain | History | Status | WorldCommand | SetBreakpoint | RemoveBreakpoint | EnableBreakpoint | ListBreakpoints | CheckCondition | Seek | Fork | Query | AttachHost;
 
 export type ClientMessage = Subscribe | Resync | Command;
 
@@ -878,4 +894,5 @@ export interface CommandResults {
   list_breakpoints: BreakpointList;
   check_condition: ConditionCheck;
   query: QueryAnswer;
+  attach_host: Record<string, unknown>;
 }

@@ -24,7 +24,7 @@ def test_the_committed_typescript_is_generated_from_the_python_definitions() -> 
 
 def test_every_op_has_a_result_type_and_a_dataclass() -> None:
     assert set(replies.RESULTS) == set(commands.OPS)
-    assert len(commands.OPS) == 25
+    assert len(commands.OPS) == 26
 
 
 def _check(message: dict[str, Any]) -> None:

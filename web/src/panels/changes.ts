@@ -73,6 +73,8 @@ export class ChangesDialog {
 function label(reason: string): string {
   if (reason === "reload") return "Hot reload";
   if (reason === "reset") return "Reset";
+  if (reason === "host_gone") return "A host went away";
+  if (reason === "host_back") return "A host attached again";
   return reason.charAt(0).toUpperCase() + reason.slice(1);
 }
 

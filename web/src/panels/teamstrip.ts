@@ -32,12 +32,16 @@ export class TeamStrip {
       const state = h("span.chip-state");
       const role = h("span.chip-role");
       const key = i < 9 ? String(i + 1) : i === 9 ? "0" : "";
+      // An attached session names each robot's host, and marks the robots of a host that went away.
+      const attached = robot as { host?: string; gone?: boolean };
+      const where = attached.host ? ` on ${attached.host}${attached.gone ? " (gone: its values are unknown until it reattaches)" : ""}` : "";
       const el = h(
         "button.chip",
         {
           role: "option",
           "data-robot": robot.id,
-          title: `${robot.name}${robot.program ? ` runs ${robot.program}` : " (no XABSL engine)"}${key ? ` — key ${key}` : ""}`,
+          title: `${robot.name}${robot.program ? ` runs ${robot.program}` : " (no XABSL engine)"}${where}${key ? ` — key ${key}` : ""}`,
+          "data-gone": attached.gone ? "true" : null,
           onclick: () => session.selectRobot(robot.id),
         },
         h("span.chip-number", { style: `background:${color}` }, String(robot.number)),

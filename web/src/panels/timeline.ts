@@ -19,10 +19,10 @@ const TEAM_ROW = 13;
 const OPTION_ROW = 17;
 const GAP = 16;
 /// Colours of generation marks by reason (others: MARK_OTHER).
-const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726", fork: "#9c6ade" };
+const MARK_COLORS: Record<string, string> = { reload: "#42a5f5", reset: "#ffa726", fork: "#9c6ade", host_gone: "#e53935", host_back: "#43a047" };
 const MARK_OTHER = "#ab47bc";
 /// The letter on a mark's flag by reason (others: the reason's first letter).
-const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0", fork: "F" };
+const MARK_LETTERS: Record<string, string> = { reload: "E", reset: "0", fork: "F", host_gone: "×", host_back: "A" };
 
 export class TimelinePanel {
   readonly element: HTMLElement;
