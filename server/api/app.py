@@ -49,6 +49,8 @@ from xabsl_studio.server.api.compare import router as compare_router
 from xabsl_studio.server.api.docs import router as docs_router
 from xabsl_studio.server.api.drafts import router as drafts_router
 from xabsl_studio.server.api.forks import router as fork_router
+from xabsl_studio.server.api.foxglove import FoxgloveServer
+from xabsl_studio.server.api.foxglove import router as foxglove_router
 from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
 from xabsl_studio.server.api.library import RecordingLibrary
 from xabsl_studio.server.api.library import router as library_router
@@ -161,6 +163,8 @@ class Studio:
         self.files = BehaviorFiles(session.example.root, [f for s in session.example.sources for f in s.file_folders])
         self.graphs = GraphCache()
         self.hub: Hub | None = None
+        #: the Foxglove WebSocket endpoint's viewers and feed (``/foxglove``; set by the lifespan)
+        self.foxglove: FoxgloveServer | None = None
         #: open ``/lsp`` connections (capped at ``MAX_LSP_CLIENTS``)
         self.lsp_connections = 0
         self.write_lock = asyncio.Lock()
@@ -191,7 +195,10 @@ class Studio:
             if isinstance(command, History):
                 return Reply(id=command.id, ok=True, result=self.start_history(command, client))
             owner = client.id if client is not None else None
-            return Reply(id=command.id, ok=True, result=await session.request(command, owner))
+            result = await session.request(command, owner)
+            if self.foxglove is not None:
+                self.foxglove.command(command)  # an event for its viewers, or a playback change
+            return Reply(id=command.id, ok=True, result=result)
         except CommandError as error:
             return Reply(id=command.id, ok=False, error=str(error))
 
@@ -670,7 +677,16 @@ async def _command_error(request: Request, error: Exception) -> JSONResponse:
 
 def _routers() -> tuple[APIRouter, ...]:
     """The routers every studio app includes (``create_app``)."""
-    return (router, drafts_router, docs_router, profile_router, compare_router, fork_router, library_router)
+    return (
+        router,
+        drafts_router,
+        docs_router,
+        profile_router,
+        compare_router,
+        fork_router,
+        library_router,
+        foxglove_router,
+    )
 
 
 def _allowed_methods(scope: Scope) -> set[str]:
@@ -720,7 +736,14 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     hub = Hub(session, asyncio.get_running_loop())
     hub.token_required = studio.policy.token is not None
     studio.hub = hub
-    session.notify = hub.on_entry
+    viewers = FoxgloveServer(session, lambda command: studio.run_command(command, None), asyncio.get_running_loop())
+    studio.foxglove = viewers
+
+    def notify(entry: frames.Entry) -> None:
+        hub.on_entry(entry)
+        viewers.on_entry(entry)
+
+    session.notify = notify
     session.on_crash = hub.on_crash
     session.on_breakpoint = hub.on_breakpoint
     await session.start()
@@ -740,6 +763,8 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
         if getattr(app.state, "serves_studios", False):
             await studio.studios.close_all()
         await hub.close_all()
+        await viewers.close_all()
+        studio.foxglove = None
         session.notify = _ignore
         await session.aclose()
         studio.hub = None
