@@ -327,7 +327,7 @@ class FoxgloveServer:
         self.run = run
         self.loop = loop
         self.replay = session if isinstance(session, ReplaySession) else None
-        self.feed = TopicFeed(session.behavior_hz)
+        self.feed = TopicFeed(session.behavior_hz, generation_events=self.replay is None)
         self.channels: dict[str, _Channel] = {}
         self.clients: dict[int, FoxgloveClient] = {}
         self.session_id = f"{os.getpid()}-{time.time_ns()}"
@@ -693,8 +693,9 @@ class FoxgloveServer:
         if len(self.clients) >= MAX_FOXGLOVE_CLIENTS:
             await websocket.close(CloseCode.TRY_AGAIN_LATER)
             return
-        if not self.clients:
+        if not self.clients:  # nobody watched meanwhile: start afresh from the newest tick
             self._last = None
+            self.feed = TopicFeed(self.session.behavior_hz, generation_events=self.replay is None)
         client = FoxgloveClient(websocket, next(self._client_ids), self)
         client.json(self.server_info())  # always the first message (the spec)
         self.clients[client.id] = client

@@ -94,10 +94,14 @@ class TopicFeed:
 
     Args:
         behavior_hz: the session's tick rate (timestamps are ``seq`` x its period).
+        generation_events: write ``reload`` and ``reset`` events on ``/xabsl/events`` when a new
+            generation comes (a live session; a replay serves its recorded events instead).
     """
 
-    def __init__(self, behavior_hz: int) -> None:
+    def __init__(self, behavior_hz: int, generation_events: bool = True) -> None:
         self.behavior_hz = behavior_hz
+        self.generation_events = generation_events
+        self._descriptions: dict[str, bytes] = {}
         #: topic -> schema name of every topic the feed has produced or will produce
         self.topics: dict[str, str] = {
             S.PROGRAM: "xabsl.Program",
@@ -191,10 +195,22 @@ class TopicFeed:
         body = {"seq": seq, "t": t, "kind": kind, "agent": agent, "data": data}
         return FeedMessage(S.EVENTS, self.time_ns(seq), orjson.dumps(body))
 
+    def _generation_events(self, entry: Entry, out: list[FeedMessage]) -> None:
+        """The events of a new generation: a ``reload`` per program that changed, or a ``reset``."""
+        gen = entry.gen
+        if gen.reason == "reload":
+            for key, description in gen.structure.get("programs", {}).items():
+                if orjson.dumps(description) != self._descriptions.get(key):
+                    data = {"key": key, "gen": gen.number, "changed_files": list(gen.changed.get(key, ()))}
+                    out.append(self.event(entry.seq, entry.t, "reload", None, data))
+        elif gen.reason in ("reset", "fork"):
+            out.append(self.event(entry.seq, entry.t, "reset", None, {"reason": gen.reason, "gen": gen.number}))
+
     def _generation(self, entry: Entry, time_ns: int, out: list[FeedMessage], fresh: bool) -> None:
         """A new generation (or the same number rebuilt, as a replay's seek does): its descriptions."""
         gen = entry.gen
         self._gen = gen
+        first = self._number is None
         self._number = gen.number
         programs = gen.structure.get("programs", {})
         static = orjson.loads(gen.scene_bytes)
@@ -216,6 +232,9 @@ class TopicFeed:
         if fresh:
             out.extend(descriptions)
             out.append(static_message)
+            if not first and self.generation_events:  # after the descriptions they refer to
+                self._generation_events(entry, out)
+        self._descriptions = {key: orjson.dumps(d) for key, d in programs.items()}
         dynamic = orjson.loads(entry.scene)
         self._scene = None
         self._latched.pop(S.FOXGLOVE_FIELD, None)

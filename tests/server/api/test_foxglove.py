@@ -19,6 +19,7 @@ from typing import Any
 
 import httpx
 import pytest
+from mcap.reader import make_reader
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
@@ -35,6 +36,7 @@ REPO = Path(__file__).resolve().parents[3]
 CLIENT = Path(__file__).with_name("foxglove_client.py")
 TOKEN = "f" * 32
 NEW, OLD = "foxglove.sdk.v1", "foxglove.websocket.v1"
+LAYOUT = REPO / "docs" / "foxglove-layout.json"
 
 
 def viewer(url: str, *args: str) -> dict[str, Any]:
@@ -45,6 +47,22 @@ def viewer(url: str, *args: str) -> dict[str, Any]:
     assert done.returncode == 0, done.stderr[:3000] + " ... " + done.stderr[-1000:]
     report: dict[str, Any] = json.loads(done.stdout)
     return report
+
+
+def layout_references() -> tuple[set[str], list[tuple[str, list[str]]]]:
+    """The topics the layout file shows, and its message paths as (topic, field names)."""
+    layout = json.loads(LAYOUT.read_text())
+    topics: set[str] = set()
+    paths: list[tuple[str, list[str]]] = []
+    for config in layout["configById"].values():
+        topics.update(config.get("topics", {}))
+        if "topicPath" in config:
+            topics.add(config["topicPath"])
+        for item in config.get("paths", []):
+            topic, _, fields = item["value"].partition(".")  # the studio's topic names hold no dot
+            topics.add(topic)
+            paths.append((topic, fields.split(".")))
+    return topics, paths
 
 
 def fox_url(server: LiveServer, prefix: str = "") -> str:
@@ -112,6 +130,14 @@ def test_a_live_session_streams_messages_that_validate_against_their_schemas(
     options = first["/xabsl/program"]["payload"]["program"]["options"]
     assert all(node[2] < len(options) for node in payload["path"] if node[0] == 0)
     assert report["times"] == sorted(report["times"]) and report["times"]
+    # docs/foxglove-layout.json works on the live session: its topics exist, its paths hold values
+    shown, paths = layout_references()
+    assert shown <= set(topics), shown - set(topics)
+    for topic, fields in paths:
+        value = first[topic]["payload"]
+        for field in fields:
+            value = value[field]
+        assert isinstance(value, int | float | str), (topic, fields, value)
 
 
 def test_a_viewer_offering_both_names_gets_the_new_one_and_one_offering_neither_a_400(live_demo: LiveServer) -> None:
@@ -182,6 +208,48 @@ def test_services_force_and_release_with_the_studios_checks(live_demo: LiveServe
     assert status["programs"], "the studio still runs"
 
 
+def test_the_studios_commands_and_reloads_reach_the_viewer_as_events(live_demo: LiveServer) -> None:
+    with connect(fox_url(live_demo), subprotocols=[NEW], max_size=None) as ws:  # type: ignore[list-item]
+        channels: dict[str, int] = {}
+        while "/xabsl/events" not in channels or "/xabsl/program" not in channels:
+            data = ws.recv(timeout=10)
+            if isinstance(data, str) and json.loads(data)["op"] == "advertise":
+                channels.update({c["topic"]: c["id"] for c in json.loads(data)["channels"]})
+        subscriptions = [
+            {"id": 1, "channelId": channels["/xabsl/events"]},
+            {"id": 2, "channelId": channels["/xabsl/program"]},
+        ]
+        ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+
+        def next_message(subscription: int, predicate: Any) -> dict[str, Any]:
+            for _ in range(5000):  # time frames come meanwhile: a bound, not a clock
+                data = ws.recv(timeout=20)
+                if isinstance(data, bytes) and data[0] == 1 and struct.unpack_from("<I", data, 1)[0] == subscription:
+                    payload: dict[str, Any] = json.loads(data[13:])
+                    if predicate(payload):
+                        return payload
+            raise AssertionError(f"no such message on subscription {subscription}")
+
+        started = next_message(2, lambda p: True)
+        assert started["reason"] == "start" and started["program"]["options"]
+        forced = httpx.post(
+            f"{live_demo.url}/api/command", json={"op": "force_option", "robot": 0, "option": "search_ball"}
+        )
+        assert forced.status_code == 200, forced.text
+        event = next_message(1, lambda p: p["kind"] == "force")
+        robot = live_demo.studio.session.generation.structure["robots"][0]["name"]
+        assert event["agent"] == robot and event["data"]["option"] == "search_ball"
+        path = "options/search_ball.xabsl"
+        current = httpx.get(f"{live_demo.url}/api/files/{path}").json()
+        edited = current["text"].replace("turn(rate = 45)", "turn(rate = 40)")
+        saved = httpx.put(f"{live_demo.url}/api/files/{path}", json={"text": edited, "version": current["version"]})
+        assert saved.status_code == 200, saved.text
+        reloaded = next_message(2, lambda p: p["reason"] == "reload")
+        assert reloaded["gen"] > started["gen"] and path in reloaded["changed_files"]
+        event = next_message(1, lambda p: p["kind"] == "reload")
+        assert event["data"]["gen"] == reloaded["gen"] and path in event["data"]["changed_files"]
+
+
 def test_a_replay_declares_its_range_and_a_seek_moves_the_studios_timeline(match: Path) -> None:
     session = ReplaySession(match)
     first, end = session.source.first, session.source.end
@@ -207,6 +275,11 @@ def test_a_replay_declares_its_range_and_a_seek_moves_the_studios_timeline(match
         assert start["sec"] * 10**9 + start["nsec"] == tick_ns(first)
         assert stop["sec"] * 10**9 + stop["nsec"] == tick_ns(end - 1)
         assert report["invalid"] == []
+        # the layout's topics are the recording's own (so it works on the file and on the replay)
+        with match.open("rb") as stream:
+            recorded = {channel.topic for channel in make_reader(stream).get_summary().channels.values()}
+        shown, _ = layout_references()
+        assert shown <= recorded | {"/xabsl/events"}, shown - recorded
         answer = next(p for p in report["playback"] if p["request_id"] == "seek-1")
         assert answer["did_seek"] and answer["status"] == 1 and answer["time"] == tick_ns(target)
         ticks = [m for m in report["after_seek"] if m["topic"].startswith("/xabsl/agents/")]
