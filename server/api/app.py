@@ -442,9 +442,10 @@ async def language_server(ws: WebSocket) -> None:
 
 @router.get("/api/status", tags=["session"], responses=error_responses())
 async def status(studio: StudioDep) -> dict[str, Any]:
-    """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
+    """The session status: clock, speed, ring buffer, programs and their diagnostics, clients, Foxglove viewers."""
     result = await studio.session.status()
     result["clients"] = studio.hub.stats() if studio.hub is not None else {}
+    result["foxglove"] = studio.foxglove.stats() if studio.foxglove is not None else {}
     result["token_required"] = studio.policy.token is not None
     result["version"] = VERSION
     return result

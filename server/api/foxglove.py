@@ -361,7 +361,7 @@ class FoxgloveServer:
     def command(self, command: Command) -> None:
         """The studio carried out ``command`` (from any client): an event, or a playback change."""
         if self.replay is not None:
-            self._tell_playback()
+            self._tell_playback(isinstance(command, Seek))
             return
         if not self.clients:
             return
@@ -397,7 +397,9 @@ class FoxgloveServer:
         if not entries:
             return
         if self.replay is not None:
-            self._tell_playback()  # a seek's state before the ticks of its new position
+            last = self._last
+            jumped = last is not None and entries[0].seq != last.seq + 1
+            self._tell_playback(jumped)  # a seek's state before the ticks of its new position
         wanted = self._wanted()
         for entry in entries:
             messages = self.feed.entry(entry, wanted)
@@ -413,7 +415,7 @@ class FoxgloveServer:
         for client in self.clients.values():
             client.binary(frame)
         if self.replay is not None:
-            self._tell_playback()
+            self._tell_playback(False)
 
     def _wanted(self) -> set[str]:
         topics: set[str] = set()
@@ -461,29 +463,28 @@ class FoxgloveServer:
         head = _PLAYBACK_STATE.pack(PLAYBACK_STATE, status, self.feed.time_ns(seq), speed, did_seek, len(rid))
         return head + rid
 
-    def _tell_playback(self) -> None:
-        """Tell every viewer the replay's playback state when it changed since they were told."""
+    def _tell_playback(self, sought: bool) -> None:
+        """Tell every viewer the replay's playback state if it changed since they were told.
+
+        A change is a new status or speed, or a new position reached by a seek (``sought``); the
+        position moving by playing or stepping is what the message frames and ``time`` show.
+        """
         if self.replay is None or self._held or not self.clients:
             return
         now = self._playback_now()
         told = self._told
-        if told == now:
-            return
-        playing = told is not None and told[0] == PLAYING and now[0] == PLAYING
-        # Playing moves the position by itself; any other change of position is a seek.
-        did_seek = told is not None and now[1] != told[1] and not (playing and now[1] > told[1])
-        if told is not None and playing and now[2] == told[2] and not did_seek:
-            self._told = now
+        moved = sought and (told is None or now[1] != told[1])
+        if told is not None and (now[0], now[2]) == (told[0], told[2]) and not moved:
             return
         self._told = now
-        frame = self._playback_frame(None, did_seek)
+        frame = self._playback_frame(None, moved)
         for client in self.clients.values():
             client.binary(frame)
 
     async def _poll_playback(self) -> None:
         while True:
             await asyncio.sleep(PLAYBACK_POLL_SECONDS)
-            self._tell_playback()
+            self._tell_playback(False)
 
     async def playback_request(self, client: FoxgloveClient, payload: bytes) -> None:
         """A playback control request: speed, seek, play or pause, then the state with its id."""
@@ -746,9 +747,9 @@ class FoxgloveServer:
         return {
             "clients": len(self.clients),
             "channels": len(self.channels),
-            "queued": {c.id: len(c.frames) for c in self.clients.values()},
-            "sent": {c.id: c.sent for c in self.clients.values()},
-            "dropped": {c.id: c.dropped for c in self.clients.values()},
+            "queued": {f"viewer-{c.id}": len(c.frames) for c in self.clients.values()},
+            "sent": {f"viewer-{c.id}": c.sent for c in self.clients.values()},
+            "dropped": {f"viewer-{c.id}": c.dropped for c in self.clients.values()},
         }
 
 

@@ -25,6 +25,7 @@ from websockets.sync.client import connect
 
 from tests.server.conftest import LiveServer
 from xabsl_studio.engine.cli import main as xabsl
+from xabsl_studio.engine.record import Recording
 from xabsl_studio.engine.worlds.bench import BenchExample
 from xabsl_studio.examples.soccer.studio import SoccerExample
 from xabsl_studio.server.api.foxglove import MAX_QUEUED_FRAMES, FoxgloveClient
@@ -63,6 +64,24 @@ def layout_references() -> tuple[set[str], list[tuple[str, list[str]]]]:
             topics.add(topic)
             paths.append((topic, fields.split(".")))
     return topics, paths
+
+
+def flatten(tree: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested symbol values (``{"ball": {"x": 1}}``) -> XABSL names (``ball.x``); ``=`` is the namespace's own."""
+    flat: dict[str, Any] = {}
+    for key, value in tree.items():
+        name = prefix[:-1] if key == "=" else prefix + key
+        if isinstance(value, dict):
+            flat.update(flatten(value, name + "."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def options_of(first: dict[str, Any]) -> dict[str, Any]:
+    """The behavior description of the first ``/xabsl/program`` message a viewer received."""
+    program: dict[str, Any] = first["/xabsl/program"]["payload"]["program"]
+    return program
 
 
 def fox_url(server: LiveServer, prefix: str = "") -> str:
@@ -130,6 +149,17 @@ def test_a_live_session_streams_messages_that_validate_against_their_schemas(
     options = first["/xabsl/program"]["payload"]["program"]["options"]
     assert all(node[2] < len(options) for node in payload["path"] if node[0] == 0)
     assert report["times"] == sorted(report["times"]) and report["times"]
+    # the values are the studio's own at that tick (its /api/log, enums there as element indices)
+    log = httpx.get(f"{soccer.url}/api/log", params={"t0": payload["t"], "t1": payload["t"]}, timeout=30)
+    line = next(json.loads(x) for x in log.text.splitlines() if json.loads(x)["seq"] == payload["seq"])
+    studio = next(r for r in line["robots"] if r["name"] == robots[0])
+    enums = {e["name"]: e["elements"] for e in options_of(first)["enums"]}
+    kinds = {s["name"]: s for s in options_of(first)["inputs"]}
+    shown = flatten(payload["inputs"])
+    assert set(shown) == set(studio["inputs"]) and shown
+    for name, value in studio["inputs"].items():
+        kind = kinds[name]
+        assert shown[name] == (enums[kind["enum"]][value] if kind["type"] == "enum" else value), name
     # docs/foxglove-layout.json works on the live session: its topics exist, its paths hold values
     shown, paths = layout_references()
     assert shown <= set(topics), shown - set(topics)
@@ -284,6 +314,21 @@ def test_a_replay_declares_its_range_and_a_seek_moves_the_studios_timeline(match
         assert answer["did_seek"] and answer["status"] == 1 and answer["time"] == tick_ns(target)
         ticks = [m for m in report["after_seek"] if m["topic"].startswith("/xabsl/agents/")]
         assert ticks and all(m["payload"]["seq"] == target and m["time"] == tick_ns(target) for m in ticks)
+        # the values are the recording's at that tick (read back by the recording's own reader)
+        with Recording(match) as recording:
+            view = recording.tick(target)
+            for message in ticks:
+                if message["topic"].endswith("/fault"):
+                    continue
+                recorded = view.agents[message["topic"].rsplit("/", 1)[1]]
+                shown = flatten(message["payload"]["inputs"])
+                assert shown == {k: v for k, v in recorded.inputs.items() if k in shown}
+                assert len(shown) == len(recorded.inputs) and shown
+                # the path: the same nodes; parameters are the studio's display values (3 decimals)
+                shown_path, recorded_path = message["payload"]["path"], recorded.path
+                assert [n[:-1] for n in shown_path] == [n[:-1] for n in recorded_path]
+                for node, exact in zip(shown_path, recorded_path, strict=True):
+                    assert node[-1] == pytest.approx(exact[-1], abs=0.0005)
         played = next(p for p in report["playback"] if p["request_id"] == "play-1")
         assert played["status"] in (0, 3) and played["speed"] == 2.0
         status = httpx.get(f"{server.url}/api/status").json()
@@ -322,6 +367,8 @@ def test_an_oversized_message_closes_with_1009_and_bad_requests_get_a_status(liv
                 statuses.append(json.loads(data))
         assert "no channel 99999" in statuses[0]["message"] and statuses[0]["level"] == 2
         assert "clientPublish" in statuses[1]["message"]
+        viewers = httpx.get(f"{live_demo.url}/api/status").json()["foxglove"]
+        assert viewers["clients"] == 1 and list(viewers["dropped"].values()) == [0]
         ws.send("x" * (65 * 1024))
         with pytest.raises(ConnectionClosed):
             while True:
