@@ -561,7 +561,7 @@ class FoxgloveServer:
         elif op == "unsubscribe":
             self._unsubscribe(client, message.get("subscriptionIds"))
         elif isinstance(op, str):
-            client.status(ERROR, f"{op} is not supported by this server")
+            client.status(WARNING, f"{op} is not supported by this server")
         else:
             client.status(ERROR, "a message needs an op")
 

@@ -13,6 +13,7 @@ import json
 import struct
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ from mcap.reader import make_reader
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
-from tests.server.conftest import LiveServer
+from tests.server.conftest import LiveServer, WsClient
 from xabsl_studio.engine.cli import main as xabsl
 from xabsl_studio.engine.record import Recording
 from xabsl_studio.engine.worlds.bench import BenchExample
@@ -374,6 +375,36 @@ def test_an_oversized_message_closes_with_1009_and_bad_requests_get_a_status(liv
             while True:
                 ws.recv(timeout=10)
         assert ws.close_code == 1009
+
+
+def test_a_viewer_that_stops_reading_loses_its_oldest_frames_and_stops_nothing(live_demo: LiveServer) -> None:
+    assert httpx.post(f"{live_demo.url}/api/command", json={"op": "speed", "speed": 20}).status_code == 200
+    with connect(fox_url(live_demo), subprotocols=[NEW], max_queue=1) as slow:  # type: ignore[list-item]
+        channels: list[int] = []
+        while not channels:
+            data = slow.recv(timeout=10)
+            if isinstance(data, str) and json.loads(data)["op"] == "advertise":
+                channels = [c["id"] for c in json.loads(data)["channels"]]
+        slow.send(
+            json.dumps(
+                {"op": "subscribe", "subscriptions": [{"id": i, "channelId": c} for i, c in enumerate(channels)]}
+            )
+        )
+        # from here on the viewer reads nothing: its socket fills, then its queue
+        viewers: dict[str, Any] = {}
+        for _ in range(600):
+            viewers = httpx.get(f"{live_demo.url}/api/status").json()["foxglove"]
+            if any(viewers["dropped"].values()):
+                break
+            time.sleep(0.2)
+        assert any(viewers["dropped"].values()), viewers
+        assert all(queued <= MAX_QUEUED_FRAMES for queued in viewers["queued"].values())
+        before = httpx.get(f"{live_demo.url}/api/status").json()["seq"]
+        with connect(live_demo.ws_url) as ws:  # the studio's own page is served as ever
+            page = WsClient(ws)
+            page.wait_hello("connect")
+            frame = page.frame_after(lambda f: f["seq"] > before)
+        assert frame["seq"] > before, "the session went on"
 
 
 def test_a_slow_viewers_queue_drops_its_oldest_frames() -> None:
