@@ -174,12 +174,16 @@ class _Service:
             "required": [k for k in request.get("required", []) if k in properties],
             "additionalProperties": False,
         }
+        # ``request``/``response`` as the SDK writes them; ``requestSchema``/``responseSchema``
+        # (the schema's text) for clients of the spec's first version, which know only those
         return {
             "id": self.id,
             "name": self.name,
             "type": f"xabsl.{self.command.__name__}",
             "request": _schema_block(request),
             "response": _schema_block(_RESPONSE_SCHEMA),
+            "requestSchema": orjson.dumps(request).decode(),
+            "responseSchema": orjson.dumps(_RESPONSE_SCHEMA).decode(),
         }
 
 

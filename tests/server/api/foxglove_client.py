@@ -161,16 +161,27 @@ def main() -> None:
         wanted = args.wait or args.topic or ["/"]
         viewer.until(lambda: all(viewer.count(p) >= args.messages for p in wanted), "messages")
         report: dict[str, Any] = {"subprotocol": ws.subprotocol}
+        calls = []
         for name, body in args.call:
             service = next(s for s in viewer.services if s["name"] == name)
             call_id = 7000 + len(viewer.responses) + len(viewer.failures)
-            ws.send(service_call(service["id"], call_id, json.loads(body)))
+            request = json.loads(body)
+            # the advertised request schema says whether the call is well formed; sent either way
+            checker = Draft202012Validator(json.loads(service["request"]["schema"]))
+            calls.append({"name": name, "call": call_id, "request_valid": checker.is_valid(request)})
+            ws.send(service_call(service["id"], call_id, request))
             viewer.until(
                 lambda c=call_id: (
                     any(r["call"] == c for r in viewer.responses) or any(f["callId"] == c for f in viewer.failures)
                 ),
                 f"the answer to {name}",
             )
+            answer = next((r for r in viewer.responses if r["call"] == call_id), None)
+            if answer is not None:
+                response = Draft202012Validator(json.loads(service["response"]["schema"]))
+                for error in response.iter_errors(answer["payload"]):
+                    viewer.invalid.append(f"{name} response: {error.message}")
+        report["calls"] = calls
         if args.seek_ns is not None:
             before = len(viewer.messages)
             ws.send(playback_request(1, 1.0, args.seek_ns, "seek-1"))

@@ -235,6 +235,9 @@ def test_services_force_and_release_with_the_studios_checks(live_demo: LiveServe
     assert "no_such_option" in failed[7001]
     assert "extra" in failed[7002]
     assert answered[7003]["payload"]["ok"] is True
+    # the advertised request schemas agree with the server on what is well formed
+    assert [c["request_valid"] for c in report["calls"]] == [True, True, False, True]
+    assert report["invalid"] == [], "responses and messages validate against their schemas"
     status = httpx.get(f"{live_demo.url}/api/status").json()
     assert status["programs"], "the studio still runs"
 
