@@ -537,12 +537,19 @@ class FoxgloveServer:
         self._dispatch()
 
     def _seq_at(self, time_ns: int) -> int:
-        """The tick of the replay at ``time_ns`` (the nearest, inside the recording)."""
+        """The first tick of the replay at or after ``time_ns`` (the last one past the end).
+
+        As an MCAP player seeks: the messages that follow a seek to T are those from T on.
+        """
         replay = self.replay
         assert replay is not None
-        hz = self.feed.behavior_hz
-        seq = (time_ns * hz + 500_000_000) // 1_000_000_000
-        return min(max(seq, replay.source.first), replay.source.end - 1)
+        time_of = self.feed.time_ns
+        seq = max(replay.source.first, time_ns * self.feed.behavior_hz // 1_000_000_000)
+        while time_of(seq) < time_ns and seq < replay.source.end - 1:
+            seq += 1
+        while seq > replay.source.first and time_of(seq - 1) >= time_ns:
+            seq -= 1
+        return min(seq, replay.source.end - 1)
 
     async def _run(self, client: FoxgloveClient, command: Command) -> Reply:
         answer = await self.run(command)

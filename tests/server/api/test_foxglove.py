@@ -300,7 +300,7 @@ def test_a_replay_declares_its_range_and_a_seek_moves_the_studios_timeline(match
             "--messages",
             "1",
             "--seek-ns",
-            str(tick_ns(target) + 3),
+            str(tick_ns(target) - 3),  # between two ticks: the seek goes to the later one
         )
         info = report["server_info"]
         assert {"rangedPlayback", "playbackControl", "time"} <= set(info["capabilities"])
