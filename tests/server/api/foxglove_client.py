@@ -153,7 +153,11 @@ def main() -> None:
     parser.add_argument("--call", nargs=2, metavar=("SERVICE", "JSON"), action="append", default=[])
     args = parser.parse_args()
     headers = {"Authorization": f"Bearer {args.token}"} if args.token else {}
-    with connect(args.url, subprotocols=[args.subprotocol], additional_headers=headers, max_size=None) as ws:
+    # No keepalive pings: validating every message, this client may fall behind a fast session, and
+    # a pong queued behind the backlog would time out (a viewer that keeps up never needs them).
+    with connect(
+        args.url, subprotocols=[args.subprotocol], additional_headers=headers, max_size=None, ping_interval=None
+    ) as ws:
         viewer = Viewer(ws, args.topic)
         first = json.loads(ws.recv(timeout=SECONDS))
         assert first["op"] == "serverInfo", first  # the spec: always sent first

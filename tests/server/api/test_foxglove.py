@@ -183,6 +183,14 @@ def test_a_viewer_offering_both_names_gets_the_new_one_and_one_offering_neither_
 
 def test_off_loopback_the_token_and_the_origin_are_checked(demo_dir: Path) -> None:
     session = Session(BenchExample(demo_dir), seed=2, speed=2.0)
+    try:
+        guarded(session)
+    finally:
+        session.stop()
+
+
+def guarded(session: Session) -> None:
+    """The checks of :func:`test_off_loopback_the_token_and_the_origin_are_checked` on a served ``session``."""
     with LiveServer(session, SecurityPolicy(token=TOKEN, loopback=False)) as server:
         url = fox_url(server)
         for headers in ({}, {"Authorization": "Bearer " + "x" * 32}):
@@ -201,7 +209,6 @@ def test_off_loopback_the_token_and_the_origin_are_checked(demo_dir: Path) -> No
         assert done.returncode != 0 and "403" in done.stderr
         report = viewer(url, "--subprotocol", OLD, "--token", TOKEN, "--messages", "2", "--wait", "/xabsl/agents/")
         assert report["invalid"] == [] and report["counts"]
-    session.stop()
 
 
 def test_services_force_and_release_with_the_studios_checks(live_demo: LiveServer) -> None:
@@ -210,11 +217,13 @@ def test_services_force_and_release_with_the_studios_checks(live_demo: LiveServe
         "--subprotocol",
         NEW,
         "--topic",
-        "/xabsl/",
+        "/xabsl/program",
+        "--topic",
+        "/xabsl/events",
         "--wait",
-        "/xabsl/agents/",
+        "/xabsl/program",
         "--messages",
-        "2",
+        "1",
         "--call",
         "/xabsl/force_option",
         '{"robot": 0, "option": "search_ball"}',
@@ -235,6 +244,8 @@ def test_services_force_and_release_with_the_studios_checks(live_demo: LiveServe
     assert "no_such_option" in failed[7001]
     assert "extra" in failed[7002]
     assert answered[7003]["payload"]["ok"] is True
+    event = report["first_messages"]["/xabsl/events"]["payload"]  # the call is a session event
+    assert event["kind"] == "force" and event["data"]["option"] == "search_ball"
     # the advertised request schemas agree with the server on what is well formed
     assert [c["request_valid"] for c in report["calls"]] == [True, True, False, True]
     assert report["invalid"] == [], "responses and messages validate against their schemas"
@@ -286,6 +297,14 @@ def test_the_studios_commands_and_reloads_reach_the_viewer_as_events(live_demo: 
 
 def test_a_replay_declares_its_range_and_a_seek_moves_the_studios_timeline(match: Path) -> None:
     session = ReplaySession(match)
+    try:
+        drive_replay(session, match)
+    finally:
+        session.stop()
+
+
+def drive_replay(session: ReplaySession, match: Path) -> None:
+    """Foxglove's timeline drives the replay, then the studio's timeline drives Foxglove's."""
     first, end = session.source.first, session.source.end
     target = first + (end - first) // 2
     with LiveServer(session) as server:
@@ -355,7 +374,6 @@ def test_a_replay_declares_its_range_and_a_seek_moves_the_studios_timeline(match
                     if current == tick_ns(back):
                         break
             assert seen[-1] == (1, tick_ns(back), 1)
-    session.stop()
 
 
 def test_an_oversized_message_closes_with_1009_and_bad_requests_get_a_status(live_demo: LiveServer) -> None:
