@@ -60,6 +60,7 @@ from fastapi.responses import JSONResponse
 from pydantic import TypeAdapter
 from starlette.websockets import WebSocketDisconnect
 
+from xabsl_studio.engine.record import Recording
 from xabsl_studio.server.protocol.commands import (
     Command,
     ForceOption,
@@ -330,7 +331,9 @@ class FoxgloveServer:
         self.session = session
         self.run = run
         self.loop = loop
-        self.replay = session if isinstance(session, ReplaySession) else None
+        #: the recording a replay plays back (None: a live session); everything this module needs
+        #: of a replay is the recording, the ring and the session's ``paused`` and ``speed``
+        self.replay: Recording | None = session.recording if isinstance(session, ReplaySession) else None
         self.feed = TopicFeed(session.behavior_hz, generation_events=self.replay is None)
         self.channels: dict[str, _Channel] = {}
         self.clients: dict[int, FoxgloveClient] = {}
@@ -346,7 +349,7 @@ class FoxgloveServer:
         self._told: tuple[int, int, float] | None = None
         self._events: dict[int, list[dict[str, Any]]] = {}
         if self.replay is not None:
-            for event in self.replay.recording.events:
+            for event in self.replay.events:
                 self._events.setdefault(int(event.get("seq", 0)), []).append(event)
         self._advertise_new()
 
@@ -453,13 +456,21 @@ class FoxgloveServer:
     def _playback_now(self) -> tuple[int, int, float]:
         replay = self.replay
         assert replay is not None
-        if not replay.paused:
+        position = self._position()
+        if not self.session.paused:
             status = PLAYING
-        elif replay.position >= replay.source.end - 1:
+        elif position >= replay.end - 1:
             status = ENDED
         else:
             status = PAUSED
-        return status, replay.position, replay.speed
+        return status, position, self.session.speed
+
+    def _position(self) -> int:
+        """The replay's playback position: the tick it put in the ring last."""
+        latest = self.session.ring.latest
+        if latest is not None:
+            return latest.seq
+        return self.replay.first if self.replay is not None else 0
 
     def _playback_frame(self, request_id: str | None, did_seek: bool) -> bytes:
         status, seq, speed = self._playback_now()
@@ -518,13 +529,13 @@ class FoxgloveServer:
         self._held = True  # the state answers first, the ticks of the new position follow it
         try:
             wanted_speed = min(MAX_SPEED, max(MIN_SPEED, round(float(speed), 6)))
-            if wanted_speed != replay.speed:
+            if wanted_speed != self.session.speed:
                 await self._run(client, Speed(op="speed", speed=wanted_speed))
             if had_seek:
                 await self._run(client, Seek(op="seek", seq=self._seq_at(seek_ns)))
-            if command == PLAY and replay.paused and replay.position < replay.source.end - 1:
+            if command == PLAY and self.session.paused and self._position() < replay.end - 1:
                 await self._run(client, Resume(op="resume"))
-            elif command == PAUSE and not replay.paused:
+            elif command == PAUSE and not self.session.paused:
                 await self._run(client, Pause(op="pause"))
             self._told = self._playback_now()
             client.binary(self._playback_frame(request_id, bool(had_seek)))
@@ -544,12 +555,12 @@ class FoxgloveServer:
         replay = self.replay
         assert replay is not None
         time_of = self.feed.time_ns
-        seq = max(replay.source.first, time_ns * self.feed.behavior_hz // 1_000_000_000)
-        while time_of(seq) < time_ns and seq < replay.source.end - 1:
+        seq = max(replay.first, time_ns * self.feed.behavior_hz // 1_000_000_000)
+        while time_of(seq) < time_ns and seq < replay.end - 1:
             seq += 1
-        while seq > replay.source.first and time_of(seq - 1) >= time_ns:
+        while seq > replay.first and time_of(seq - 1) >= time_ns:
             seq -= 1
-        return min(seq, replay.source.end - 1)
+        return min(seq, replay.end - 1)
 
     async def _run(self, client: FoxgloveClient, command: Command) -> Reply:
         answer = await self.run(command)
@@ -685,9 +696,9 @@ class FoxgloveServer:
             info["supportedEncodings"] = ["json"]
         else:
             info["capabilities"] += ["rangedPlayback", "playbackControl"]
-            info["dataStartTime"] = _timestamp(self.feed.time_ns(replay.source.first))
-            info["dataEndTime"] = _timestamp(self.feed.time_ns(replay.source.end - 1))
-            info["metadata"]["replay"] = str(replay.recording.path)
+            info["dataStartTime"] = _timestamp(self.feed.time_ns(replay.first))
+            info["dataEndTime"] = _timestamp(self.feed.time_ns(replay.end - 1))
+            info["metadata"]["replay"] = str(replay.path)
         return info
 
     async def serve(self, websocket: WebSocket) -> None:
