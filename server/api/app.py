@@ -678,16 +678,7 @@ async def _command_error(request: Request, error: Exception) -> JSONResponse:
 
 def _routers() -> tuple[APIRouter, ...]:
     """The routers every studio app includes (``create_app``)."""
-    return (
-        router,
-        drafts_router,
-        docs_router,
-        profile_router,
-        compare_router,
-        fork_router,
-        library_router,
-        foxglove_router,
-    )
+    return (router, drafts_router, docs_router, profile_router, compare_router, fork_router, library_router)
 
 
 def _allowed_methods(scope: Scope) -> set[str]:
@@ -832,6 +823,7 @@ def create_app(
     app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     for included in _routers():
         app.include_router(included, dependencies=[Depends(single_query_values)])
+    app.include_router(foxglove_router)  # one websocket route (/foxglove): no query parameters of its own
     _document_messages(app)
     if ui is not None:
         app.mount("/", WebUi(directory=ui, html=True), name="web")
