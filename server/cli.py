@@ -367,6 +367,8 @@ def run(args: argparse.Namespace) -> int:
     if session.live_recorder is not None:
         print(f"  recording the session into {session.live_recorder.folder} (--no-record: off)")
     print(f"  API   http://{shown}:{args.port}/api/openapi.json   websocket ws://{shown}:{args.port}/ws")
+    token = f"?token={policy.token}" if policy.token else ""
+    print(f"  Foxglove / Lichtblick: ws://{shown}:{args.port}/foxglove{token}   (docs/foxglove.md)")
     if not (web_dist / "index.html").is_file():
         print(f"  (the web UI is not built: {web_dist} is missing; run make)")
     sys.stdout.flush()

@@ -39,7 +39,7 @@ from xabsl_studio.engine.record.mcapfile import McapWriter
 from xabsl_studio.engine.record.sampler import ProgramTables, reads_json
 from xabsl_studio.engine.types import Value
 
-__all__ = ["CHUNK_SIZE", "DECIMALS", "FOXGLOVE_EVERY", "NO_CHANGE", "RecordingEncoder", "TickSample"]
+__all__ = ["CHUNK_SIZE", "DECIMALS", "FOXGLOVE_EVERY", "NO_CHANGE", "Nesting", "RecordingEncoder", "TickSample"]
 
 #: Uncompressed bytes per MCAP chunk: small enough that a seek decompresses little (a chunk is
 #: about 2 s of a 10-agent match), large enough for zstd to find the repetition between ticks.
@@ -98,17 +98,15 @@ class _Agent:
 
     def bind(self, tables: ProgramTables, gen: int, decimals: int | None) -> None:
         self.gen = gen
-        self.nest_inputs = _Nesting(tables.inputs, tables.input_enums, tables.input_decimals, tables.enums, decimals)
-        self.nest_outputs = _Nesting(
-            tables.outputs, tables.output_enums, tables.output_decimals, tables.enums, decimals
-        )
+        self.nest_inputs = Nesting(tables.inputs, tables.input_enums, tables.input_decimals, tables.enums, decimals)
+        self.nest_outputs = Nesting(tables.outputs, tables.output_enums, tables.output_decimals, tables.enums, decimals)
         self.inputs: tuple[Value | None, ...] = ()
         self.outputs: tuple[Value | None, ...] = ()
         self.assignments: tuple[Value | None, ...] | None = None
         self.key = True
 
 
-class _Nesting:
+class Nesting:
     """Symbol values -> the nested JSON object of a symbols message (``ball.x`` -> ``{"ball": {"x": ..}}``).
 
     Foxglove's message paths address nested fields with dots (``.inputs.ball.x``) and cannot

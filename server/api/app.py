@@ -49,6 +49,8 @@ from xabsl_studio.server.api.compare import router as compare_router
 from xabsl_studio.server.api.docs import router as docs_router
 from xabsl_studio.server.api.drafts import router as drafts_router
 from xabsl_studio.server.api.forks import router as fork_router
+from xabsl_studio.server.api.foxglove import FoxgloveServer
+from xabsl_studio.server.api.foxglove import router as foxglove_router
 from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
 from xabsl_studio.server.api.library import RecordingLibrary
 from xabsl_studio.server.api.library import router as library_router
@@ -146,6 +148,8 @@ class Studio:
         self.files = BehaviorFiles(session.example.root, [f for s in session.example.sources for f in s.file_folders])
         self.graphs = GraphCache()
         self.hub: Hub | None = None
+        #: the Foxglove WebSocket endpoint's viewers and feed (``/foxglove``; set by the lifespan)
+        self.foxglove: FoxgloveServer | None = None
         #: open ``/lsp`` connections (capped at ``MAX_LSP_CLIENTS``)
         self.lsp_connections = 0
         self.write_lock = asyncio.Lock()
@@ -176,7 +180,10 @@ class Studio:
             if isinstance(command, History):
                 return Reply(id=command.id, ok=True, result=self.start_history(command, client))
             owner = client.id if client is not None else None
-            return Reply(id=command.id, ok=True, result=await session.request(command, owner))
+            result = await session.request(command, owner)
+            if self.foxglove is not None:
+                self.foxglove.command(command)  # an event for its viewers, or a playback change
+            return Reply(id=command.id, ok=True, result=result)
         except CommandError as error:
             return Reply(id=command.id, ok=False, error=str(error))
 
@@ -418,9 +425,10 @@ async def language_server(ws: WebSocket) -> None:
 
 @router.get("/api/status", tags=["session"], responses=error_responses())
 async def status(studio: StudioDep) -> dict[str, Any]:
-    """The session status: clock, speed, ring buffer, programs and their diagnostics, clients."""
+    """The session status: clock, speed, ring buffer, programs and their diagnostics, clients, Foxglove viewers."""
     result = await studio.session.status()
     result["clients"] = studio.hub.stats() if studio.hub is not None else {}
+    result["foxglove"] = studio.foxglove.stats() if studio.foxglove is not None else {}
     result["token_required"] = studio.policy.token is not None
     result["version"] = VERSION
     return result
@@ -710,7 +718,14 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     hub = Hub(session, asyncio.get_running_loop())
     hub.token_required = studio.policy.token is not None
     studio.hub = hub
-    session.notify = hub.on_entry
+    viewers = FoxgloveServer(session, lambda command: studio.run_command(command, None), asyncio.get_running_loop())
+    studio.foxglove = viewers
+
+    def notify(entry: frames.Entry) -> None:
+        hub.on_entry(entry)
+        viewers.on_entry(entry)
+
+    session.notify = notify
     session.on_crash = hub.on_crash
     session.on_breakpoint = hub.on_breakpoint
     await session.start()
@@ -730,6 +745,8 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
         if getattr(app.state, "serves_studios", False):
             await studio.studios.close_all()
         await hub.close_all()
+        await viewers.close_all()
+        studio.foxglove = None
         session.notify = _ignore
         await session.aclose()
         studio.hub = None
@@ -796,6 +813,7 @@ def create_app(
     app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     for included in _routers():
         app.include_router(included, dependencies=[Depends(single_query_values)])
+    app.include_router(foxglove_router)  # one websocket route (/foxglove): no query parameters of its own
     _document_messages(app)
     if ui is not None:
         app.mount("/", WebUi(directory=ui, html=True), name="web")

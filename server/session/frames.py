@@ -26,6 +26,7 @@ import time
 from collections import deque
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from itertools import islice
 from typing import Any
 
 import orjson
@@ -260,6 +261,10 @@ class Ring:
         except IndexError:  # past the end, or an append dropped the oldest meanwhile
             return None
         return entry if entry.seq == seq else None
+
+    def newest(self, count: int) -> list[Entry]:
+        """The newest ``count`` entries (fewer in a shorter ring), oldest first, without copying the ring."""
+        return list(islice(reversed(self._entries), count))[::-1]
 
     def snapshot(self) -> list[Entry]:
         """A copy of the entries, oldest first (a C-level copy, safe against a racing append)."""

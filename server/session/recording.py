@@ -46,7 +46,7 @@ from xabsl_studio.engine.types import Kind
 from xabsl_studio.server.protocol.host import Sample
 from xabsl_studio.server.session.frames import Generation
 
-__all__ = ["DEFAULT_CAP_BYTES", "DEFAULT_ROLL_TICKS", "LiveRecorder", "default_folder", "tables_of"]
+__all__ = ["DEFAULT_CAP_BYTES", "DEFAULT_ROLL_TICKS", "LiveRecorder", "command_event", "default_folder", "tables_of"]
 
 log = logging.getLogger("xabsl.server")
 
@@ -64,6 +64,28 @@ _EVENT_OF = {
     "release_input": "release_input",
     "reset_agent": "reset_agent",
 }
+
+
+def command_event(command: Any, gen: Generation | None) -> tuple[str, str | None, dict[str, Any]] | None:
+    """A command the session carried out as an event ``(kind, agent, data)``; None: not an event.
+
+    ``agent`` is the name of the command's robot in ``gen`` (None without one), ``data`` the
+    command's arguments (docs/recordings.md, "Events").
+    """
+    kind = _EVENT_OF.get(getattr(command, "op", None) or "")
+    if kind is None:
+        return None
+    data = {k: v for k, v in dataclasses.asdict(command).items() if k not in ("type", "id", "op", "robot")}
+    if "agent" in data:
+        # the event's own ``agent`` is the robot; the XABSL agent it now runs is ``name``
+        # (docs/recordings.md), so the two never collide
+        data["name"] = data.pop("agent")
+    robot = getattr(command, "robot", None)
+    agent = None
+    if robot is not None and gen is not None and 0 <= robot < len(gen.structure["robots"]):
+        agent = str(gen.structure["robots"][robot]["name"])
+    return kind, agent, data
+
 
 #: The folder's size cap by default.
 DEFAULT_CAP_BYTES = 2_000_000_000
@@ -267,20 +289,10 @@ class LiveRecorder:
 
     def command(self, command: Any) -> None:
         """A command the simulation carried out, as an event (those that change what runs)."""
-        op = getattr(command, "op", None)
-        kind = _EVENT_OF.get(op or "")
-        if kind is None:
-            return
-        data = {k: v for k, v in dataclasses.asdict(command).items() if k not in ("type", "id", "op", "robot")}
-        if "agent" in data:
-            # the event's own ``agent`` is the robot; the XABSL agent it now runs is ``name``
-            # (docs/recordings.md), so the two never collide
-            data["name"] = data.pop("agent")
-        robot = getattr(command, "robot", None)
-        agent = None
-        if robot is not None and self._gen is not None and 0 <= robot < len(self._gen.structure["robots"]):
-            agent = self._gen.structure["robots"][robot]["name"]
-        self.event(kind, agent, **data)
+        event = command_event(command, self._gen)
+        if event is not None:
+            kind, agent, data = event
+            self.event(kind, agent, **data)
 
     def close(self) -> None:
         """Finish the current file (and keep the folder under its cap)."""

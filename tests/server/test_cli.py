@@ -8,9 +8,10 @@ import time
 from pathlib import Path
 
 import httpx2 as httpx
+import orjson
 import pytest
 
-from tests.server.conftest import free_port
+from tests.server.conftest import REPO, free_port
 from xabsl_studio.server.session.recording import cache_folder, default_folder
 
 
@@ -53,10 +54,18 @@ def test_serve_runs_an_example_and_prints_the_url(demo_dir: Path) -> None:
                 time.sleep(0.2)
         assert status.status_code == 200 and status.json()["speed"] == 2.0
         assert httpx.get(f"http://127.0.0.1:{port}/api/status").status_code == 401
+        # a Foxglove viewer (the spec client of tests/server/api) on the address the server prints
+        viewer = [sys.executable, str(REPO / "tests" / "server" / "api" / "foxglove_client.py")]
+        viewer += [f"ws://127.0.0.1:{port}/foxglove?token=t0k", "--subprotocol", "foxglove.websocket.v1"]
+        viewer += ["--messages", "2", "--wait", "/xabsl/agents/"]
+        watched = subprocess.run(viewer, capture_output=True, text=True, timeout=120)
+        assert watched.returncode == 0, watched.stderr[-2000:]
+        assert orjson.loads(watched.stdout)["invalid"] == []
     finally:
         process.terminate()
         out, _ = process.communicate(timeout=20)
     assert f"http://localhost:{port}/?token=t0k" in out
+    assert f"ws://localhost:{port}/foxglove?token=t0k" in out
 
 
 def test_serve_refuses_a_bad_example(tmp_path: Path) -> None:
