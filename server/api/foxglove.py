@@ -80,7 +80,6 @@ from xabsl_studio.server.session.feed import FeedMessage, TopicFeed, schema_of
 from xabsl_studio.server.session.frames import Entry
 from xabsl_studio.server.session.live import Session
 from xabsl_studio.server.session.recording import command_event
-from xabsl_studio.server.session.replay import ReplaySession
 
 __all__ = ["SUBPROTOCOLS", "FoxgloveClient", "FoxgloveServer", "router"]
 
@@ -333,7 +332,7 @@ class FoxgloveServer:
         self.loop = loop
         #: the recording a replay plays back (None: a live session); everything this module needs
         #: of a replay is the recording, the ring and the session's ``paused`` and ``speed``
-        self.replay: Recording | None = session.recording if isinstance(session, ReplaySession) else None
+        self.replay: Recording | None = session.played
         self.feed = TopicFeed(session.behavior_hz, generation_events=self.replay is None)
         self.channels: dict[str, _Channel] = {}
         self.clients: dict[int, FoxgloveClient] = {}
