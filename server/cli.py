@@ -140,7 +140,13 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         "and serve them with xabsl_studio.attach.serve_engines (docs/attach.md). Several hosts make one "
         "session (a team of robot processes). The studio is served like xabsl serve's.",
     )
-    parser.add_argument("addresses", metavar="HOST:PORT", nargs="+", help="a host's address (e.g. 127.0.0.1:7410)")
+    parser.add_argument(
+        "addresses",
+        metavar="HOST:PORT",
+        nargs="+",
+        help="a host's address (e.g. 127.0.0.1:7410), or naoth://HOST[:5401] for a NaoTH robot or simulator "
+        "(docs/naoth.md; needs --behavior)",
+    )
     parser.add_argument(
         "--behavior",
         default=None,
@@ -180,11 +186,19 @@ def run_attach(args: argparse.Namespace) -> int:
     from xabsl_studio.server.api.security import SecurityPolicy, TokenError
     from xabsl_studio.server.api.transport import WebSocketProtocol
     from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
+    from xabsl_studio.server.protocol.naoth import parse_naoth_address
     from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
     from xabsl_studio.server.session.recording import LiveRecorder, default_folder
 
+    naoth = [a.startswith("naoth://") for a in args.addresses]
+    if any(naoth) and not all(naoth):
+        raise UsageError("attach either NaoTH robots (naoth://HOST) or hosts of xabsl_studio.attach, not both")
+    if any(naoth) and args.behavior is None:
+        raise UsageError("a NaoTH robot needs --behavior AGENTS_FILE: the sources it runs (docs/naoth.md)")
     try:
-        addresses = [parse_address(a) for a in args.addresses]
+        addresses = [
+            parse_naoth_address(a) if n else parse_address(a) for a, n in zip(args.addresses, naoth, strict=True)
+        ]
     except ValueError as error:
         raise UsageError(str(error)) from None
     try:
@@ -202,7 +216,14 @@ def run_attach(args: argparse.Namespace) -> int:
     root = common_root(sources) if sources else Path.cwd()
     hosts = ", ".join(args.addresses)
     example = AttachedExample(f"attached: {hosts}", root, sources, behavior_hz=max(1, args.hz) * len(addresses))
-    session = AttachedSession(addresses, example, args.token, args.name, control=not args.watch)
+    session: AttachedSession
+    if any(naoth):
+        from xabsl_studio.server.session.naoth import NaothSession
+
+        example.behavior_hz = 30 * len(addresses)  # NaoTH's cognition runs at 30 frames per second
+        session = NaothSession(addresses, example, studio=args.name)
+    else:
+        session = AttachedSession(addresses, example, args.token, args.name, control=not args.watch)
     folder = Path(args.record_dir) if args.record_dir else default_folder()
     recording = None
     if args.no_record:

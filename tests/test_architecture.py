@@ -241,7 +241,7 @@ ENGINE_LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"runtime"}),
     frozenset({"host", "trace"}),
     frozenset({"record", "docs", "worlds"}),
-    frozenset({"profile", "testing", "compare"}),
+    frozenset({"profile", "testing", "compare", "naoth"}),
     frozenset({"cli"}),
 )
 

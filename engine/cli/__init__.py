@@ -57,6 +57,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.profile",
         "profile a recording: time per option and state, transitions, oscillations, coverage",
     ),
+    "import": (
+        "xabsl_studio.engine.cli.imports",
+        "convert another system's logs into a recording (naoth: a NaoTH game log): docs/naoth.md",
+    ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
     "run": (
         "xabsl_studio.engine.cli.run",
