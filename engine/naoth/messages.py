@@ -186,9 +186,9 @@ def _fill(message: descriptor_pb2.DescriptorProto, name: str) -> None:
         field = message.field.add(name=field_name, number=number)
         field.label = {"required": _REQUIRED, "optional": _OPTIONAL, "repeated": _REPEATED}[label]
         if kind in _TYPES:
-            field.type = _TYPES[kind]  # type: ignore[assignment]
+            field.type = _TYPES[kind]
         else:
-            field.type = _F.TYPE_ENUM if kind in ENUMS else _F.TYPE_MESSAGE  # type: ignore[assignment]
+            field.type = _F.TYPE_ENUM if kind in ENUMS else _F.TYPE_MESSAGE
             field.type_name = f".{PACKAGE}.{kind}"
         if default is not None:
             field.default_value = default

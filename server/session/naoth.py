@@ -10,9 +10,10 @@ recording, history), with each host a NaoTH robot reached through
   ``refused``/``mismatches`` status and the studio's compile errors, the robot's agents come from
   ``behavior:list_agents``;
 * **frames**: ``BehaviorStateSparse`` is asked again as soon as the previous answer came (one
-  request in flight: as fast as the robot answers); each answer is one tick of the session
-  whose host ``seq`` is the robot's frame number, so frames the robot ran between two answers
-  are counted as missed and show as gaps on the timeline;
+  request in flight: as fast as the robot answers); each answer with a new frame number is one
+  tick of the session whose host ``seq`` is the robot's frame number (an answer repeating the
+  last frame, the robot's 30 Hz being slower than the questions, is dropped), so frames the
+  robot ran between two answers are counted as missed and show as gaps on the timeline;
 * **reload of the behavior on the robot**: this studio's own reload drops the frames between
   ``behavior:reload`` and the new complete message (never joined with the old tables); a robot
   serves one client at a time, so no other tool reloads while the studio is attached, and the
@@ -272,17 +273,18 @@ class NaothSession(AttachedSession):
         join = host.join
         if join is None or host.generation is None:
             return
+        number = sparse.frameNumber if sparse.HasField("frameNumber") else None
+        if number is not None and number == host.seq:
+            return  # the robot has not run a frame since the last answer (it runs at 30 Hz)
         joined = join.frame(sparse)
-        number = joined.frame_number
         seq = number if number is not None else host.seq + 1
+        if seq < host.seq:  # the robot restarted (frame numbers start again): its frames go on
+            host.seq, host.previous = seq - 1, None
         consecutive = host.previous is not None and seq == host.seq + 1
-        host.inferred += infer_decisions(
-            join.program, joined.path, host.previous.path if consecutive and host.previous else None
-        )
+        previous = host.previous.path if consecutive and host.previous is not None else None
+        host.inferred += infer_decisions(join.program, joined.path, previous)
         host.previous = joined
         host.unplaced += joined.unplaced
-        if seq <= host.seq:  # the robot restarted (frame numbers start again): its frames go on
-            host.seq = seq - 1
         if joined.agent is not None:
             host.agent = joined.agent
         extras = b""

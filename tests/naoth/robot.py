@@ -9,7 +9,9 @@ registration order). Messages are encoded by protobuf from the project's message
 (``xabsl_studio.engine.naoth.messages``, protobuf's own encoder).
 
 Frames are deterministic: the robot advances ``--step`` frames of 33 ms per sparse request
-(``--step 3`` leaves gaps of two frames between answers), so tests need no timing. Every frame
+(``--step 3`` leaves gaps of two frames between answers) until frame ``--frames``, then
+answers with that frame again (as a robot polled faster than it runs does); an agent switch or
+a reload grants ``--frames`` more. Tests need no timing. Every frame
 it served (and, with ``--log``, every frame of the log) goes as the truth to ``--truth FILE``,
 one JSON line per frame with names and values as the engine had them::
 
@@ -49,6 +51,10 @@ class Robot:
 
     def __init__(self, program: Program, agent: str) -> None:
         self.frame = 0
+        #: the frame the robot stops at, and how many more an agent switch or a reload grants
+        self.limit = 10**9
+        self.frames = 0
+        self.last: Any = None
         self.ball = 1400.0
         self.kicks = 0
         self.load(program, agent)
@@ -234,9 +240,12 @@ def answer(robot: Robot, command: Any, config: Path, step: int, truth: IO[bytes]
         if "BehaviorStateComplete" in args:
             return bytes(robot.complete.SerializeToString())
         if "BehaviorStateSparse" in args:
+            if robot.frame + step > robot.limit and robot.last is not None:
+                return bytes(robot.last.SerializeToString())  # no new frame yet
             for _ in range(step):
                 robot.step()
             sparse, shown = robot.build_sparse()
+            robot.last = sparse
             if truth is not None:
                 truth.write(orjson.dumps(shown) + b"\n")
                 truth.flush()
@@ -252,6 +261,7 @@ def answer(robot: Robot, command: Any, config: Path, step: int, truth: IO[bytes]
             return f'agent not found:  "{agent}"'.encode()
         robot.agent = agent
         robot.engine.root_actions.select_agent(agent)
+        robot.limit += robot.frames
         return f'resetted agent to "{agent}"'.encode()
     if name == "Cognition:file::write":
         path = config / Path(args.get("path", b"").decode()).name
@@ -261,6 +271,7 @@ def answer(robot: Robot, command: Any, config: Path, step: int, truth: IO[bytes]
         try:
             program = read_ic((config / "behavior-ic.dat").read_text(encoding="latin-1"))
             robot.load(program, robot.agent)
+            robot.limit += robot.frames
         except Exception as error:  # the robot answers with the error text, as NaoTH's does
             return f"XABSL error: {error}".encode()
         return b"behavior reloaded"
@@ -271,6 +282,7 @@ def serve(args: argparse.Namespace) -> int:
     program = compile_file(args.behavior).program
     assert program is not None
     robot = Robot(program, args.agent)
+    robot.frames = robot.limit = args.frames
     config = Path(args.config)
     config.mkdir(parents=True, exist_ok=True)
     truth = open(args.truth, "ab") if args.truth else None  # noqa: SIM115 -- open for the process's life
@@ -333,6 +345,7 @@ def main(argv: list[str] | None = None) -> int:
     s = sub.add_parser("serve")
     s.add_argument("--port", type=int, default=0)
     s.add_argument("--step", type=int, default=1)
+    s.add_argument("--frames", type=int, default=10**9, help="stop running at this frame (more per switch/reload)")
     s.add_argument("--config", default="Config")
     l = sub.add_parser("log")  # noqa: E741
     l.add_argument("log")
