@@ -12,10 +12,11 @@ recording, history), with each host a NaoTH robot reached through
 * **frames**: ``BehaviorStateSparse`` is asked again as soon as the previous answer came (one
   request in flight: as fast as the robot answers); each answer with a new frame number is one
   tick of the session whose host ``seq`` is the robot's frame number (an answer repeating the
-  last frame, the robot's 30 Hz being slower than the questions, is dropped), so frames the
+  last frame, the robot's 30 Hz being slower than the questions, is dropped, and the next
+  question waits :data:`REPEAT_PAUSE`), so frames the
   robot ran between two answers are counted as missed and show as gaps on the timeline;
-* **reload of the behavior on the robot**: this studio's own reload drops the frames between
-  ``behavior:reload`` and the new complete message (never joined with the old tables); a robot
+* **reload of the behavior on the robot**: this studio's own reload asks no frame between
+  ``behavior:reload`` and the new complete message (none is joined with the old tables); a robot
   serves one client at a time, so no other tool reloads while the studio is attached, and the
   complete message's frame number is checked every :data:`COMPLETE_EVERY` seconds all the same;
 * **commands**: agent selection (``behavior:set_agent``), hot reload (our compiler's IC written
@@ -72,6 +73,10 @@ log = logging.getLogger("xabsl.server")
 IC_PATH = "Config/behavior-ic.dat"
 #: Seconds between two checks whether the robot loaded its behavior again.
 COMPLETE_EVERY = 2.0
+#: Seconds to wait after an answer that repeated the last frame before asking again: a third of a
+#: 30 Hz frame, so a new frame shows within 10 ms and an idle robot is not asked a thousand times
+#: a second.
+REPEAT_PAUSE = 0.01
 #: What a NaoTH robot lets a studio do (its debug port has no command for the others).
 CAPABILITIES = {
     "pause": False,
@@ -120,6 +125,9 @@ class NaothHost(HostConnection):
     next_ident: int = 0
     previous: JoinedFrame | None = None
     number: int = 0
+    #: held by the frame loop for each question and by a reload for all of its steps, so no frame
+    #: is asked between ``behavior:reload`` and the new tables
+    busy: asyncio.Lock = field(default_factory=asyncio.Lock)
 
     def info(self, me: str | None) -> dict[str, Any]:
         """The host as the status shows it, with what the join found."""
@@ -169,14 +177,19 @@ class NaothSession(AttachedSession):
             await self._load(host, "connect")
             checked = time.monotonic()
             while True:
-                if time.monotonic() - checked > COMPLETE_EVERY:
-                    checked = time.monotonic()
-                    complete = await self._command(host, "Cognition:representation:get", {"BehaviorStateComplete": b""})
-                    message = M.parse("BehaviorStateComplete", complete)
-                    if message.frameNumber != host.complete_frame:
-                        await self._load(host, "reload", message)
-                data = await self._command(host, "Cognition:representation:get", {"BehaviorStateSparse": b""})
-                self._sparse(host, M.parse("BehaviorStateSparse", data))
+                async with host.busy:
+                    if time.monotonic() - checked > COMPLETE_EVERY:
+                        checked = time.monotonic()
+                        complete = await self._command(
+                            host, "Cognition:representation:get", {"BehaviorStateComplete": b""}
+                        )
+                        message = M.parse("BehaviorStateComplete", complete)
+                        if message.frameNumber != host.complete_frame:
+                            await self._load(host, "reload", message)
+                    data = await self._command(host, "Cognition:representation:get", {"BehaviorStateSparse": b""})
+                    new = self._sparse(host, M.parse("BehaviorStateSparse", data))
+                if not new:
+                    await asyncio.sleep(REPEAT_PAUSE)
                 if tasks[0].done():
                     tasks[0].result()  # the reader failed: its error ends this connection
         except M.DecodeError as error:
@@ -245,8 +258,7 @@ class NaothSession(AttachedSession):
         agents = (await self._command(host, "Cognition:behavior:list_agents")).decode("utf-8", "replace")
         host.agents = tuple(a for a in agents.splitlines() if a) or tuple(a for a, _ in host.join.agents)
         host.agent = (await self._command(host, "Cognition:behavior:get_agent")).decode("utf-8", "replace") or None
-        host.previous = None
-        host.seq = -1
+        host.previous = None  # frame numbers go on across a reload: a gap still counts
         host.number += 1
         name = host.label.removeprefix("naoth://")
         self._from_host(host, Welcome(name, (name,), dict(CAPABILITIES), name, None))
@@ -269,13 +281,14 @@ class NaothSession(AttachedSession):
         )
         self._from_host(host, HostGeneration(generation, {self.key: emit_ic(program)}))
 
-    def _sparse(self, host: NaothHost, sparse: Any) -> None:
+    def _sparse(self, host: NaothHost, sparse: Any) -> bool:
+        """One answer as a session tick; False when it was no new frame (the caller waits a little)."""
         join = host.join
         if join is None or host.generation is None:
-            return
+            return False
         number = sparse.frameNumber if sparse.HasField("frameNumber") else None
         if number is not None and number == host.seq:
-            return  # the robot has not run a frame since the last answer (it runs at 30 Hz)
+            return False  # the robot has not run a frame since the last answer (it runs at 30 Hz)
         joined = join.frame(sparse)
         seq = number if number is not None else host.seq + 1
         if seq < host.seq:  # the robot restarted (frame numbers start again): its frames go on
@@ -305,6 +318,7 @@ class NaothSession(AttachedSession):
             b"{}",
         )
         self._from_host(host, sample)
+        return True
 
     # -- commands ---------------------------------------------------------------------------------------
 
@@ -319,7 +333,9 @@ class NaothSession(AttachedSession):
                 return False, None, f"robot {host.label}: {text}"
             host.agent = command.agent
             return True, None, None
-        if isinstance(command, Status | ReleaseOwner):
+        if isinstance(command, Status):
+            return True, {}, None  # no simulation counters: the robots' are in ``attached``
+        if isinstance(command, ReleaseOwner):
             return True, None, None
         if isinstance(command, SetBreakpoints):
             if command.points:
@@ -346,21 +362,20 @@ class NaothSession(AttachedSession):
         ic = emit_ic(program)
         problems: list[str] = []
         sent = 0
-        for host in self.hosts:
-            if not host.connected or not isinstance(host, NaothHost):
-                continue
-            sent += 1
-            host.join = None  # frames between the reload and the new tables are not joined with the old ones
-            await self._command(host, "Cognition:file::write", {"path": IC_PATH, "content": ic.encode("latin-1")})
-            answer = (await self._command(host, "Cognition:behavior:reload")).decode("utf-8", "replace")
-            if "error" in answer.lower() or not answer.startswith("behavior reloaded"):
-                problems.append(f"{host.label}: {answer.strip()}")
         state.running = program
         state.running_sources = compilation.sources
         state.running_json = program_to_json(program, compilation.source_text)
         state.partial = state.partial_json = None
         for host in self.hosts:
-            if host.connected and isinstance(host, NaothHost):
+            if not host.connected or not isinstance(host, NaothHost):
+                continue
+            sent += 1
+            async with host.busy:  # no frame is asked between the reload and the new tables
+                content = ic.encode("latin-1")
+                await self._command(host, "Cognition:file::write", {"path": IC_PATH, "content": content})
+                answer = (await self._command(host, "Cognition:behavior:reload")).decode("utf-8", "replace")
+                if "error" in answer.lower() or not answer.startswith("behavior reloaded"):
+                    problems.append(f"{host.label}: {answer.strip()}")
                 await self._load(host, "reload")
         if problems:
             state.error = "; ".join(problems)

@@ -55,6 +55,7 @@ class Robot:
         self.limit = 10**9
         self.frames = 0
         self.last: Any = None
+        self.declarations = program
         self.ball = 1400.0
         self.kicks = 0
         self.load(program, agent)
@@ -269,7 +270,9 @@ def answer(robot: Robot, command: Any, config: Path, step: int, truth: IO[bytes]
         return b"written"
     if name == "Cognition:behavior:reload":
         try:
-            program = read_ic((config / "behavior-ic.dat").read_text(encoding="latin-1"))
+            # the host's own declarations (every enum element its symbol code registers) stay
+            ic = (config / "behavior-ic.dat").read_text(encoding="latin-1")
+            program = read_ic(ic, robot.declarations)
             robot.load(program, robot.agent)
             robot.limit += robot.frames
         except Exception as error:  # the robot answers with the error text, as NaoTH's does
@@ -282,6 +285,7 @@ def serve(args: argparse.Namespace) -> int:
     program = compile_file(args.behavior).program
     assert program is not None
     robot = Robot(program, args.agent)
+    robot.declarations = program
     robot.frames = robot.limit = args.frames
     config = Path(args.config)
     config.mkdir(parents=True, exist_ok=True)
