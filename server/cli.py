@@ -160,6 +160,13 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         help="the token of this studio's web UI (generated off loopback)",
     )
     parser.add_argument("--watch", action="store_true", help="attach without taking control (a command takes it)")
+    parser.add_argument(
+        "--share",
+        type=int,
+        default=None,
+        metavar="PORT",
+        help="NaoTH: serve the robot's one debug slot on 127.0.0.1:PORT to other studios and RobotControl",
+    )
     parser.add_argument("--name", default=None, help="how the hosts show this studio")
     parser.add_argument("--hz", type=int, default=100, help="the hosts' tick rate, for sizing the history (100)")
     parser.add_argument("--host", default="127.0.0.1", help="address the studio binds (default 127.0.0.1)")
@@ -217,11 +224,15 @@ def run_attach(args: argparse.Namespace) -> int:
     hosts = ", ".join(args.addresses)
     example = AttachedExample(f"attached: {hosts}", root, sources, behavior_hz=max(1, args.hz) * len(addresses))
     session: AttachedSession
+    if args.share is not None and not any(naoth):
+        raise UsageError("--share is for a NaoTH robot (naoth://HOST)")
     if any(naoth):
         from xabsl_studio.server.session.naoth import NaothSession
 
         example.behavior_hz = 30 * len(addresses)  # NaoTH's cognition runs at 30 frames per second
-        session = NaothSession(addresses, example, studio=args.name)
+        if args.share is not None and (len(addresses) != 1 or not 0 <= args.share < 65536):
+            raise UsageError("--share PORT shares one robot's slot: attach one naoth:// robot, PORT in 0..65535")
+        session = NaothSession(addresses, example, share=args.share, studio=args.name)
     else:
         session = AttachedSession(addresses, example, args.token, args.name, control=not args.watch)
     folder = Path(args.record_dir) if args.record_dir else default_folder()
@@ -248,6 +259,10 @@ def run_attach(args: argparse.Namespace) -> int:
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     print(f"xabsl studio: attached to {hosts}")
+    if args.share:
+        print(
+            f"  the robot's debug port is shared on 127.0.0.1:{args.share} (xabsl attach naoth://127.0.0.1:{args.share})"
+        )
     print(f"  open  http://{shown}:{args.port}{query}")
     if session.live_recorder is not None:
         print(f"  recording the session into {session.live_recorder.folder} (--no-record: off)")

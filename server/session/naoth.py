@@ -23,7 +23,9 @@ recording, history), with each host a NaoTH robot reached through
   with ``file::write`` to ``Config/behavior-ic.dat``, then ``behavior:reload``); forcing,
   overrides, pause, step, reset and breakpoints are refused with the reason (the robot has no
   command for them), and the host's ``capabilities`` say so;
-* **heartbeat**: a bare ``-1`` every second.
+* **heartbeat**: a bare ``-1`` every second;
+* **sharing** (``--share PORT``): the robot's one debug slot served to other studios and
+  RobotControl through this connection (``xabsl_studio.server.session.naothshare``).
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ from xabsl_studio.server.protocol.naoth import (
 )
 from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, HostConnection
 from xabsl_studio.server.session.live import CommandError
+from xabsl_studio.server.session.naothshare import SharedSlot
 
 __all__ = ["CAPABILITIES", "COMPLETE_EVERY", "IC_PATH", "NaothHost", "NaothSession"]
 
@@ -152,12 +155,48 @@ class NaothSession(AttachedSession):
         example: the behavior sets compiled here (exactly one: the sources the robots run).
     """
 
-    def __init__(self, addresses: Sequence[tuple[str, int]], example: AttachedExample, **options: Any) -> None:
+    def __init__(
+        self,
+        addresses: Sequence[tuple[str, int]],
+        example: AttachedExample,
+        share: int | None = None,
+        **options: Any,
+    ) -> None:
         super().__init__(addresses, example, **options)
+        if share is not None and len(addresses) != 1:
+            raise ValueError("--share serves one robot's slot: attach one robot")
+        #: the robot's debug slot served to other clients (``--share PORT``), once attached
+        self.share: SharedSlot | None = None
+        self._share_port = share
         self.hosts = [NaothHost(h, p, f"naoth://{h}:{p}") for h, p in addresses]
         if len(self.programs) != 1:
             raise ValueError("a NaoTH session needs the sources the robots run (--behavior AGENTS_FILE)")
         self.key = next(iter(self.programs))
+
+    async def start(self) -> None:
+        """Connect to every robot; serve the shared slot (``--share``) on top."""
+        await super().start()
+        if self._share_port is not None:
+            host = self.hosts[0]
+            assert isinstance(host, NaothHost)
+            self.share = SharedSlot(lambda name, args: self._forward(host, name, args), self._share_port)
+            await self.share.start()
+            log.info("the robot's debug port is shared on 127.0.0.1:%d", self.share.port)
+
+    async def aclose(self) -> None:
+        """Stop sharing, detach."""
+        if self.share is not None:
+            await self.share.close()
+        await super().aclose()
+
+    async def _forward(self, host: NaothHost, name: str, args: dict[str, bytes]) -> bytes:
+        """A shared client's command on the robot (a reload re-reads the tables before the next frame)."""
+        if name == "Cognition:behavior:reload":
+            async with host.busy:
+                answer = await self._command(host, name, dict(args))
+                await self._load(host, "reload")
+                return answer
+        return await self._command(host, name, dict(args))
 
     def _program(self) -> Program:
         state = self.programs[self.key]

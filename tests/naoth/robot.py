@@ -294,6 +294,7 @@ def serve(args: argparse.Namespace) -> int:
     print(f"listening on {server.getsockname()[1]}", flush=True)
     while True:
         client, _ = server.accept()  # one client at a time, as the robot's debug server
+        client.settimeout(5.0)  # a client silent for 5 s is dropped, as a robot drops it
         try:
             while True:
                 (ident,) = struct.unpack("<i", read_exactly(client, 4))

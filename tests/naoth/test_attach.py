@@ -197,6 +197,40 @@ def test_sources_that_differ_from_the_robots_behavior_are_named(robot: Robot, be
         studio.stop()
 
 
+def test_a_shared_slot_serves_a_second_studio_through_the_first(tmp_path: Path, behavior: Path) -> None:
+    from ..attach.test_attached import free_port
+
+    robot = Robot(tmp_path, "--step", "3", "--frames", "30")  # 10 frames, 10 more per agent switch
+    port = free_port()
+    first = Studio(f"naoth://127.0.0.1:{robot.port}", "--behavior", str(behavior), "--no-record", "--share", str(port))
+    try:
+        first.until(lambda s: s["attached"][0]["seq"] == 30)
+        second = Studio(f"naoth://127.0.0.1:{port}", "--behavior", str(behavior), "--no-record")
+        try:
+            second.until(lambda s: s["attached"][0]["seq"] == 30 and s["attached"][0]["agents"] == ["soccer", "looker"])
+            # the second studio switches the agent through the first; the robot runs 10 more frames
+            code, reply = second.command(op="select_agent", robot=0, agent="looker")
+            assert code == 200 and reply["ok"], reply
+            second.until(lambda s: s["attached"][0]["seq"] == 60)
+            first.until(lambda s: s["attached"][0]["seq"] == 60 and s["attached"][0]["agent"] == "looker")
+            a, b = first.status()["attached"][0], second.status()["attached"][0]
+            # each new frame went to the one studio that asked; the last of each grant, repeated, to both
+            assert 20 <= a["received"] + b["received"] <= 22 and b["mismatches"] == []
+            program = compile_file(str(behavior / "agents.xabsl")).program
+            assert program is not None
+            enums = {name: e.elements for name, e in program.enums.items()}
+            truth = [expected(f, enums) for f in robot.frames()]
+            ticks = [line["robots"][0] for line in second.get("/api/log?t0=0") if line["robots"][0]["path"]]
+            assert len(ticks) == b["received"] >= 2
+            assert all(shown(tick) in truth for tick in ticks)
+            assert shown(ticks[-1]) == truth[-1] and ticks[-1]["path"][0]["option"] == "look_around"
+        finally:
+            second.stop()
+    finally:
+        first.stop()
+        robot.stop()
+
+
 def test_a_naoth_robot_needs_the_sources(tmp_path: Path) -> None:
     done = subprocess.run(
         [sys.executable, "-m", "xabsl_studio.engine.cli", "attach", "naoth://127.0.0.1:5401"],
