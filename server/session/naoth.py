@@ -248,15 +248,22 @@ class NaothSession(AttachedSession):
 
     async def _read(self, host: NaothHost, reader: asyncio.StreamReader) -> None:
         replies = ReplyReader()
-        while True:
-            data = await reader.read(1 << 16)
-            if not data:
-                raise ConnectionError("the robot closed the connection")
-            host.heard = time.monotonic()
-            for ident, payload in replies.feed(data):
-                future = host.waiting.pop(ident, None)
-                if future is not None and not future.done():
-                    future.set_result(payload)
+        try:
+            while True:
+                data = await reader.read(1 << 16)
+                if not data:
+                    raise ConnectionError("the robot closed the connection")
+                host.heard = time.monotonic()
+                for ident, payload in replies.feed(data):
+                    future = host.waiting.pop(ident, None)
+                    if future is not None and not future.done():
+                        future.set_result(payload)
+        except (OSError, WireError) as error:
+            # the question waiting for an answer learns at once why none comes
+            for future in host.waiting.values():
+                if not future.done():
+                    future.set_exception(error)
+            raise
 
     async def _beat(self, writer: asyncio.StreamWriter) -> None:
         while True:

@@ -239,3 +239,36 @@ def test_a_naoth_robot_needs_the_sources(tmp_path: Path) -> None:
         timeout=60,
     )
     assert done.returncode == 2 and "needs --behavior" in done.stderr
+
+
+def test_a_port_that_answers_what_no_robot_would_is_left_and_tried_again(behavior: Path) -> None:
+    import socket
+    import struct
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+    connections: list[bytes] = []
+
+    def serve() -> None:  # answers the first command with an answer of 100 MB, never sent
+        while True:
+            try:
+                client, _ = server.accept()
+            except OSError:
+                return
+            with client:
+                head = client.recv(8)
+                connections.append(head)
+                if len(head) == 8:
+                    client.sendall(struct.pack("<iI", struct.unpack("<i", head[:4])[0], 100 * 1024 * 1024))
+                    client.recv(1)
+
+    threading.Thread(target=serve, daemon=True).start()
+    studio = Studio(f"naoth://127.0.0.1:{server.getsockname()[1]}", "--behavior", str(behavior), "--no-record")
+    try:
+        studio.until(lambda s: len(connections) >= 2)  # left, and tried again
+        status = studio.status()
+        assert not status["attached"][0]["connected"] and status["attached"][0]["received"] == 0
+        assert struct.unpack("<i", connections[0][:4])[0] == 1  # ids start at 1
+    finally:
+        studio.stop()
+        server.close()
