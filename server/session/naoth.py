@@ -209,13 +209,14 @@ class NaothSession(AttachedSession):
 
     async def _attach(self, host: HostConnection) -> None:
         assert isinstance(host, NaothHost)
-        reader, writer = await asyncio.wait_for(asyncio.open_connection(host.host, host.port), 5.0)
+        async with asyncio.timeout(5.0):
+            reader, writer = await asyncio.open_connection(host.host, host.port)
         host.writer = writer
         tasks = [asyncio.create_task(self._read(host, reader)), asyncio.create_task(self._beat(writer))]
         try:
             await self._load(host, "connect")
             checked = time.monotonic()
-            while True:
+            while not self._closing:
                 async with host.busy:
                     if time.monotonic() - checked > COMPLETE_EVERY:
                         checked = time.monotonic()
@@ -281,7 +282,10 @@ class NaothSession(AttachedSession):
         host.waiting[ident] = future
         writer.write(encode_command(ident, name, args))
         try:
-            return await asyncio.wait_for(future, REPLY_TIMEOUT)
+            # asyncio.timeout, not wait_for: on Python 3.11 wait_for swallows a cancellation that
+            # arrives as the answer does, and the studio's shutdown then waited on this loop forever
+            async with asyncio.timeout(REPLY_TIMEOUT):
+                return await future
         finally:
             host.waiting.pop(ident, None)
 

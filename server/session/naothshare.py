@@ -76,14 +76,17 @@ class SharedSlot:
         self.clients += 1
         try:
             while True:
-                (ident,) = _INT.unpack(await asyncio.wait_for(reader.readexactly(4), CLIENT_TIMEOUT))
+                async with asyncio.timeout(CLIENT_TIMEOUT):  # not wait_for: see naoth._command
+                    (ident,) = _INT.unpack(await reader.readexactly(4))
                 if ident == -1:
                     continue  # the client's heartbeat: the robot hears this studio's
-                (size,) = _INT.unpack(await asyncio.wait_for(reader.readexactly(4), CLIENT_TIMEOUT))
+                async with asyncio.timeout(CLIENT_TIMEOUT):
+                    (size,) = _INT.unpack(await reader.readexactly(4))
                 if not 0 <= size <= MAX_COMMAND:
                     log.warning("shared NaoTH port: a client sent a command of %d bytes; dropped", size)
                     return
-                data = await asyncio.wait_for(reader.readexactly(size), CLIENT_TIMEOUT)
+                async with asyncio.timeout(CLIENT_TIMEOUT):
+                    data = await reader.readexactly(size)
                 command = M.parse("CMD", data)
                 args = {a.name: a.bytes for a in command.args}
                 answer = await self.ask(command.name, args)

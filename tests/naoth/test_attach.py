@@ -140,9 +140,9 @@ def test_every_frame_the_robot_answers_shows_as_it_ran_and_the_rest_are_counted(
         code, reply = studio.command(op="pause")
         assert not reply["ok"] and "cannot pause" in reply["error"]
     finally:
-        studio.stop()
+        output = studio.stop()
     files = list((tmp_path / "rec").glob("*.mcap"))
-    assert len(files) == 1
+    assert len(files) == 1, (sorted(p.name for p in (tmp_path / "rec").iterdir()), output[-4000:])
     with Recording(files[0]) as recording:
         paths = [t.agents[next(iter(t.agents))].path for t in recording.ticks()]
     assert sum(1 for p in paths if p) == 100
