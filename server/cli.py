@@ -140,7 +140,13 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         "and serve them with xabsl_studio.attach.serve_engines (docs/attach.md). Several hosts make one "
         "session (a team of robot processes). The studio is served like xabsl serve's.",
     )
-    parser.add_argument("addresses", metavar="HOST:PORT", nargs="+", help="a host's address (e.g. 127.0.0.1:7410)")
+    parser.add_argument(
+        "addresses",
+        metavar="HOST:PORT",
+        nargs="+",
+        help="a host's address (e.g. 127.0.0.1:7410), or naoth://HOST[:5401] for a NaoTH robot or simulator "
+        "(docs/naoth.md; needs --behavior)",
+    )
     parser.add_argument(
         "--behavior",
         default=None,
@@ -156,6 +162,13 @@ def register_attach(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
     parser.add_argument("--watch", action="store_true", help="attach without taking control (a command takes it)")
     parser.add_argument(
         "--no-connect", action="store_true", help="the studio's users may not attach more hosts (Connect…)"
+    )
+    parser.add_argument(
+        "--share",
+        type=int,
+        default=None,
+        metavar="PORT",
+        help="NaoTH: serve the robot's one debug slot on 127.0.0.1:PORT to other studios and RobotControl",
     )
     parser.add_argument("--name", default=None, help="how the hosts show this studio")
     parser.add_argument("--hz", type=int, default=100, help="the hosts' tick rate, for sizing the history (100)")
@@ -184,11 +197,19 @@ def run_attach(args: argparse.Namespace) -> int:
     from xabsl_studio.server.api.security import SecurityPolicy, TokenError
     from xabsl_studio.server.api.transport import WebSocketProtocol
     from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
+    from xabsl_studio.server.protocol.naoth import parse_naoth_address
     from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
     from xabsl_studio.server.session.recording import LiveRecorder, cache_folder, default_folder
 
+    naoth = [a.startswith("naoth://") for a in args.addresses]
+    if any(naoth) and not all(naoth):
+        raise UsageError("attach either NaoTH robots (naoth://HOST) or hosts of xabsl_studio.attach, not both")
+    if any(naoth) and args.behavior is None:
+        raise UsageError("a NaoTH robot needs --behavior AGENTS_FILE: the sources it runs (docs/naoth.md)")
     try:
-        addresses = [parse_address(a) for a in args.addresses]
+        addresses = [
+            parse_naoth_address(a) if n else parse_address(a) for a, n in zip(args.addresses, naoth, strict=True)
+        ]
     except ValueError as error:
         raise UsageError(str(error)) from None
     try:
@@ -208,9 +229,20 @@ def run_attach(args: argparse.Namespace) -> int:
     root = common_root(sources) if sources else Path(tempfile.mkdtemp(prefix="xabsl-attach-"))
     hosts = ", ".join(args.addresses)
     example = AttachedExample(f"attached: {hosts}", root, sources, behavior_hz=max(1, args.hz) * len(addresses))
-    session = AttachedSession(
-        addresses, example, args.token, args.name, control=not args.watch, allow_connect=not args.no_connect
-    )
+    session: AttachedSession
+    if args.share is not None and not any(naoth):
+        raise UsageError("--share is for a NaoTH robot (naoth://HOST)")
+    if any(naoth):
+        from xabsl_studio.server.session.naoth import NaothSession
+
+        example.behavior_hz = 30 * len(addresses)  # NaoTH's cognition runs at 30 frames per second
+        if args.share is not None and (len(addresses) != 1 or not 0 <= args.share < 65536):
+            raise UsageError("--share PORT shares one robot's slot: attach one naoth:// robot, PORT in 0..65535")
+        session = NaothSession(addresses, example, share=args.share, studio=args.name)
+    else:
+        session = AttachedSession(
+            addresses, example, args.token, args.name, control=not args.watch, allow_connect=not args.no_connect
+        )
     # The hosts send what a recording needs (their programs' IC and description, their sources).
     if args.record_dir:
         folder = Path(args.record_dir)
@@ -240,6 +272,10 @@ def run_attach(args: argparse.Namespace) -> int:
     for name in ("pygls", "lsprotocol", "xabsl_studio.lsp"):  # as xabsl serve: /lsp logs every message at INFO
         logging.getLogger(name).setLevel(logging.WARNING)
     print(f"xabsl studio: attached to {hosts}")
+    if args.share:
+        print(
+            f"  the robot's debug port is shared on 127.0.0.1:{args.share} (xabsl attach naoth://127.0.0.1:{args.share})"
+        )
     print(f"  open  http://{shown}:{args.port}{query}")
     if session.live_recorder is not None:
         print(f"  recording the session into {session.live_recorder.folder} (--no-record: off)")

@@ -243,7 +243,7 @@ ENGINE_LAYERS: tuple[frozenset[str], ...] = (
     frozenset({"runtime"}),
     frozenset({"host", "trace"}),
     frozenset({"record", "docs", "worlds"}),
-    frozenset({"profile", "testing", "compare", "query"}),
+    frozenset({"profile", "testing", "compare", "query", "naoth"}),
     frozenset({"cli"}),
 )
 

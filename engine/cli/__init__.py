@@ -69,6 +69,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.query",
         "find the ticks of a recording where an XABSL condition holds (docs/queries.md)",
     ),
+    "import": (
+        "xabsl_studio.engine.cli.imports",
+        "convert another system's logs into a recording (naoth: a NaoTH game log): docs/naoth.md",
+    ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
     "run": (
         "xabsl_studio.engine.cli.run",

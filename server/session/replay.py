@@ -789,7 +789,10 @@ def explain(
         raise CommandError(f"option {ir_option.name} did not run in tick {agent.tick} of {agent.name}")
     decided_in, leaf = node[6], node[7]
     if leaf < 0:
-        raise CommandError(f"option {ir_option.name} decided nothing in that tick")
+        # a NaoTH game log (docs/naoth.md) says no leaf unless the structure made it certain
+        raise CommandError(
+            f"option {ir_option.name} decided nothing in that tick, or the recording does not say which leaf it took"
+        )
     if not 0 <= decided_in < len(ir_option.states):
         raise CommandError(f"option {ir_option.name} has no state {decided_in}")
     decided = ir_option.states[decided_in]

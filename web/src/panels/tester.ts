@@ -2,6 +2,7 @@
 /// declaration (types, ranges, units, enum choices), run it as the root of the selected robot
 /// (`force_option` / `force_behavior`), watch it, release. The simulation controls (pause, step,
 /// speed, reset) sit in the top bar and work from here too.
+import { unavailable } from "../capabilities";
 import type { Connection } from "../connection";
 import { type Parameter, parseRange, rangeText } from "../description";
 import { checkNumber } from "../params";
@@ -17,6 +18,8 @@ export class TesterPanel {
   private readonly form: HTMLFormElement;
   private readonly state: HTMLElement;
   private readonly doc: HTMLElement;
+  private readonly note: HTMLElement;
+  private readonly forcing: HTMLButtonElement[];
   private key = "";
   private controls: Array<{ param: Parameter; control: HTMLInputElement | HTMLSelectElement; error: HTMLElement }> = [];
 
@@ -33,6 +36,12 @@ export class TesterPanel {
     });
     this.state = h("div.test-state");
     this.doc = h("div.muted.small");
+    this.note = h("div.test-unavailable", { role: "note", hidden: true });
+    this.forcing = [
+      h<"button">("button.primary#test-run", { title: "Force it as the root (Ctrl+Enter)", onclick: () => this.run() }, "▶ Run on robot"),
+      h("button#test-release", { title: "Back to the robot's own root", onclick: () => this.release() }, "Release"),
+      h("button", { title: "Restart every option of this robot's XABSL agent and clear a fault", onclick: () => this.resetAgent() }, "Reset agent"),
+    ];
     this.element = h(
       "div.panel.tester-panel",
       {},
@@ -40,12 +49,11 @@ export class TesterPanel {
       this.picker,
       this.doc,
       this.form,
+      this.note,
       h(
         "div.toolbar",
         {},
-        h("button.primary#test-run", { title: "Force it as the root (Ctrl+Enter)", onclick: () => this.run() }, "▶ Run on robot"),
-        h("button#test-release", { title: "Back to the robot's own root", onclick: () => this.release() }, "Release"),
-        h("button", { title: "Restart every option of this robot's XABSL agent and clear a fault", onclick: () => this.resetAgent() }, "Reset agent"),
+        ...this.forcing,
         h(
           "button#test-save",
           { title: "Write a behavior test (tests/NAME.xabsl-test.toml) that reproduces this situation and asserts what is active now", onclick: () => void this.saveAsTest() },
@@ -170,6 +178,8 @@ export class TesterPanel {
     const target = this.target();
     const robot = this.session.selectedRobot;
     if (!target) return;
+    const why = unavailable(this.session, robot, "force");
+    if (why) return toast(why, "error");
     const params = this.params();
     if (!params) return;
     const forced =
@@ -221,6 +231,10 @@ export class TesterPanel {
       text = `${name}: forced to ${kind === 0 ? "option" : "basic behavior"} ${forced ?? id} — Release to go back`;
     }
     if (robot?.fault) text += ` · fault: ${robot.fault.message}`;
+    const why = unavailable(this.session, this.session.selectedRobot, "force");
+    this.note.hidden = why === null;
+    setText(this.note, why ?? "");
+    for (const button of this.forcing) button.disabled = why !== null;
     setText(this.state, text);
     this.state.classList.toggle("forced", !!robot?.forced);
   }
