@@ -16,6 +16,7 @@ session from a tick of it.
 from __future__ import annotations
 
 import asyncio
+import logging
 import re
 from collections.abc import Iterable
 from pathlib import Path
@@ -24,6 +25,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException, Request
 from pydantic import BaseModel, Field
 
+from xabsl_studio.engine.record.recover import RecoveryFailed, in_use, recover
 from xabsl_studio.server.api.openapi import error_responses
 from xabsl_studio.server.api.studios import StudioFull, Studios
 
@@ -32,6 +34,8 @@ __all__ = ["RecordingLibrary", "router"]
 #: What a recording's name may look like (a plain file name).
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.+-]{0,200}\.mcap$"
 _NAME = re.compile(NAME_PATTERN)
+log = logging.getLogger("xabsl.server")
+
 #: The most recordings listed (newest first).
 MAX_LISTED = 500
 
@@ -48,6 +52,8 @@ class RecordingLibrary:
         self.folder = folder.expanduser().resolve() if folder is not None else None
         self.files = {p.name: p.expanduser().resolve() for p in files}
         self._info: dict[tuple[str, int, int], dict[str, Any]] = {}
+        #: cut recordings (``.mcap.part``) that could not be recovered: why
+        self._unrecoverable: dict[str, str] = {}
 
     def resolve(self, name: str) -> Path:
         """The file of recording ``name``.
@@ -70,20 +76,46 @@ class RecordingLibrary:
         return real
 
     def list(self) -> list[dict[str, Any]]:
-        """The recordings, newest first (header facts read once per file version)."""
+        """The recordings, newest first (header facts read once per file version).
+
+        A file that cannot be read is an entry with its ``error``; a cut one nobody writes
+        (``NAME.mcap.part``) is recovered first (``xabsl_studio.engine.record.recover``), and listed
+        with its error if it cannot be; one being written is listed as such.
+        """
         paths: dict[str, Path] = {}
+        parts: dict[str, Path] = {}
         if self.folder is not None and self.folder.is_dir():
+            for path in self.folder.glob("*.mcap.part"):
+                if _NAME.match(path.name.removesuffix(".part")) and _inside(path, self.folder):
+                    parts[path.name] = path
+            for name, path in sorted(parts.items()):
+                if not in_use(path) and name not in self._unrecoverable:
+                    try:
+                        recover(path)
+                    except RecoveryFailed as error:
+                        self._unrecoverable[name] = error.reason or str(error)
             for path in self.folder.glob("*.mcap"):
-                if _NAME.match(path.name) and path.is_file() and path.resolve().parent == self.folder:
+                if _NAME.match(path.name) and _inside(path, self.folder):
                     paths[path.name] = path
         paths.update({n: p for n, p in self.files.items() if p.is_file()})
         rows = []
-        for name, path in paths.items():
-            stat = path.stat()
+        for name, path in [*paths.items(), *parts.items()]:
+            try:
+                stat = path.stat()
+            except OSError:  # gone since the glob (recovered, pruned)
+                continue
             rows.append((stat.st_mtime, name, path, stat.st_size))
         rows.sort(reverse=True)
         out = []
         for mtime, name, path, size in rows[:MAX_LISTED]:
+            if name in parts:
+                if in_use(path):
+                    info = {"error": "being recorded now (it is listed when it closes)", "recording": True}
+                else:
+                    reason = self._unrecoverable.get(name, "cut")
+                    info = {"error": f"cut by its writer and cannot be recovered: {reason}"}
+                out.append({"name": name, "size": size, "modified": round(mtime, 3), **info})
+                continue
             key = (str(path), int(mtime * 1e6), size)
             info = self._info.get(key)
             if info is None:
@@ -92,8 +124,18 @@ class RecordingLibrary:
         return out
 
 
+def _inside(path: Path, folder: Path) -> bool:
+    """A regular file directly in ``folder`` after resolving links (a link out of it is not listed)."""
+    try:
+        real = path.resolve()
+        return real.parent == folder and real.is_file()
+    except OSError:
+        return False
+
+
 def _facts(path: Path) -> dict[str, Any]:
-    from xabsl_studio.engine.record import Recording, RecordingError
+    from xabsl_studio.engine.errors import XabslError
+    from xabsl_studio.engine.record import Recording
 
     try:
         with Recording(path) as recording:
@@ -108,10 +150,14 @@ def _facts(path: Path) -> dict[str, Any]:
                 "agents": len(recording.agents),
                 "deterministic": bool(header.get("deterministic")),
                 "forked_from": header.get("forked_from"),
+                "cut": recording.cut,
                 "error": None,
             }
-    except (RecordingError, OSError) as error:
-        return {"error": str(error)}
+    except (XabslError, OSError) as error:
+        return {"error": str(error).removeprefix(f"{path}: ")}
+    except Exception as error:  # one unreadable file must never cost the listing of the others
+        log.exception("reading the recording %s failed", path)
+        return {"error": f"cannot be read ({type(error).__name__})"}
 
 
 class OpenBody(BaseModel):

@@ -34,6 +34,7 @@ import asyncio
 import contextlib
 import dataclasses
 import functools
+import logging
 import time
 from bisect import bisect_right
 from collections.abc import Iterator, Mapping, Sequence
@@ -75,6 +76,8 @@ from xabsl_studio.server.session.frames import Entry, FrameRecorder, Generation,
 from xabsl_studio.server.session.live import CommandError, Session
 from xabsl_studio.server.simulation.explain import explanation_result, tree_result
 from xabsl_studio.server.simulation.worker import check_speed
+
+log = logging.getLogger("xabsl.server")
 
 __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
 
@@ -328,8 +331,14 @@ class ReplaySession(Session):
             recording = Recording(path)
         except (RecordingError, OSError) as error:
             raise ExampleError(str(error)) from None
-        if len(recording) == 0:
+        try:
+            self._open(path, recording, root, speed)
+        except RecordingError as error:  # a damaged first or last tick, program or scene
             recording.close()
+            raise ExampleError(str(error)) from None
+
+    def _open(self, path: str | Path, recording: Recording, root: Path | None, speed: float) -> None:
+        if len(recording) == 0:
             raise ExampleError(f"{path}: the recording holds no tick")
         header = recording.header
         name = f"{header.get('example') or header.get('world') or 'recording'} (replay of {Path(path).name})"
@@ -457,7 +466,12 @@ class ReplaySession(Session):
                 await asyncio.sleep(delay)
             # Catch up by recording the ticks that fell due (clients pick their own rate).
             behind = max(1, 1 + int((time.perf_counter() - due) * self.behavior_hz * self.speed))
-            self._advance(min(behind, 40))
+            try:
+                self._advance(min(behind, 40))
+            except RecordingError as error:  # a damaged tick further on: playing stops before it
+                log.warning("the replay stops playing: %s", error)
+                self.paused = True
+                break
             if behind > 1:
                 due = time.perf_counter()
         self.paused = True
