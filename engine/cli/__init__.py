@@ -57,6 +57,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.profile",
         "profile a recording: time per option and state, transitions, oscillations, coverage",
     ),
+    "recover": (
+        "xabsl_studio.engine.cli.recover",
+        "make cut recordings (FILE.mcap.part left by a killed run) readable to their last complete tick",
+    ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
     "run": (
         "xabsl_studio.engine.cli.run",

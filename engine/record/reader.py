@@ -28,6 +28,7 @@ from typing import Any, BinaryIO
 
 import orjson
 
+from xabsl_studio.engine.errors import ReadError
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import schema as S
@@ -53,6 +54,8 @@ class ProgramView:
     sources: dict[str, Any] | None = None
     #: the generation's intermediate code (None in recordings made before it was recorded)
     ic: str | None = None
+    #: the file it was read from (for errors)
+    file: str = ""
 
     def program(self) -> Program | None:
         """The generation's program rebuilt from its intermediate code (None without IC).
@@ -60,7 +63,13 @@ class ProgramView:
         What the IC cannot carry stays out: source texts (conditions are rendered canonically),
         doc comments, and declarations nothing uses.
         """
-        return read_ic(self.ic) if self.ic is not None else None
+        if self.ic is None:
+            return None
+        try:
+            return read_ic(self.ic)
+        except (ReadError, ValueError, IndexError, KeyError, RecursionError) as error:  # a damaged IC: the file's fault
+            reason = f"generation {self.gen} of {self.key!r}: its intermediate code does not read ({error})"
+            raise RecordingError(f"{self.file}: {reason}", path=self.file, reason=reason) from None
 
     def option(self, option_id: int) -> dict[str, Any]:
         """The option JSON with IR id ``option_id``."""
@@ -234,6 +243,7 @@ class Recording:
                     tuple(data.get("changed_files", ())),
                     data.get("sources"),
                     data.get("ic"),
+                    self.path,
                 )
                 self.programs[(view.key, view.gen)] = view
             elif topic == S.EVENTS:
@@ -323,7 +333,7 @@ class Recording:
             if k == key and g <= gen and (best is None or g > best.gen):
                 best = view
         if best is None:
-            raise RecordingError(f"no program {key!r} of generation {gen} in {self.path}")
+            raise self._invalid(f"no program {key!r} of generation {gen} in it")
         return best
 
     # -- ticks ----------------------------------------------------------------------------------------
@@ -335,7 +345,7 @@ class Recording:
             RecordingError: ``seq`` is outside the recording.
         """
         if not self.first <= seq < self.end:
-            raise RecordingError(f"tick {seq} is outside the recording ({self.first}..{self.end - 1})")
+            raise self._invalid(f"tick {seq} is outside the recording ({self.first}..{self.end - 1})")
         start = max(self.first, seq - seq % self.key_every)  # the first tick is a key frame too
         last = None
         for last in self._decode(start, seq + 1):  # noqa: B007 -- only the last view is wanted

@@ -265,13 +265,14 @@ class ReplaySource:
         extras: list[bytes] = []
         inputs: list[tuple[Any, ...]] = []
         outputs: list[tuple[Any, ...]] = []
-        for robot in self.robots:
+        gen = self.generation(view.seq)
+        for i, robot in enumerate(self.robots):
             agent = view.agents.get(robot["name"])
-            if agent is None:
+            if agent is None:  # no engine, or no tick of it in the file: its values are unknown
                 paths.append(b"[]")
                 extras.append(b"")
-                inputs.append(())
-                outputs.append(())
+                inputs.append((None,) * len(gen.input_ids[i]))
+                outputs.append((None,) * len(gen.output_ids[i]))
                 continue
             codec = self.codec(agent.program)
             paths.append(orjson.dumps(codec.path(agent.path)))
@@ -336,6 +337,9 @@ class ReplaySession(Session):
         except RecordingError as error:  # a damaged first or last tick, program or scene
             recording.close()
             raise ExampleError(str(error)) from None
+        except BaseException:
+            recording.close()
+            raise
 
     def _open(self, path: str | Path, recording: Recording, root: Path | None, speed: float) -> None:
         if len(recording) == 0:
