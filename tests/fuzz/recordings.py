@@ -169,7 +169,7 @@ def _shape_edits() -> list[tuple[str, str, Edit]]:
         ("tick-path-state-unknown", agents, _path_edit([0, 0, 0, 9999, 0, 0, 0, -1, []])),
         ("tick-path-string", agents, _set("path", "option")),
         ("tick-path-node-short", agents, _path_edit([0, 0])),
-        ("tick-path-depth-jump", agents, lambda doc: {**doc, "path": [doc["path"][0], [*doc["path"][0][:1], 5, *doc["path"][0][2:]]]}),
+        ("tick-path-depth-jump", agents, lambda doc: {**doc, "path": [doc["path"][0], _deeper(doc["path"][0])]}),
         ("tick-inputs-list", agents, _set("inputs", [1, 2])),
         ("tick-value-list", agents, lambda doc: {**doc, "inputs": {"x": [1, 2, 3]}}),
         ("tick-seq-missing", agents, _set("seq", _DELETE)),
@@ -179,6 +179,10 @@ def _shape_edits() -> list[tuple[str, str, Edit]]:
         ("scene-not-object", S.WORLD_SCENE, _set("scene", 5)),
         ("static-not-object", S.WORLD_STATIC, _set("scene", [])),
     ]  # fmt: skip
+
+
+def _deeper(node: list[Any]) -> list[Any]:
+    return [node[0], 5, *node[2:]]
 
 
 def _first_tables(doc: Any, field: str, value: Any) -> Any:
@@ -212,7 +216,8 @@ def _with_event(messages: list[Message], event: dict[str, Any]) -> list[Message]
     """``messages`` with ``event`` on ``/xabsl/events`` after the header."""
     first = messages[0]
     schema = orjson.dumps(S.SCHEMAS["xabsl.Event"])
-    extra = Message("xabsl.Event", "jsonschema", schema, S.EVENTS, first.log_time, first.publish_time, 0, orjson.dumps(event))
+    data = orjson.dumps(event)
+    extra = Message("xabsl.Event", "jsonschema", schema, S.EVENTS, first.log_time, first.publish_time, 0, data)
     return [first, extra, *messages[1:]]
 
 
@@ -228,10 +233,11 @@ def _missing(messages: list[Message]) -> Iterator[tuple[str, list[Message]]]:
 def _lying_lengths(base: bytes) -> Iterator[tuple[str, bytes]]:
     size = len(base)
     footer_at = size - 8 - 29
-    opcode, length, summary_start, offsets, crc = struct.unpack_from("<BQQQI", base, footer_at)
+    opcode, length, summary_start, offsets, _crc = struct.unpack_from("<BQQQI", base, footer_at)
     assert opcode == 0x02 and length == 20
     yield "footer-summary-past-end", base[:footer_at] + struct.pack("<BQQQI", 2, 20, 2**63, offsets, 0) + MAGIC
-    yield "footer-length-huge", base[:footer_at] + struct.pack("<BQQQI", 2, 2**64 - 1, summary_start, offsets, 0) + MAGIC
+    huge = struct.pack("<BQQQI", 2, 2**64 - 1, summary_start, offsets, 0)
+    yield "footer-length-huge", base[:footer_at] + huge + MAGIC
     # the first summary record (a Schema) claiming 2^64-1 bytes, the CRC cleared so it is believed
     lie = bytearray(base)
     struct.pack_into("<Q", lie, summary_start + 1, 2**64 - 1)
