@@ -226,7 +226,7 @@ def _free_port() -> int:
 
 def _replay_routes(url: str) -> Iterator[tuple[str, int, str]]:
     """``(route, status, body)`` of what a replay's page reads over REST."""
-    routes = ("/api/status", "/api/structure", "/api/profile", "/api/graph/behavior", "/api/log?t0=0", "/api/recordings")
+    routes = ("/api/status", "/api/structure", "/api/profile", "/api/graph/behavior", "/api/log?t0=0")
     for route in routes:
         response = httpx.get(url + route, timeout=60)
         yield route, response.status_code, response.text
