@@ -408,7 +408,7 @@ def scan_chunks(stream: BinaryIO, size: int) -> Iterator[ScannedChunk | str]:
     """The complete chunks of the data section of ``stream`` (``size`` bytes), in file order.
 
     Yields each chunk that is whole and undamaged, then, where the scan stopped, a string: why
-    (``"complete"`` after the DataEnd record or the footer). Records outside chunks are skipped.
+    (``"complete"`` at the DataEnd record or the footer). Records outside chunks are skipped.
 
     Raises:
         Malformed: not an MCAP file.
@@ -420,7 +420,10 @@ def scan_chunks(stream: BinaryIO, size: int) -> Iterator[ScannedChunk | str]:
     while True:
         head = stream.read(9)
         if len(head) < 9:
-            yield "complete" if not head and offset == size else f"cut in the record at byte {offset}"
+            if not head and offset == size:
+                yield "the file ends after its last complete record, without a summary (its writer stopped)"
+            else:
+                yield f"cut in the record at byte {offset}"
             return
         opcode, length = struct.unpack("<BQ", head)
         if opcode in (_DATA_END, _FOOTER):
