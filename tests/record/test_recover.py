@@ -172,3 +172,51 @@ def test_a_part_that_is_no_recording_stays_and_is_listed_with_its_reason(tmp_pat
 
     [entry] = RecordingLibrary(tmp_path).list()
     assert entry["name"] == "junk.mcap.part" and "cannot be recovered: no complete tick" in entry["error"], entry
+
+
+def _file_size_limit(limit: int) -> None:
+    """In the studio's process before it starts: files may not grow past ``limit`` (a full disk)."""
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past it fails (EFBIG) instead of killing
+
+
+def test_a_recording_stopped_by_a_full_disk_is_kept_and_recovered(tmp_path: Path) -> None:
+    """Writes past 1.5 MB fail in the studio's process: the studio goes on, the recording so far stays."""
+    folder = tmp_path / "recordings"
+    port = free_port()
+    command = [sys.executable, "-m", "xabsl_studio.engine.cli", "serve", str(SOCCER), "--port", str(port)]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    full = subprocess.Popen(
+        [*command, "--record-dir", str(folder), "--speed", "20"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,
+        preexec_fn=lambda: _file_size_limit(1_500_000),
+    )
+    try:
+        _up(full, port)
+        deadline = time.monotonic() + DEADLINE
+        while not httpx.get(f"http://127.0.0.1:{port}/api/status", timeout=10).json()["recording"]["failed"]:
+            assert time.monotonic() < deadline, "the recording never hit the limit"
+            time.sleep(0.2)
+        assert httpx.get(f"http://127.0.0.1:{port}/api/status", timeout=10).status_code == 200  # it goes on
+        # never deleted: the .part stays until its recovery (at once, off the event loop) replaced it
+        while list(folder.glob("*.recovering")) or not list(folder.glob("*.mcap*")):
+            assert time.monotonic() < deadline, sorted(p.name for p in folder.iterdir())
+            time.sleep(0.2)
+    finally:
+        _end(full, signal.SIGKILL)
+    again = free_port()
+    second = _serve(folder, again, "--paused")
+    try:
+        _up(second, again)
+        listed = httpx.get(f"http://127.0.0.1:{again}/api/recordings", timeout=60).json()["recordings"]
+    finally:
+        _end(second, signal.SIGTERM)
+    [entry] = [r for r in listed if r.get("cut")]
+    assert entry["error"] is None and entry["ticks"] > 40, entry
+    assert not list(folder.glob("*.mcap.part")) or all(r["name"] != entry["name"] + ".part" for r in listed)
