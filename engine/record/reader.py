@@ -163,7 +163,8 @@ def _flatten(tree: dict[str, Any], into: dict[str, Value | None], prefix: str = 
         if isinstance(value, dict):
             _flatten(value, into, name + ".", depth + 1)
         elif value is None or isinstance(value, (int, float, str)):
-            into[name] = value
+            recorded: Any = value  # (enum values are recorded as element names)
+            into[name] = recorded
         else:
             raise V.Invalid(f"the value of {name[:60]!r} is {type(value).__name__}, not a symbol value")
 

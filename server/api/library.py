@@ -107,6 +107,7 @@ class RecordingLibrary:
             rows.append((stat.st_mtime, name, path, stat.st_size))
         rows.sort(reverse=True)
         out = []
+        info: dict[str, Any] | None
         for mtime, name, path, size in rows[:MAX_LISTED]:
             if name in parts:
                 if in_use(path):
