@@ -231,7 +231,7 @@ class RecordingEncoder:
         self._stream: BinaryIO = open(self._part, "wb")  # noqa: SIM115 -- closed in close()
         # Held while writing, dropped by the kernel if this process dies: a studio recovers only
         # the ``.part`` files nobody writes (``xabsl_studio.engine.record.recover``).
-        lock_part(self._stream)
+        lock_part(self._stream, wait=True)
         self._writer = McapWriter(self._stream, chunk_size=chunk_size)
         self._writer.start(profile=S.PROFILE, library="xabsl-studio")
         schemas = {**S.SCHEMAS, foxglove.SCENE_UPDATE_SCHEMA["title"]: foxglove.SCENE_UPDATE_SCHEMA}

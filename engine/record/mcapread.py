@@ -85,7 +85,7 @@ def _error(path: str, reason: str) -> RecordingError:
     return RecordingError(f"{path}: {reason}", path=path, reason=reason)
 
 
-class Malformed(Exception):
+class Malformed(RecordError):
     """Raised by :class:`_Cursor` (turned into a RecordingError with the file's name)."""
 
 

@@ -74,14 +74,17 @@ class Recovered:
     cut: dict[str, Any]
 
 
-def lock_part(stream: BinaryIO) -> None:
+def lock_part(stream: BinaryIO, wait: bool = False) -> None:
     """Take the writer's exclusive lock on an open ``.part`` (no-op without ``fcntl``).
 
+    ``wait``: until it is free (a writer creating its file waits out a studio that looked at it
+    that very moment; an old file is never a new writer's, their names are never reused).
+
     Raises:
-        OSError: another process holds it.
+        OSError: another open file holds it (without ``wait``).
     """
     if fcntl is not None:
-        fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.flock(stream.fileno(), fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
 
 
 def in_use(part: Path) -> bool:
@@ -153,10 +156,14 @@ def recover(part: str | os.PathLike[str]) -> Recovered:
             with contextlib.suppress(OSError):
                 temp.unlink()
             raise _fail(part, f"cannot write {target.name}: {error.strerror or error}") from None
-        except RecordingError:
+        except Malformed as error:  # a schema or channel record that does not parse
             with contextlib.suppress(OSError):
                 temp.unlink()
-            raise
+            raise _fail(part, f"not a recording ({error})") from None
+        except RecordingError as error:  # what was written does not read back as a recording
+            with contextlib.suppress(OSError):
+                temp.unlink()
+            raise _fail(part, error.reason or str(error)) from None
         part.unlink()  # (still locked: no writer can have reopened it)
     log.info("recovered %s: %d ticks in %s (%s)", part, ticks, target, reason)
     return Recovered(part, target, ticks, cut)

@@ -17,6 +17,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from xabsl_studio.engine.errors import RecordError
+
 __all__ = [
     "MAX_NAME",
     "Invalid",
@@ -34,7 +36,7 @@ MAX_NAME = 200
 MAX_HZ = 100_000
 
 
-class Invalid(Exception):
+class Invalid(RecordError):
     """A message that does not have the shape a recording's message has (the text says where)."""
 
 

@@ -52,8 +52,8 @@ class RecordingLibrary:
         self.folder = folder.expanduser().resolve() if folder is not None else None
         self.files = {p.name: p.expanduser().resolve() for p in files}
         self._info: dict[tuple[str, int, int], dict[str, Any]] = {}
-        #: cut recordings (``.mcap.part``) that could not be recovered: why
-        self._unrecoverable: dict[str, str] = {}
+        #: cut recordings (``.mcap.part``) that could not be recovered: why, and the file's version then
+        self._unrecoverable: dict[str, tuple[str, tuple[int, int] | None]] = {}
 
     def resolve(self, name: str) -> Path:
         """The file of recording ``name``.
@@ -89,11 +89,12 @@ class RecordingLibrary:
                 if _NAME.match(path.name.removesuffix(".part")) and _inside(path, self.folder):
                     parts[path.name] = path
             for name, path in sorted(parts.items()):
-                if not in_use(path) and name not in self._unrecoverable:
+                version = _version(path)
+                if not in_use(path) and self._unrecoverable.get(name, ("", None))[1] != version:
                     try:
                         recover(path)
                     except RecoveryFailed as error:
-                        self._unrecoverable[name] = error.reason or str(error)
+                        self._unrecoverable[name] = (error.reason or str(error), version)
             for path in self.folder.glob("*.mcap"):
                 if _NAME.match(path.name) and _inside(path, self.folder):
                     paths[path.name] = path
@@ -113,7 +114,7 @@ class RecordingLibrary:
                 if in_use(path):
                     info = {"error": "being recorded now (it is listed when it closes)", "recording": True}
                 else:
-                    reason = self._unrecoverable.get(name, "cut")
+                    reason = self._unrecoverable.get(name, ("cut", None))[0]
                     info = {"error": f"cut by its writer and cannot be recovered: {reason}"}
                 out.append({"name": name, "size": size, "modified": round(mtime, 3), **info})
                 continue
@@ -123,6 +124,15 @@ class RecordingLibrary:
                 info = self._info[key] = _facts(path)
             out.append({"name": name, "size": size, "modified": round(mtime, 3), **info})
         return out
+
+
+def _version(path: Path) -> tuple[int, int] | None:
+    """A file's size and modification time (None if it is gone)."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return None
+    return stat.st_size, stat.st_mtime_ns
 
 
 def _inside(path: Path, folder: Path) -> bool:

@@ -19,6 +19,7 @@ file must be refused.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
 import subprocess
@@ -300,3 +301,29 @@ def test_the_studio_lists_and_opens_a_folder_of_hostile_recordings(base: Path, h
             for route, status, body in _replay_routes(replay):
                 assert status < 500, (path.name, route, body[:300])
             assert httpx.delete(f"{server.url}/api/recordings/open/{opened.json()['id']}").status_code == 200
+
+
+def test_recover_makes_each_hostile_part_a_readable_recording_or_says_why(hostile: list[Path], tmp_path: Path) -> None:
+    """Each hostile file as a cut ``.mcap.part``: recovered to a file that reads, or refused in one line."""
+    from xabsl_studio.engine.record.recover import RecoveryFailed, recover
+
+    recovered = 0
+    for path in hostile:
+        if not path.is_file() or path.is_symlink():
+            continue
+        part = tmp_path / f"{path.stem}.mcap.part"
+        part.write_bytes(path.read_bytes())
+        try:
+            done = recover(part)
+        except RecoveryFailed as error:
+            assert str(error).startswith(f"{part}: ") and "\n" not in str(error), error
+            assert part.exists()  # never deleted
+            continue
+        recovered += 1
+        assert not part.exists() and done.path.name == f"{path.stem}.mcap"
+        with Recording(done.path) as recording:  # it opens, its last tick reads (damage kept is still refused)
+            assert len(recording) == done.ticks > 0 and recording.cut is not None
+            recording.tick(recording.end - 1)
+        with contextlib.suppress(RecordingError):
+            _read_to_the_end(done.path)
+    assert recovered > 10  # the cuts and the files of a good shape elsewhere
