@@ -80,7 +80,7 @@ class RecordingLibrary:
 
         A file that cannot be read is an entry with its ``error``; a cut one nobody writes
         (``NAME.mcap.part``) is recovered first (``xabsl_studio.engine.record.recover``), and listed
-        with its error if it cannot be; one being written is listed as such.
+        with its error if it cannot be; one being written is not listed (it is once it closes).
         """
         paths: dict[str, Path] = {}
         parts: dict[str, Path] = {}
@@ -111,11 +111,10 @@ class RecordingLibrary:
         info: dict[str, Any] | None
         for mtime, name, path, size in rows[:MAX_LISTED]:
             if name in parts:
-                if in_use(path):
-                    info = {"error": "being recorded now (it is listed when it closes)", "recording": True}
-                else:
-                    reason = self._unrecoverable.get(name, ("cut", None))[0]
-                    info = {"error": f"cut by its writer and cannot be recovered: {reason}"}
+                if in_use(path):  # being written: listed once it closes
+                    continue
+                reason = self._unrecoverable.get(name, ("cut", None))[0]
+                info = {"error": f"cut by its writer and cannot be recovered: {reason}"}
                 out.append({"name": name, "size": size, "modified": round(mtime, 3), **info})
                 continue
             key = (str(path), int(mtime * 1e6), size)
