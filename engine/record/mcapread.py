@@ -248,14 +248,28 @@ def iter_records(records: bytes | memoryview) -> Iterator[tuple[int, _Cursor]]:
 
 
 def _messages_of(records: bytes, channels: Container[int] | None) -> Iterator[tuple[int, int, bytes]]:
-    for opcode, body in iter_records(records):
+    """The messages of a chunk's records; a record running past the chunk is :class:`Malformed`.
+
+    Scanned with ``struct`` directly: the profiler reads hundreds of thousands.
+    """
+    unpack_from = struct.unpack_from
+    position, size = 0, len(records)
+    while position < size:
+        if position + 9 > size:
+            raise Malformed(f"a record header at {position} runs past the chunk's {size} bytes")
+        opcode = records[position]
+        (length,) = unpack_from("<Q", records, position + 1)
+        body = position + 9
+        end = body + length
+        if end > size:
+            raise Malformed(f"a record of {length} bytes at {position} runs past the chunk's {size} bytes")
         if opcode == _MESSAGE:
-            channel = body.u16()
-            body.u32()
-            log_time = body.u64()
-            body.u64()
+            if length < 22:
+                raise Malformed(f"a message record of {length} bytes at {position} (at least 22)")
+            channel, _sequence, log_time = unpack_from("<HIQ", records, body)
             if channels is None or channel in channels:
-                yield channel, log_time, bytes(records[body.pos : body.end])
+                yield channel, log_time, records[body + 22 : end]
+        position = end
 
 
 def open_regular(path: str) -> BinaryIO:

@@ -428,12 +428,16 @@ class Recording:
         wanted = {S.agent_topic(name): name for name in names}
         channels = {cid: wanted[topic] for cid, topic in self._topics.items() if topic in wanted}
         first, last = self.time_ns(start), self.time_ns(stop - 1)
+        descriptions: dict[tuple[str, int], dict[str, Any]] = {}
         for channel, _time, raw in self._file.messages(channels, first, last + 1):
             message = self._json(raw, f"a message of {channels[channel]}")
             self._check(V.check_tick, message)
-            agent = channels[channel]
-            self._check(V.check_path, message["path"], self.program(agent, message["gen"]).description)
-            yield message["seq"], message["t"], agent, message["gen"], message["path"]
+            agent, gen = channels[channel], message["gen"]
+            description = descriptions.get((agent, gen))
+            if description is None:
+                description = descriptions[(agent, gen)] = self.program(agent, gen).description
+            self._check(V.check_path, message["path"], description)
+            yield message["seq"], message["t"], agent, gen, message["path"]
 
     def _decode(self, start: int, stop: int) -> Iterator[TickView]:
         """Views of ticks ``start`` .. ``stop - 1``; ``start`` must be a key frame tick."""
@@ -452,14 +456,12 @@ class Recording:
             topic = self._topics[channel]
             data = self._json(raw, f"a message on {topic}")
             entry = agent_topics.get(topic)
-            if entry is None:
-                shape = _SCENE if topic == S.WORLD_SCENE else _STATUS
-            else:
-                shape = V.TICK if entry[1] else _FAULT
-            self._check(V.check, data, shape, f"a message on {topic}")
             if entry is not None and entry[1]:
                 self._check(V.check_tick, data)
                 self._check(V.check_path, data["path"], self.program(entry[0], data["gen"]).description)
+            else:
+                shape = _FAULT if entry is not None else _SCENE if topic == S.WORLD_SCENE else _STATUS
+                self._check(V.check, data, shape, f"a message on {topic}")
             seq = data["seq"]
             if current is not None and seq != current.seq:
                 yield current
