@@ -30,9 +30,10 @@ from pathlib import Path
 
 import httpx
 import pytest
+from websockets.sync.client import connect
 
 from tests.fuzz.recordings import write_all
-from tests.server.conftest import LiveServer
+from tests.server.conftest import LiveServer, WsClient
 from xabsl_studio.engine.cli import main
 from xabsl_studio.engine.record import Recording, RecordingError
 from xabsl_studio.server.api.library import RecordingLibrary
@@ -327,3 +328,38 @@ def test_recover_makes_each_hostile_part_a_readable_recording_or_says_why(hostil
         with contextlib.suppress(RecordingError):
             _read_to_the_end(done.path)
     assert recovered > 10  # the cuts and the files of a good shape elsewhere
+
+
+def _damaged_midway(hostile: list[Path]) -> list[Path]:
+    """Files a replay starts from (first and last tick read) with a tick between that does not."""
+    out = []
+    for path in hostile:
+        if path.is_file() and _replays(path):
+            with Recording(path) as recording:
+                try:
+                    for _view in recording.ticks():
+                        pass
+                except RecordingError:
+                    out.append(path)
+    return out
+
+
+def test_a_replay_damaged_midway_answers_the_damage_where_it_is_read(hostile: list[Path]) -> None:
+    damaged = _damaged_midway(hostile)
+    assert damaged, "no hostile file is damaged between its first and last tick"
+    for path in damaged:
+        session = ReplaySession(path)
+        first, end = session.source.first, session.source.end
+        with LiveServer(session) as server, connect(server.ws_url, max_size=None, open_timeout=10) as ws:
+            client = WsClient(ws)
+            client.frame_after()
+            errors = 0
+            for seq in range(first, end, max(1, (end - first) // 40)):
+                reply = client.command("seek", seq=seq)
+                if not reply["ok"]:
+                    errors += 1
+                    assert reply["error"].startswith(f"{path}: ") and "internal error" not in reply["error"], reply
+            assert errors, path.name
+            assert client.command("status")["ok"]  # the connection and the session go on
+            for route, status, body in _replay_routes(server.url):
+                assert status < 500, (path.name, route, body[:300])
