@@ -395,8 +395,8 @@ def run(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     # The language server behind /lsp (pygls) logs every message it sends or receives at INFO:
     # a few keystrokes made 112 KB of console. Its warnings and errors still show.
-    for name in ("pygls", "lsprotocol", "xabsl_studio.lsp"):
-        logging.getLogger(name).setLevel(logging.WARNING)
+    for logger in ("pygls", "lsprotocol", "xabsl_studio.lsp"):
+        logging.getLogger(logger).setLevel(logging.WARNING)
     where = "a recording, paused" if args.replay is not None else "simulation in its own process"
     print(f"xabsl studio: {name}, speed {session.speed:g}x ({where})")
     print(f"  open  http://{shown}:{args.port}{query}")

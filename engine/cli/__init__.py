@@ -73,6 +73,10 @@ ENGINE_COMMANDS: dict[str, tuple[str, str]] = {
         "xabsl_studio.engine.cli.imports",
         "convert another system's logs into a recording (naoth: a NaoTH game log): docs/naoth.md",
     ),
+    "recover": (
+        "xabsl_studio.engine.cli.recover",
+        "make cut recordings (FILE.mcap.part left by a killed run) readable to their last complete tick",
+    ),
     "plan": ("xabsl_studio.engine.cli.plan", "run GRAPHPLAN on a PDDL domain and problem and print the layered plan"),
     "run": (
         "xabsl_studio.engine.cli.run",

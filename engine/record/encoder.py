@@ -25,6 +25,7 @@ key frame sees it).
 
 from __future__ import annotations
 
+import contextlib
 import os
 from itertools import compress
 from operator import ne
@@ -36,6 +37,7 @@ import orjson
 from xabsl_studio.engine.record import foxglove
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record.mcapfile import McapWriter
+from xabsl_studio.engine.record.recover import lock_part
 from xabsl_studio.engine.record.sampler import ProgramTables, reads_json
 from xabsl_studio.engine.types import Value
 
@@ -196,7 +198,8 @@ class RecordingEncoder:
     """Writes a recording from encoder operations (see the module docstring).
 
     The file is written to ``FILE.part`` and renamed to ``FILE`` by :meth:`close`, so a crashed
-    run never leaves a truncated file under the final name.
+    run never leaves a truncated file under the final name; ``xabsl_studio.engine.record.recover``
+    makes a cut ``FILE.part`` a readable ``FILE`` again.
     """
 
     def __init__(
@@ -224,6 +227,9 @@ class RecordingEncoder:
         self._key = True
         self._part = self.path.with_name(self.path.name + ".part")
         self._stream: BinaryIO = open(self._part, "wb")  # noqa: SIM115 -- closed in close()
+        # Held while writing, dropped by the kernel if this process dies: a studio recovers only
+        # the ``.part`` files nobody writes (``xabsl_studio.engine.record.recover``).
+        lock_part(self._stream, wait=True)
         self._writer = McapWriter(self._stream, chunk_size=chunk_size)
         self._writer.start(profile=S.PROFILE, library="xabsl-studio")
         schemas = {**S.SCHEMAS, foxglove.SCENE_UPDATE_SCHEMA["title"]: foxglove.SCENE_UPDATE_SCHEMA}
@@ -352,6 +358,17 @@ class RecordingEncoder:
             self._stream.close()
             os.replace(self._part, self.path)
         return str(self.path), self.ticks, self.messages, self.path.stat().st_size
+
+    def abandon(self) -> Path:
+        """Stop writing and keep the partial file (``FILE.mcap.part``, for ``recover``); its path.
+
+        For a writer that failed (a full disk): what was written stays, to be recovered.
+        """
+        if not self._closed:
+            self._closed = True
+            with contextlib.suppress(OSError):  # the disk that failed the write may fail the flush too
+                self._stream.close()
+        return self._part
 
     def abort(self) -> None:
         """Stop without a file: the partial file is removed."""

@@ -63,7 +63,12 @@ def resimulate(recording: Recording, build_world: Callable[[int], World], at: in
     early = [e["kind"] for e in recording.events if e["seq"] < at and e["kind"] != "note"]
     if early:
         raise RecordingError(f"cannot replay the session events before tick {at} yet: {', '.join(early)}")
-    world = build_world(int(header["seed"]))
+    if not isinstance(header.get("seed"), int) or not isinstance(header.get("physics_hz"), int):
+        raise RecordingError(f"{recording.path}: no seed or physics rate in its header: it cannot be re-simulated")
+    try:
+        world = build_world(header["seed"])
+    except (TypeError, ValueError, KeyError) as error:  # recorded world options this world does not take
+        raise RecordingError(f"{recording.path}: the recorded world does not build again ({error})") from None
     names = [a.name for a in world.agents]
     if names != [a["name"] for a in header["agents"]]:
         raise RecordingError(f"the rebuilt world has other agents: {names}")

@@ -22,27 +22,22 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import struct
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO
 
 import orjson
-import zstandard
-from mcap.reader import SeekingReader, make_reader
 
-from xabsl_studio.engine.errors import RecordError
+from xabsl_studio.engine.errors import ReadError
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import schema as S
+from xabsl_studio.engine.record import validate as V
+from xabsl_studio.engine.record.mcapread import McapFile, RecordingError, open_regular
 from xabsl_studio.engine.runtime import AssignmentNode, BehaviorNode, OptionNode, Root
 from xabsl_studio.engine.types import Kind, Value
 
 __all__ = ["AgentTick", "ProgramView", "Recording", "RecordingError", "TickView"]
-
-
-class RecordingError(RecordError, ValueError):
-    """The file is not a recording this reader understands (or a tick outside it was asked for)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,6 +54,8 @@ class ProgramView:
     sources: dict[str, Any] | None = None
     #: the generation's intermediate code (None in recordings made before it was recorded)
     ic: str | None = None
+    #: the file it was read from (for errors)
+    file: str = ""
 
     def program(self) -> Program | None:
         """The generation's program rebuilt from its intermediate code (None without IC).
@@ -66,7 +63,13 @@ class ProgramView:
         What the IC cannot carry stays out: source texts (conditions are rendered canonically),
         doc comments, and declarations nothing uses.
         """
-        return read_ic(self.ic) if self.ic is not None else None
+        if self.ic is None:
+            return None
+        try:
+            return read_ic(self.ic)
+        except (ReadError, ValueError, IndexError, KeyError, RecursionError) as error:  # a damaged IC: the file's fault
+            reason = f"generation {self.gen} of {self.key!r}: its intermediate code does not read ({error})"
+            raise RecordingError(f"{self.file}: {reason}", path=self.file, reason=reason) from None
 
     def option(self, option_id: int) -> dict[str, Any]:
         """The option JSON with IR id ``option_id``."""
@@ -144,13 +147,26 @@ def _raw(
     return out
 
 
-def _flatten(tree: dict[str, Any], into: dict[str, Value | None], prefix: str = "") -> None:
+#: How deep symbol names nest (``a.b.c``) in a recording's values at most.
+_MAX_NESTING = 32
+_SCENE = {"seq": V.SEQ, "t": int, "scene": dict}
+_STATUS = {"seq": V.SEQ, "t": int, "status": dict}
+_FAULT = {"seq": V.SEQ, "t": int, "fault": ({"message": str}, type(None))}
+
+
+def _flatten(tree: dict[str, Any], into: dict[str, Value | None], prefix: str = "", depth: int = 0) -> None:
+    """The nested symbol values of a message, by dotted name (raises ``validate.Invalid`` on a non-value)."""
+    if depth > _MAX_NESTING:
+        raise V.Invalid(f"the symbol values under {prefix[:60]!r} nest deeper than {_MAX_NESTING}")
     for key, value in tree.items():
         name = prefix[:-1] if key == "=" else prefix + key
         if isinstance(value, dict):
-            _flatten(value, into, name + ".")
+            _flatten(value, into, name + ".", depth + 1)
+        elif value is None or isinstance(value, (int, float, str)):
+            recorded: Any = value  # (enum values are recorded as element names)
+            into[name] = recorded
         else:
-            into[name] = value
+            raise V.Invalid(f"the value of {name[:60]!r} is {type(value).__name__}, not a symbol value")
 
 
 class _AgentState:
@@ -176,31 +192,35 @@ class Recording:
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = os.fspath(path)
-        self._stream: BinaryIO = open(self.path, "rb")  # noqa: SIM115 -- closed in close()
         try:
-            self._reader = make_reader(self._stream)
-            if not isinstance(self._reader, SeekingReader):  # pragma: no cover - files are seekable
-                raise RecordingError(f"{self.path}: not seekable")
-            summary = self._reader.get_summary()
-            if summary is None:
-                raise RecordingError(f"{self.path}: no MCAP summary (the recording was not closed)")
-            self._summary = summary
-            header = None
-            for _schema, _channel, message in self._reader.iter_messages(topics=[S.RECORDING]):
-                header = orjson.loads(message.data)
-                break
-        except RecordingError:
+            self._stream: BinaryIO = open_regular(self.path)
+        except OSError as error:
+            raise RecordingError(
+                f"{self.path}: {error.strerror or error}", path=self.path, reason=str(error.strerror or error)
+            ) from None
+        try:
+            self._open()
+        except BaseException:
             self._stream.close()
             raise
-        except Exception as error:
-            self._stream.close()
-            raise RecordingError(f"{self.path}: not a readable MCAP file ({error})") from None
-        if header is None or header.get("format") != S.FORMAT:
-            self._stream.close()
-            raise RecordingError(f"{self.path}: not an xabsl recording")
-        if int(header.get("version", 0)) > S.VERSION:
-            self._stream.close()
-            raise RecordingError(f"{self.path}: format version {header['version']} is newer than {S.VERSION}")
+
+    def _open(self) -> None:
+        self._file = McapFile.open(self.path, self._stream)
+        self._topics = {ch.id: ch.topic for ch in self._file.channels.values()}
+        by_topic: dict[str, list[int]] = {}
+        for channel, topic in self._topics.items():
+            by_topic.setdefault(topic, []).append(channel)
+        self._by_topic = by_topic
+        header = None
+        for _channel, _time, data in self._messages([S.RECORDING]):
+            header = self._json(data, "the header")
+            break
+        if not isinstance(header, dict) or header.get("format") != S.FORMAT:
+            raise self._invalid("not an xabsl recording (no xabsl.Recording header)")
+        version = header.get("version", 0)
+        if isinstance(version, int) and version > S.VERSION:
+            raise self._invalid(f"format version {version} is newer than {S.VERSION}")
+        self._check(V.check_header, header)
         self.header: dict[str, Any] = header
         self.behavior_hz = int(header["behavior_hz"])
         self.key_every = int(header["key_every"])
@@ -210,11 +230,11 @@ class Recording:
         self.events: list[dict[str, Any]] = []
         self.static_scenes: list[dict[str, Any]] = []
         tables = dict(header["tables"])
-        for _schema, channel, message in self._reader.iter_messages(
-            topics=[S.PROGRAM, S.EVENTS, S.WORLD_STATIC], log_time_order=False
-        ):
-            data = orjson.loads(message.data)
-            if channel.topic == S.PROGRAM:
+        for channel, _time, raw in self._messages([S.PROGRAM, S.EVENTS, S.WORLD_STATIC]):
+            topic = self._topics[channel]
+            data = self._json(raw, f"a message on {topic}")
+            if topic == S.PROGRAM:
+                self._check(V.check_program, data, tables)
                 view = ProgramView(
                     data["key"],
                     data["gen"],
@@ -224,9 +244,11 @@ class Recording:
                     tuple(data.get("changed_files", ())),
                     data.get("sources"),
                     data.get("ic"),
+                    self.path,
                 )
                 self.programs[(view.key, view.gen)] = view
-            elif channel.topic == S.EVENTS:
+            elif topic == S.EVENTS:
+                self._check(V.check_event, data)
                 self.events.append(data)
                 if data["kind"] == "reload" and data.get("data", {}).get("tables"):
                     tables[data["data"]["key"]] = data["data"]["tables"]
@@ -235,15 +257,47 @@ class Recording:
                         old = self.programs[key]
                         self.programs[key] = dataclasses.replace(old, tables=tables[old.key])
             else:
+                self._check(V.check, data, {"seq": V.SEQ, "scene": dict}, "a static scene")
                 self.static_scenes.append(data)
-        counts = summary.statistics.channel_message_counts if summary.statistics else {}
-        scene_channels = [c for c, ch in summary.channels.items() if ch.topic == S.WORLD_SCENE]
+        for agent in self.agents:
+            key = self._program_of[agent]
+            if not any(k == key and g == 0 for k, g in self.programs):
+                raise self._invalid(f"no description of program {key!r} (agent {agent!r}) at its start")
+        counts = self._file.counts
+        scene_channels = by_topic.get(S.WORLD_SCENE, [])
         #: number of ticks recorded (seq runs first .. first + ticks - 1)
         self.ticks_count = sum(counts.get(c, 0) for c in scene_channels)
         #: the seq of the first tick: 0, or where the run this continues was forked
         self.first = int(header.get("first_seq") or 0)
         #: one past the seq of the last tick
         self.end = self.first + self.ticks_count
+        #: how the file was recovered after its writer died (``xabsl_studio.engine.record.recover``), else None
+        self.cut: dict[str, Any] | None = header.get("cut")
+
+    # -- checking what is read ------------------------------------------------------------------------
+
+    def _invalid(self, reason: str) -> RecordingError:
+        return RecordingError(f"{self.path}: {reason}", path=self.path, reason=reason)
+
+    def _json(self, data: bytes, what: str) -> Any:
+        try:
+            return orjson.loads(data)
+        except orjson.JSONDecodeError as error:
+            raise self._invalid(f"{what} is not JSON ({error})") from None
+
+    def _check(self, checker: Any, *args: Any) -> None:
+        try:
+            checker(*args)
+        except V.Invalid as error:
+            raise self._invalid(str(error)) from None
+
+    def _messages(
+        self, topics: list[str], start: int | None = None, stop: int | None = None
+    ) -> Iterator[tuple[int, int, bytes]]:
+        channels = {c for topic in topics for c in self._by_topic.get(topic, ())}
+        if not channels:
+            return iter(())
+        return self._file.messages(channels, start, stop)
 
     # -- basics -------------------------------------------------------------------------------------
 
@@ -266,8 +320,11 @@ class Recording:
 
     def topics(self) -> dict[str, str]:
         """Topic -> schema name of every channel in the file."""
-        schemas = self._summary.schemas
-        return {ch.topic: schemas[ch.schema_id].name for ch in self._summary.channels.values()}
+        schemas = self._file.schemas
+        return {
+            ch.topic: schemas[ch.schema_id].name if ch.schema_id in schemas else ""
+            for ch in self._file.channels.values()
+        }
 
     def program_key(self, agent: str) -> str | None:
         """The key of the behavior set ``agent`` runs (None: no XABSL program)."""
@@ -282,7 +339,7 @@ class Recording:
             if k == key and g <= gen and (best is None or g > best.gen):
                 best = view
         if best is None:
-            raise RecordingError(f"no program {key!r} of generation {gen} in {self.path}")
+            raise self._invalid(f"no program {key!r} of generation {gen} in it")
         return best
 
     # -- ticks ----------------------------------------------------------------------------------------
@@ -294,12 +351,13 @@ class Recording:
             RecordingError: ``seq`` is outside the recording.
         """
         if not self.first <= seq < self.end:
-            raise RecordingError(f"tick {seq} is outside the recording ({self.first}..{self.end - 1})")
+            raise self._invalid(f"tick {seq} is outside the recording ({self.first}..{self.end - 1})")
         start = max(self.first, seq - seq % self.key_every)  # the first tick is a key frame too
         last = None
         for last in self._decode(start, seq + 1):  # noqa: B007 -- only the last view is wanted
             pass
-        assert last is not None and last.seq == seq
+        if last is None or last.seq != seq:
+            raise self._invalid(f"tick {seq} is counted in the file's statistics but not in it")
         return last
 
     def ticks(self, start: int | None = None, stop: int | None = None) -> Iterator[TickView]:
@@ -334,18 +392,15 @@ class Recording:
             return out
         key = max(self.first, start - start % self.key_every)
         values: dict[str, Any] = {}
-        loads = orjson.loads
-        for _schema, _channel, message in self._reader.iter_messages(
-            topics=[S.agent_topic(agent)],
-            starting_at=self.time_ns(key),
-            ending_before=self.time_ns(stop - 1) + 1,
-            log_time_order=False,
+        for _channel, _time, raw in self._messages(
+            [S.agent_topic(agent)], self.time_ns(key), self.time_ns(stop - 1) + 1
         ):
-            data = loads(message.data)
+            data = self._json(raw, f"a message of {agent}")
+            self._check(V.check_tick, data)
             if data["key"]:
                 values = {}
-            _flatten(data["inputs"], values)
-            _flatten(data["outputs"], values)
+            self._check(_flatten, data["inputs"], values)
+            self._check(_flatten, data["outputs"], values)
             seq = data["seq"]
             if seq < start or (seq - start) % every:
                 continue
@@ -376,13 +431,18 @@ class Recording:
         if start >= stop:
             return
         wanted = {S.agent_topic(name): name for name in names}
-        channels = {cid: wanted[ch.topic] for cid, ch in self._summary.channels.items() if ch.topic in wanted}
+        channels = {cid: wanted[topic] for cid, topic in self._topics.items() if topic in wanted}
         first, last = self.time_ns(start), self.time_ns(stop - 1)
-        loads = orjson.loads
-        for channel, log_time, data in self._raw_messages(channels, first, last):
-            if first <= log_time <= last:
-                message = loads(data)
-                yield message["seq"], message["t"], channels[channel], message["gen"], message["path"]
+        descriptions: dict[tuple[str, int], dict[str, Any]] = {}
+        for channel, _time, raw in self._file.messages(channels, first, last + 1):
+            message = self._json(raw, f"a message of {channels[channel]}")
+            self._check(V.check_tick, message)
+            agent, gen = channels[channel], message["gen"]
+            description = descriptions.get((agent, gen))
+            if description is None:
+                description = descriptions[(agent, gen)] = self.program(agent, gen).description
+            self._check(V.check_path, message["path"], description)
+            yield message["seq"], message["t"], agent, gen, message["path"]
 
     def agent_messages(
         self, start: int = 0, stop: int | None = None, agents: list[str] | None = None
@@ -390,10 +450,11 @@ class Recording:
         """``(agent, message)`` per agent and tick in recorded order: the ``xabsl.AgentTick`` messages as JSON.
 
         The pass for scans of whole recordings that need more than :meth:`paths` (the query
-        engine's columns): key frames and changes as recorded (docs/recordings.md), no views.
+        engine's columns): key frames and changes as recorded (docs/recordings.md), no views;
+        every message checked like the ticks :meth:`ticks` decodes.
 
         Raises:
-            RecordingError: an agent in ``agents`` is not a recorded XABSL agent.
+            RecordingError: an agent in ``agents`` is not a recorded XABSL agent; a damaged message.
         """
         names = self.agents if agents is None else agents
         for name in names:
@@ -404,51 +465,14 @@ class Recording:
         if start >= stop:
             return
         wanted = {S.agent_topic(name): name for name in names}
-        channels = {cid: wanted[ch.topic] for cid, ch in self._summary.channels.items() if ch.topic in wanted}
+        channels = {cid: wanted[topic] for cid, topic in self._topics.items() if topic in wanted}
         # from the key frame at or before start, so that the first message yielded is a key frame
         key = max(self.first, start - start % self.key_every)
         first, last = self.time_ns(key), self.time_ns(stop - 1)
-        loads = orjson.loads
-        for channel, log_time, data in self._raw_messages(channels, first, last):
-            if first <= log_time <= last:
-                yield channels[channel], loads(data)
-
-    def _raw_messages(self, channels: dict[int, str], first: int, last: int) -> Iterator[tuple[int, int, bytes]]:
-        """``(channel id, log time, data)`` of the chunks overlapping ``first`` .. ``last``, file order.
-
-        Scans the decompressed chunk records directly (the ``mcap`` reader parses every record
-        of a chunk into objects, about 20 µs each; the profiler reads hundreds of thousands).
-        """
-        unpack_from = struct.unpack_from
-        indexes = sorted(self._summary.chunk_indexes, key=lambda c: c.message_start_time)
-        for index in indexes:
-            if index.message_end_time < first or index.message_start_time > last:
-                continue
-            if not any(cid in index.message_index_offsets for cid in channels):
-                continue
-            self._stream.seek(index.chunk_start_offset + index.chunk_length - index.compressed_size)
-            raw = self._stream.read(index.compressed_size)
-            if index.compression == "zstd":
-                buffer = zstandard.ZstdDecompressor().decompress(raw, max_output_size=index.uncompressed_size)
-            elif index.compression == "":
-                buffer = raw
-            else:  # pragma: no cover - the recorder writes zstd; others through the mcap reader
-                for _schema, channel, message in self._reader.iter_messages(
-                    starting_at=index.message_start_time, ending_before=index.message_end_time + 1
-                ):
-                    if channel.id in channels:
-                        yield channel.id, message.log_time, message.data
-                continue
-            position, size = 0, len(buffer)
-            while position < size:
-                opcode = buffer[position]
-                (length,) = unpack_from("<Q", buffer, position + 1)
-                body = position + 9
-                if opcode == 0x05:  # Message: channel u16, sequence u32, log time u64, publish time u64, data
-                    channel, _sequence, log_time = unpack_from("<HIQ", buffer, body)
-                    if channel in channels:
-                        yield channel, log_time, buffer[body + 22 : body + length]
-                position = body + length
+        for channel, _time, raw in self._file.messages(channels, first, last + 1):
+            message = self._json(raw, f"a message of {channels[channel]}")
+            self._check(V.check_tick, message)
+            yield channels[channel], message
 
     def _decode(self, start: int, stop: int) -> Iterator[TickView]:
         """Views of ticks ``start`` .. ``stop - 1``; ``start`` must be a key frame tick."""
@@ -463,21 +487,22 @@ class Recording:
         topics = [*agent_topics, S.WORLD_SCENE, S.WORLD_STATUS]
         current: TickView | None = None
         status: dict[str, Any] | None = None
-        loads = orjson.loads
-        for _schema, channel, message in self._reader.iter_messages(
-            topics=topics,
-            starting_at=self.time_ns(start),
-            ending_before=self.time_ns(stop - 1) + 1,
-            log_time_order=False,
-        ):
-            data = loads(message.data)
+        for channel, _time, raw in self._messages(topics, self.time_ns(start), self.time_ns(stop - 1) + 1):
+            topic = self._topics[channel]
+            data = self._json(raw, f"a message on {topic}")
+            entry = agent_topics.get(topic)
+            if entry is not None and entry[1]:
+                self._check(V.check_tick, data)
+                self._check(V.check_path, data["path"], self.program(entry[0], data["gen"]).description)
+            else:
+                shape = _FAULT if entry is not None else _SCENE if topic == S.WORLD_SCENE else _STATUS
+                self._check(V.check, data, shape, f"a message on {topic}")
             seq = data["seq"]
             if current is not None and seq != current.seq:
                 yield current
                 current = None
             if current is None:
                 current = TickView(seq, data["t"], {}, None, status, events_by_seq.get(seq, []))
-            topic = channel.topic
             if topic == S.WORLD_SCENE:
                 current.scene = data["scene"]
                 continue
@@ -501,8 +526,8 @@ class Recording:
                 state.inputs, state.outputs = {}, {}
             else:  # a new dict per tick: views already yielded keep their values
                 state.inputs, state.outputs = dict(state.inputs), dict(state.outputs)
-            _flatten(data["inputs"], state.inputs)
-            _flatten(data["outputs"], state.outputs)
+            self._check(_flatten, data["inputs"], state.inputs)
+            self._check(_flatten, data["outputs"], state.outputs)
             for unread in data.get("unread", ()):
                 target = state.outputs if unread in state.outputs else state.inputs
                 target[unread] = None

@@ -54,6 +54,12 @@ def same_sources(a: Mapping[str, Any] | None, b: Mapping[str, Any] | None) -> bo
     return a is not None and b is not None and a.get("agents") == b.get("agents") and a.get("files") == b.get("files")
 
 
+#: The most folders a recorded source name may climb (``../``) above the agents file's folder.
+_MAX_UPS = 16
+#: The longest part of a recorded source name, in bytes (file systems take 255).
+_MAX_PART = 200
+
+
 def compile_sources(sources: Mapping[str, Any], what: str = "the recorded behavior") -> Program:
     """Compile recorded ``sources`` again (in a temporary folder with the recorded layout).
 
@@ -91,11 +97,17 @@ def write_sources(sources: Mapping[str, Any], folder: Path, what: str = "the rec
         ups = len(parts) - len([p for p in parts if p != ".."])
         if clean.startswith("/") or ".." in parts[ups:] or not isinstance(text, str):
             raise RecordingError(f"{what}: malformed source file name {name!r}")
+        # A name the temporary folder can hold: no NUL or control characters, short parts, few levels up.
+        if ups > _MAX_UPS or any(not p or len(p.encode()) > _MAX_PART or not p.isprintable() for p in parts):
+            raise RecordingError(f"{what}: malformed source file name {str(name)[:80]!r}")
         depth = max(depth, ups)
         normal[clean] = text
     base = folder.joinpath(*(["up"] * depth), "_xabsl_fork_agents")
-    for name, text in normal.items():
-        path = Path(os.path.normpath(base / name))
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text, encoding="utf-8")
+    try:
+        for name, text in normal.items():
+            path = Path(os.path.normpath(base / name))
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8")
+    except (OSError, UnicodeError) as error:
+        raise RecordingError(f"{what}: its source files cannot be written again ({error})") from None
     return base, base / posixpath.normpath(agents)

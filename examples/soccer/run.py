@@ -520,8 +520,11 @@ def fork_match(
         options = dict(header.get("world_options") or {})
         if "robots" not in options or "half_duration_s" not in options:
             raise UsageError(f"--fork: {recording_path} does not say how its world was built (no world_options)")
-        players = int(options.pop("robots"))
-        half = float(options.pop("half_duration_s"))
+        try:
+            players = int(options.pop("robots"))
+            half = float(options.pop("half_duration_s"))
+        except (TypeError, ValueError) as error:
+            raise UsageError(f"--fork: {recording_path}: malformed world_options ({error})") from None
         behavior_hz = int(header["behavior_hz"])
 
         def key_of(agent: Any) -> str:

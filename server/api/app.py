@@ -43,6 +43,7 @@ from starlette.types import Receive, Scope, Send
 import xabsl_studio
 from xabsl_studio.engine.emit.dot import GraphvizMissing
 from xabsl_studio.engine.ir.model import Program
+from xabsl_studio.engine.record.mcapread import RecordingError
 from xabsl_studio.engine.runtime.activation import OPTION_NODE
 from xabsl_studio.server.api.clients import Client, Hub
 from xabsl_studio.server.api.compare import router as compare_router
@@ -205,12 +206,15 @@ class Studio:
         def messages() -> Iterator[bytes]:
             chunk: list[bytes] = []
             index = 0
-            for frame in encoded:
-                chunk.append(frame)
-                if len(chunk) == HISTORY_CHUNK:
-                    yield encode_history_chunk(command.id, index, False, chunk)
-                    index += 1
-                    chunk = []
+            try:
+                for frame in encoded:
+                    chunk.append(frame)
+                    if len(chunk) == HISTORY_CHUNK:
+                        yield encode_history_chunk(command.id, index, False, chunk)
+                        index += 1
+                        chunk = []
+            except RecordingError as error:  # a damaged tick further on in a replay's file: the history ends there
+                log.warning("history of the replay ends early: %s", error)
             yield encode_history_chunk(command.id, index, True, chunk)
 
         if count:
@@ -653,6 +657,11 @@ async def _file_error(request: Request, error: Exception) -> JSONResponse:
     return JSONResponse({"detail": error.message, **error.extra}, status_code=error.status)
 
 
+async def _recording_error(request: Request, error: Exception) -> JSONResponse:
+    """A replay's file turned out damaged where a request read it: 422 with what is wrong."""
+    return JSONResponse({"detail": str(error)}, status_code=422)
+
+
 async def _command_error(request: Request, error: Exception) -> JSONResponse:
     return JSONResponse({"detail": str(error)}, status_code=409)
 
@@ -810,6 +819,7 @@ def create_app(
     app.add_middleware(SecurityMiddleware, policy=policy, public=public)
     app.add_exception_handler(FileError, _file_error)
     app.add_exception_handler(CommandError, _command_error)
+    app.add_exception_handler(RecordingError, _recording_error)
     app.add_exception_handler(StarletteHTTPException, _method_not_allowed)
     for included in _routers():
         app.include_router(included, dependencies=[Depends(single_query_values)])

@@ -31,6 +31,7 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from xabsl_studio.engine.errors import RecordError
 from xabsl_studio.server.protocol.commands import Command, Resync, Subscribe, guess_id, parse_message
 from xabsl_studio.server.protocol.host import Hit
 from xabsl_studio.server.protocol.limits import DEFAULT_RATE, MAX_MESSAGE_BYTES, MAX_PENDING_CONTROL, CloseCode
@@ -231,6 +232,8 @@ class Client:
             return
         try:
             answer = await run_command(message, self)
+        except RecordError as exc:  # a replay's file damaged where the command read it: say so
+            answer = Reply(id=message.id, ok=False, error=str(exc))
         except Exception as exc:  # a bug must not end the connection: answer and log it
             log.exception("command %s failed", message.op)
             answer = Reply(id=message.id, ok=False, error=f"internal error: {type(exc).__name__}: {exc}")

@@ -16,6 +16,7 @@ session from a tick of it.
 from __future__ import annotations
 
 import asyncio
+import logging
 import re
 from collections.abc import Iterable
 from pathlib import Path
@@ -23,6 +24,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Request
 
+from xabsl_studio.engine.record.recover import RecoveryFailed, in_use, recover
 from xabsl_studio.server.api.openapi import error_responses
 from xabsl_studio.server.api.studios import StudioFull, Studios
 from xabsl_studio.server.protocol.rest import RECORDING_NAME_PATTERN, ForkBody, OpenBody
@@ -31,6 +33,7 @@ __all__ = ["RecordingLibrary", "router"]
 
 #: What a recording's name may look like (a plain file name).
 _NAME = re.compile(RECORDING_NAME_PATTERN)
+log = logging.getLogger("xabsl.server")
 #: The most recordings listed (newest first).
 MAX_LISTED = 500
 
@@ -47,6 +50,8 @@ class RecordingLibrary:
         self.folder = folder.expanduser().resolve() if folder is not None else None
         self.files = {p.name: p.expanduser().resolve() for p in files}
         self._info: dict[tuple[str, int, int], dict[str, Any]] = {}
+        #: cut recordings (``.mcap.part``) that could not be recovered: why, and the file's version then
+        self._unrecoverable: dict[str, tuple[str, tuple[int, int] | None]] = {}
 
     def resolve(self, name: str) -> Path:
         """The file of recording ``name``.
@@ -69,20 +74,47 @@ class RecordingLibrary:
         return real
 
     def list(self) -> list[dict[str, Any]]:
-        """The recordings, newest first (header facts read once per file version)."""
+        """The recordings, newest first (header facts read once per file version).
+
+        A file that cannot be read is an entry with its ``error``; a cut one nobody writes
+        (``NAME.mcap.part``) is recovered first (``xabsl_studio.engine.record.recover``), and listed
+        with its error if it cannot be; one being written is not listed (it is once it closes).
+        """
         paths: dict[str, Path] = {}
+        parts: dict[str, Path] = {}
         if self.folder is not None and self.folder.is_dir():
+            for path in self.folder.glob("*.mcap.part"):
+                if _NAME.match(path.name.removesuffix(".part")) and _inside(path, self.folder):
+                    parts[path.name] = path
+            for name, path in sorted(parts.items()):
+                version = _version(path)
+                if not in_use(path) and self._unrecoverable.get(name, ("", None))[1] != version:
+                    try:
+                        recover(path)
+                    except RecoveryFailed as error:
+                        self._unrecoverable[name] = (error.reason or str(error), version)
             for path in self.folder.glob("*.mcap"):
-                if _NAME.match(path.name) and path.is_file() and path.resolve().parent == self.folder:
+                if _NAME.match(path.name) and _inside(path, self.folder):
                     paths[path.name] = path
         paths.update({n: p for n, p in self.files.items() if p.is_file()})
         rows = []
-        for name, path in paths.items():
-            stat = path.stat()
+        for name, path in [*paths.items(), *parts.items()]:
+            try:
+                stat = path.stat()
+            except OSError:  # gone since the glob (recovered, pruned)
+                continue
             rows.append((stat.st_mtime, name, path, stat.st_size))
         rows.sort(reverse=True)
         out = []
+        info: dict[str, Any] | None
         for mtime, name, path, size in rows[:MAX_LISTED]:
+            if name in parts:
+                if in_use(path):  # being written: listed once it closes
+                    continue
+                reason = self._unrecoverable.get(name, ("cut", None))[0]
+                info = {"error": f"cut by its writer and cannot be recovered: {reason}"}
+                out.append({"name": name, "size": size, "modified": round(mtime, 3), **info})
+                continue
             key = (str(path), int(mtime * 1e6), size)
             info = self._info.get(key)
             if info is None:
@@ -91,8 +123,27 @@ class RecordingLibrary:
         return out
 
 
+def _version(path: Path) -> tuple[int, int] | None:
+    """A file's size and modification time (None if it is gone)."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return None
+    return stat.st_size, stat.st_mtime_ns
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    """A regular file directly in ``folder`` after resolving links (a link out of it is not listed)."""
+    try:
+        real = path.resolve()
+        return real.parent == folder and real.is_file()
+    except OSError:
+        return False
+
+
 def _facts(path: Path) -> dict[str, Any]:
-    from xabsl_studio.engine.record import Recording, RecordingError
+    from xabsl_studio.engine.errors import XabslError
+    from xabsl_studio.engine.record import Recording
 
     try:
         with Recording(path) as recording:
@@ -107,10 +158,14 @@ def _facts(path: Path) -> dict[str, Any]:
                 "agents": len(recording.agents),
                 "deterministic": bool(header.get("deterministic")),
                 "forked_from": header.get("forked_from"),
+                "cut": recording.cut,
                 "error": None,
             }
-    except (RecordingError, OSError) as error:
-        return {"error": str(error)}
+    except (XabslError, OSError) as error:
+        return {"error": str(error).removeprefix(f"{path}: ")}
+    except Exception as error:  # one unreadable file must never cost the listing of the others
+        log.exception("reading the recording %s failed", path)
+        return {"error": f"cannot be read ({type(error).__name__})"}
 
 
 router = APIRouter()

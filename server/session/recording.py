@@ -7,6 +7,11 @@ operations, so recording costs the simulation process nothing. Files roll: a new
 after each roll the oldest files of the folder are deleted while the folder holds more than
 ``cap_bytes``. Every file opens on its own (header, program descriptions, static scene).
 
+A file the studio could not finish (killed, crashed, a full disk) stays ``NAME.mcap.part``; the next
+studio on the folder recovers it to its last complete tick on start
+(``xabsl_studio.engine.record.recover``), and a write that fails keeps what was written and
+recovers it at once. Nothing recorded is deleted but by the folder's cap.
+
 What a sample carries is what the frames show, so a live recording differs from a headless one
 (``xabsl run --record``) in three ways, written into its header (``"source": "studio"``): values
 are display values (decimals to 3 digits, enum values as element indices, which the header's
@@ -29,6 +34,7 @@ import hashlib
 import logging
 import os
 import re
+import threading
 import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -41,6 +47,7 @@ from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import RecordingEncoder
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record.encoder import NO_CHANGE
+from xabsl_studio.engine.record.recover import RecoveryFailed, recover, recover_folder
 from xabsl_studio.engine.record.sampler import ProgramTables
 from xabsl_studio.engine.types import Kind
 from xabsl_studio.server.protocol.host import Sample
@@ -91,6 +98,15 @@ def command_event(command: Any, gen: Generation | None) -> tuple[str, str | None
 DEFAULT_CAP_BYTES = 2_000_000_000
 #: Ticks per file by default (10 minutes at 40 Hz).
 DEFAULT_ROLL_TICKS = 24_000
+
+
+def _recover_quietly(part: Path) -> None:
+    try:
+        done = recover(part)
+    except RecoveryFailed as error:
+        log.warning("the cut recording stays as it is: %s", error)
+    else:
+        log.warning("recovered the cut recording %s: %d ticks in %s", part.name, done.ticks, done.path.name)
 
 
 def cache_folder() -> Path:
@@ -151,6 +167,10 @@ class LiveRecorder:
     ) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
+        # Recordings an earlier studio left cut (killed, crashed, out of disk) become readable again.
+        self.recovered, self.unrecovered = recover_folder(self.folder)
+        for done in self.recovered:
+            log.warning("recovered the cut recording %s: %d ticks in %s", done.part.name, done.ticks, done.path.name)
         self.example = example
         self.behavior_hz = behavior_hz
         self.physics_hz = physics_hz
@@ -390,8 +410,11 @@ class LiveRecorder:
         log.exception("recording the session failed; the studio goes on without recording")
         self._failed = True
         if self._encoder is not None:
-            self._encoder.abort()
+            # What was written stays (a full disk must not cost the recording so far): recovered
+            # now, off the event loop, or at the next start if the disk is still full.
+            part = self._encoder.abandon()
             self._encoder = None
+            threading.Thread(target=_recover_quietly, args=(part,), name="xabsl-recover", daemon=True).start()
 
     # -- messages ---------------------------------------------------------------------------------
 

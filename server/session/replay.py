@@ -34,6 +34,7 @@ import asyncio
 import contextlib
 import dataclasses
 import functools
+import logging
 import time
 from bisect import bisect_right
 from collections.abc import Iterator, Mapping, Sequence
@@ -86,6 +87,8 @@ from xabsl_studio.server.simulation.explain import (
     why_not_result,
 )
 from xabsl_studio.server.simulation.worker import check_speed
+
+log = logging.getLogger("xabsl.server")
 
 __all__ = ["MAX_HISTORY_TICKS", "ReplayExample", "ReplaySession", "explain"]
 
@@ -273,13 +276,14 @@ class ReplaySource:
         extras: list[bytes] = []
         inputs: list[tuple[Any, ...]] = []
         outputs: list[tuple[Any, ...]] = []
-        for robot in self.robots:
+        gen = self.generation(view.seq)
+        for i, robot in enumerate(self.robots):
             agent = view.agents.get(robot["name"])
-            if agent is None:
+            if agent is None:  # no engine, or no tick of it in the file: its values are unknown
                 paths.append(b"[]")
                 extras.append(b"")
-                inputs.append(())
-                outputs.append(())
+                inputs.append((None,) * len(gen.input_ids[i]))
+                outputs.append((None,) * len(gen.output_ids[i]))
                 continue
             codec = self.codec(agent.program)
             paths.append(orjson.dumps(codec.path(agent.path)))
@@ -351,8 +355,17 @@ class ReplaySession(Session):
             recording = Recording(path)
         except (RecordingError, OSError) as error:
             raise ExampleError(str(error)) from None
-        if len(recording) == 0:
+        try:
+            self._open(path, recording, root, speed)
+        except RecordingError as error:  # a damaged first or last tick, program or scene
             recording.close()
+            raise ExampleError(str(error)) from None
+        except BaseException:
+            recording.close()
+            raise
+
+    def _open(self, path: str | Path, recording: Recording, root: Path | None, speed: float) -> None:
+        if len(recording) == 0:
             raise ExampleError(f"{path}: the recording holds no tick")
         header = recording.header
         name = f"{header.get('example') or header.get('world') or 'recording'} (replay of {Path(path).name})"
@@ -482,7 +495,12 @@ class ReplaySession(Session):
                 await asyncio.sleep(delay)
             # Catch up by recording the ticks that fell due (clients pick their own rate).
             behind = max(1, 1 + int((time.perf_counter() - due) * self.behavior_hz * self.speed))
-            self._advance(min(behind, 40))
+            try:
+                self._advance(min(behind, 40))
+            except RecordingError as error:  # a damaged tick further on: playing stops before it
+                log.warning("the replay stops playing: %s", error)
+                self.paused = True
+                break
             if behind > 1:
                 due = time.perf_counter()
         self.paused = True

@@ -218,5 +218,5 @@ def test_where_two_library_recordings_first_act_differently(client: TestClient, 
     assert _get(client, "/api/compare/diverge", recording="new.mcap", against="gone.mcap")[0] == 404
     assert _get(client, "/api/compare/diverge", recording="../new.mcap", against="old.mcap")[0] == 404
     status, body = _get(client, "/api/compare/diverge", recording="new.mcap", against="broken.mcap")
-    assert status == 422 and "not a readable MCAP file" in str(body)
+    assert status == 422 and "not an MCAP file" in str(body)
     assert _get(client, "/api/compare/diverge", recording="new.mcap")[0] == 422  # `against` missing

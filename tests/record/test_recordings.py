@@ -320,7 +320,7 @@ def test_reload_and_events_start_a_new_generation(tmp_path: Path) -> None:
 def test_not_a_recording_is_refused(tmp_path: Path) -> None:
     junk = tmp_path / "junk.mcap"
     junk.write_bytes(b"not mcap at all")
-    with pytest.raises(RecordingError, match="not a readable MCAP file"):
+    with pytest.raises(RecordingError, match="not an MCAP file"):
         Recording(junk)
 
 

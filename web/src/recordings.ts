@@ -17,6 +17,8 @@ export interface RecordingEntry {
   agents?: number;
   deterministic?: boolean;
   forked_from?: { file: string; seq: number } | null;
+  /// set when the file was recovered after its writer died: why it ended there
+  cut?: { reason: string; file_bytes: number; kept_bytes: number } | null;
   error?: string | null;
 }
 
@@ -114,7 +116,7 @@ export class Recordings {
         h("td", {}, new Date(r.modified * 1000).toLocaleString()),
         h("td.num", {}, formatSize(r.size)),
         h("td.num", {}, r.seconds !== undefined ? formatDuration(r.seconds) : ""),
-        h("td", {}, r.error ? `unreadable: ${r.error}` : `${r.example ?? "?"}${r.deterministic ? "" : " (live)"}${r.forked_from ? ` · fork of ${r.forked_from.file} at ${r.forked_from.seq}` : ""}`),
+        h("td", {}, r.error ? `unreadable: ${r.error}` : `${r.example ?? "?"}${r.deterministic ? "" : " (live)"}${r.forked_from ? ` · fork of ${r.forked_from.file} at ${r.forked_from.seq}` : ""}${r.cut ? ` · cut, recovered to its last complete tick (${r.cut.reason})` : ""}`),
         h("td", {}, r.error ? "" : h("button.open-recording", { onclick: () => void this.open(r.name) }, "Open")),
       ),
     );
