@@ -39,6 +39,8 @@ FOLDERS: dict[str, str] = {
 ROOT = "play_soccer"
 #: states of the root option: one per situation, the big machine of the set
 ROOT_STATES = 30
+#: the root's state while the robot is fallen: it calls the basic behavior stand, nothing else
+FALLEN = "fallen"
 #: options (besides the root) with a large machine of their own
 LARGE = ("striker_main", "goalie_main", "defender_main", "search_main")
 
@@ -160,7 +162,12 @@ def _option_source(option: _Option, rnd: random.Random) -> str:
     if option.states > len(_WORDS):
         names = [f"situation_{k}" for k in range(option.states)]
     large = option.states > 8
+    root = option.name == ROOT
     lines = [f"/** Generated option {option.name} ({option.folder}). */", f"option {option.name} {{"]
+    if root:
+        # A fallen robot (robot.is_fallen set by hand) only stands: its activation path differs
+        # from the others' (the tests select robots by it).
+        lines += ["  common decision {", "    if (robot.is_fallen)", f"      goto {FALLEN};", "  }"]
     for k, state in enumerate(names):
         head = "initial state" if k == 0 else "state"
         lines.append(f"  // state {state} of {option.name}")
@@ -172,7 +179,7 @@ def _option_source(option: _Option, rnd: random.Random) -> str:
         if large:
             targets += [names[(k + j) % len(names)] for j in (3, 7, 11) if (k + j) % len(names) != k]
         for j, target in enumerate(targets):
-            keyword = "if" if j == 0 else "else if"
+            keyword = "else if" if j > 0 or root else "if"
             condition = _condition(rnd, k + j, long=large and j > 0)
             lines.append(f"      {keyword} ({condition})")
             lines.append(f"        goto {target};")
@@ -184,6 +191,16 @@ def _option_source(option: _Option, rnd: random.Random) -> str:
         lines.append(f"      {_action(rnd, option.children, k)}")
         lines.append("    }")
         lines.append("  }")
+    if root:
+        lines += [
+            f"  state {FALLEN} {{",
+            "    decision {",
+            f"      else if (!robot.is_fallen)\n        goto {names[0]};",
+            "      else\n        stay;",
+            "    }",
+            "    action {\n      stand();\n    }",
+            "  }",
+        ]
     lines.append("}")
     return "\n".join(lines) + "\n"
 

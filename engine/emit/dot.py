@@ -146,30 +146,32 @@ def state_machine(option: ir.Option) -> str:
             assert leaf.target is not None
             path = ir.leaf_path(state.decision, leaf.leaf)
             condition = " && ".join(node.text if taken else f"!({node.text})" for node, taken in path)
-            label = _transition_label(path, number if len(leaves) > 1 else None)
+            large = len(option.states) > _LARGE_MACHINE
+            label = _transition_label(path, number if len(leaves) > 1 else None, _LARGE_LABEL if large else _LABEL_LINE)
             lines.append(
                 f"  {quote('s:' + state.name)} -> {quote('s:' + leaf.target)} "
-                f"[id={quote(f'leaf_{state.index}_{leaf.leaf}')}, label={quote(label)}, "
+                f"[id={quote(f'leaf_{state.index}_{leaf.leaf}')}, {'xlabel' if large else 'label'}={quote(label)}, "
                 f"tooltip={quote(f'{number}. {condition}' if len(leaves) > 1 else condition or 'always')}];"
             )
     lines.append("}")
     return "\n".join(lines) + "\n"
 
 
-def _transition_label(path: list[tuple[ir.If, bool]], number: int | None = None) -> str:
+def _transition_label(path: list[tuple[ir.If, bool]], number: int | None = None, limit: int = 0) -> str:
     """An edge's label: the conditions that must hold, numbered by decision order (tooltip: the path).
 
     Not the negations of the ifs before the leaf: they made every label of a state start alike.
     A condition longer than a line is cut at a word with "…": long labels tangled big machines
     (issue 31), and the tooltip and the option view's transition list show it whole.
     """
+    limit = limit or _LABEL_LINE
     taken = [node.text for node, went in path if went]
     text = " && ".join(taken) if taken else ("else" if path else "always")
     if number is not None:
         text = f"{number}. {text}"
-    if len(text) <= _LABEL_LINE:
+    if len(text) <= limit:
         return text
-    cut = text[: _LABEL_LINE - 2]
+    cut = text[: limit - 2]
     if " " in cut:
         cut = cut[: cut.rindex(" ")]
     return cut.rstrip(" &|(") + " …"
@@ -177,6 +179,12 @@ def _transition_label(path: list[tuple[ir.If, bool]], number: int | None = None)
 
 #: Characters of a transition label in a state machine (one line).
 _LABEL_LINE = 36
+#: Above this many states a machine's labels are shorter still (the number and a word or two)
+#: and placed after the layout (``xlabel``): as part of the layout, label text widened every rank
+#: it crossed and a 30-state machine took ``dot`` 7 s instead of 0.6 s. The option view lists
+#: the conditions whole.
+_LARGE_MACHINE = 12
+_LARGE_LABEL = 20
 
 
 def _escape_label(text: str) -> str:

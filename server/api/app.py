@@ -20,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import subprocess
 from collections.abc import AsyncIterator, Iterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -631,6 +632,8 @@ async def _svg(studio: Studio, request: Request, dot: str) -> Response:
         svg, etag = await asyncio.to_thread(studio.graphs.svg, dot)
     except GraphvizMissing as error:
         raise HTTPException(503, str(error)) from None
+    except subprocess.TimeoutExpired as error:
+        raise HTTPException(503, f"Graphviz took longer than {error.timeout:g} s to lay out this graph") from None
     if _etag(request.headers.get("if-none-match")) == etag:
         return Response(status_code=304, headers={"ETag": f'"{etag}"'})
     return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
