@@ -184,10 +184,10 @@ def test_find_jumps_to_a_state_of_another_option(tab: Any) -> None:
 
 
 def active_and_faded(tab: Any) -> tuple[set[str], set[str]]:
-    """Nodes drawn at full strength and nodes faded (computed opacity), in the option graph."""
+    """Nodes drawn at full strength and nodes faded (computed fill opacity), in the option graph."""
     rows = tab.evaluate(
         f"""() => [...document.querySelectorAll('{GRAPH} g.node')].map((n) => [
-            n.id, n.classList.contains('active'), parseFloat(getComputedStyle(n).opacity),
+            n.id, n.classList.contains('active'), parseFloat(getComputedStyle(n).fillOpacity),
         ])"""
     )
     for node, active, opacity in rows:
@@ -224,7 +224,7 @@ def test_fading_follows_the_selected_robot(tab: Any, team: StudioServer) -> None
         # Fade off: nothing is faded
         tab.click(".graph-panel .fade-toggle input")
         assert tab.evaluate(
-            f"() => [...document.querySelectorAll('{GRAPH} g.node')].every((n) => getComputedStyle(n).opacity === '1')"
+            f"() => [...document.querySelectorAll('{GRAPH} g.node')].every((n) => getComputedStyle(n).fillOpacity === '1')"
         )
     finally:
         team.command("release_input", robot=1, symbol="robot.is_fallen")
