@@ -223,9 +223,9 @@ def test_fading_follows_the_selected_robot(tab: Any, team: StudioServer) -> None
         assert soccer in active and active - {soccer, behaviors}
         # Fade off: nothing is faded
         tab.click(".graph-panel .fade-toggle input")
-        assert tab.evaluate(
-            f"() => [...document.querySelectorAll('{GRAPH} g.node')].every((n) => getComputedStyle(n).fillOpacity === '1')"
-        )
+        full = """(g) => [...document.querySelectorAll(g + ' g.node')]
+            .every((n) => getComputedStyle(n).fillOpacity === '1')"""
+        assert tab.evaluate(full, GRAPH)
     finally:
         team.command("release_input", robot=1, symbol="robot.is_fallen")
 
