@@ -20,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import subprocess
 from collections.abc import AsyncIterator, Iterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -52,7 +53,13 @@ from xabsl_studio.server.api.drafts import router as drafts_router
 from xabsl_studio.server.api.forks import router as fork_router
 from xabsl_studio.server.api.foxglove import FoxgloveServer
 from xabsl_studio.server.api.foxglove import router as foxglove_router
-from xabsl_studio.server.api.graphs import GraphCache, GraphError, option_graph_dot, state_machine_dot
+from xabsl_studio.server.api.graphs import (
+    GraphCache,
+    GraphError,
+    grouped_graph_dot,
+    option_graph_dot,
+    state_machine_dot,
+)
 from xabsl_studio.server.api.library import RecordingLibrary
 from xabsl_studio.server.api.library import router as library_router
 from xabsl_studio.server.api.openapi import ErrorBody, error_responses
@@ -71,6 +78,7 @@ from xabsl_studio.server.protocol.rest import (
     FileBody,
     FileList,
     GenerationDiff,
+    GraphGroups,
     ProgramDiagnostic,
     Recompiled,
     RenameBody,
@@ -618,6 +626,8 @@ async def _svg(studio: Studio, request: Request, dot: str) -> Response:
         svg, etag = await asyncio.to_thread(studio.graphs.svg, dot)
     except GraphvizMissing as error:
         raise HTTPException(503, str(error)) from None
+    except subprocess.TimeoutExpired as error:
+        raise HTTPException(503, f"Graphviz took longer than {error.timeout:g} s to lay out this graph") from None
     if _etag(request.headers.get("if-none-match")) == etag:
         return Response(status_code=304, headers={"ETag": f'"{etag}"'})
     return Response(svg, media_type="image/svg+xml", headers={"ETag": f'"{etag}"', "Cache-Control": "no-cache"})
@@ -630,16 +640,52 @@ _SVG_RESPONSES: dict[int | str, dict[str, Any]] = {
 }
 
 
+#: The longest ``collapse`` list of one graph request (group keys are folder paths).
+MAX_COLLAPSE_CHARS = 4000
+#: Between two group keys in ``collapse`` (no folder name of a behavior set has one).
+COLLAPSE_SEPARATOR = "|"
+
+
 @router.get("/api/graph/{program}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)
 async def graph(
-    studio: StudioDep, request: Request, program: str, agent: str | None = None, root: str | None = None
+    studio: StudioDep,
+    request: Request,
+    program: str,
+    agent: str | None = None,
+    root: str | None = None,
+    collapse: Annotated[str | None, Query(max_length=MAX_COLLAPSE_CHARS)] = None,
 ) -> Response:
-    """The option graph below an XABSL agent's root option, or below option ``root`` (a forced root) (SVG)."""
+    """The option graph below an XABSL agent's root option, or below option ``root`` (a forced root) (SVG).
+
+    With ``collapse`` (group keys separated by ``|``; ``*`` for all, empty for none) the graph is
+    grouped by source folder: the groups named are one node each, the others clusters (the groups:
+    ``/api/graph-groups``). Keys that name no group are ignored (a reload may remove a folder).
+    """
+    collapsed = None if collapse is None else [k for k in collapse.split(COLLAPSE_SEPARATOR) if k]
     try:
-        dot = option_graph_dot(_running(studio, program), agent, root)
+        running = _running(studio, program)
+        if collapsed is None:
+            dot = option_graph_dot(running, agent, root)
+        else:
+            dot, _ = grouped_graph_dot(running, agent, root, collapsed)
     except GraphError as error:
         raise HTTPException(404, str(error)) from None
     return await _svg(studio, request, dot)
+
+
+@router.get("/api/graph-groups/{program}", tags=["graphs"], responses=error_responses(404))
+async def graph_groups(
+    studio: StudioDep, program: str, agent: str | None = None, root: str | None = None
+) -> GraphGroups:
+    """The option groups of a graph (source folders, or name prefixes), with their ids.
+
+    In the order the grouped SVG numbers them (``group_<n>``).
+    """
+    try:
+        _, groups = grouped_graph_dot(_running(studio, program), agent, root, [])
+    except GraphError as error:
+        raise HTTPException(404, str(error)) from None
+    return {"groups": [{"key": g.key, "options": list(g.options), "behaviors": list(g.behaviors)} for g in groups]}
 
 
 @router.get("/api/graph/{program}/{option}", tags=["graphs"], response_class=SvgResponse, responses=_SVG_RESPONSES)

@@ -12,6 +12,7 @@ import threading
 from collections import OrderedDict
 
 from xabsl_studio.engine.emit.dot import option_graph, render_svg, state_machine
+from xabsl_studio.engine.emit.groups import OptionGroup, grouped_option_graph
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.server.protocol.errors import ServerError
 
@@ -46,21 +47,36 @@ class GraphCache:
         return svg, digest
 
 
+def graph_root(program: Program, agent: str | None, root: str | None = None) -> str | None:
+    """The option the graph starts at, None for a program without agents (all options).
+
+    ``root`` (a robot's forced root), else the root of XABSL agent ``agent`` (default: the first).
+    """
+    if root is not None:
+        if root not in program.options:
+            raise GraphError(f"no option {root!r} in this behavior")
+        return root
+    if not program.agents:
+        return None
+    chosen = next((a for a in program.agents if a.name == agent), None) if agent else program.agents[0]
+    if chosen is None:
+        raise GraphError(f"no agent {agent!r} in this behavior")
+    return chosen.root
+
+
 def option_graph_dot(program: Program, agent: str | None, root: str | None = None) -> str:
     """The DOT of the option graph below the root of XABSL agent ``agent`` (default: the first).
 
     ``root``: below that option instead (a robot's forced root).
     """
-    if root is not None:
-        if root not in program.options:
-            raise GraphError(f"no option {root!r} in this behavior")
-        return option_graph(program, root)
-    if not program.agents:
-        return option_graph(program, None)
-    chosen = next((a for a in program.agents if a.name == agent), None) if agent else program.agents[0]
-    if chosen is None:
-        raise GraphError(f"no agent {agent!r} in this behavior")
-    return option_graph(program, chosen.root)
+    return option_graph(program, graph_root(program, agent, root))
+
+
+def grouped_graph_dot(
+    program: Program, agent: str | None, root: str | None, collapsed: list[str]
+) -> tuple[str, tuple[OptionGroup, ...]]:
+    """The grouped option graph (folders as clusters, ``collapsed`` ones as one node) and its groups."""
+    return grouped_option_graph(program, graph_root(program, agent, root), collapsed)
 
 
 def state_machine_dot(program: Program, option: str) -> str:

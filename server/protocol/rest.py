@@ -264,6 +264,25 @@ class GenerationDiff(TypedDict):
     files: list[ChangedFile]
 
 
+@with_config(_RESULT)
+class OptionGroupJson(TypedDict):
+    """One group of an option graph (``xabsl_studio.engine.emit.groups.OptionGroup``).
+
+    A source folder or name prefix with its options' ids, or the called basic behaviors' ids.
+    """
+
+    key: str
+    options: list[int]
+    behaviors: list[int]
+
+
+@with_config(_RESULT)
+class GraphGroups(TypedDict):
+    """``GET /api/graph-groups/{program}``: the groups in the order the grouped SVG numbers them."""
+
+    groups: list[OptionGroupJson]
+
+
 #: Every result, printed as a TypeScript interface by ``tsgen``.
 RESULTS: tuple[type, ...] = (
     FileStat,
@@ -278,6 +297,8 @@ RESULTS: tuple[type, ...] = (
     TestDraft,
     ChangedFile,
     GenerationDiff,
+    OptionGroupJson,
+    GraphGroups,
 )
 #: Every body, printed as a TypeScript interface by ``tsgen`` (what the web UI sends).
 BODIES: tuple[type, ...] = (FileBody, RenameBody, CompileBody, TestDraftBody, OpenBody, ForkBody)

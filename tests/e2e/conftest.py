@@ -53,8 +53,10 @@ def free_port() -> int:
 class StudioServer:
     """``xabsl serve`` on a soccer copy, started, stopped and restarted on one port."""
 
-    def __init__(self, example: Path, port: int, log: Path, replay: bool = False) -> None:
+    def __init__(self, example: Path, port: int, log: Path, replay: bool = False, extra: tuple[str, ...] = ()) -> None:
         self.example = example
+        #: more arguments of ``xabsl serve`` (``--robots 5``)
+        self.extra = extra
         self.port = port
         self.log = log
         #: serve ``example`` as a recording (``xabsl serve --replay FILE``) instead of a folder
@@ -70,6 +72,7 @@ class StudioServer:
         what = ["--replay", str(self.example)] if self.replay else [str(self.example)]
         command = [str(xabsl), "serve", *what, "--port", str(self.port), "--web-dist", str(WEB_DIST)]
         command += ["--record-dir", str(self.log.parent / "recordings")]  # not into the user's cache
+        command += self.extra
         with self.log.open("ab") as log:
             self.process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
         deadline = time.monotonic() + 60
@@ -109,7 +112,7 @@ class StudioServer:
 
 
 @contextlib.contextmanager
-def serving(example: Path, root: Path, replay: bool = False) -> Iterator[StudioServer]:
+def serving(example: Path, root: Path, replay: bool = False, extra: tuple[str, ...] = ()) -> Iterator[StudioServer]:
     """``xabsl serve`` on ``example`` (a folder, or a recording with ``replay``) while in the block.
 
     Fails (never skips) when chromium or the built UI is missing: a missing browser must not look
@@ -119,7 +122,7 @@ def serving(example: Path, root: Path, replay: bool = False) -> Iterator[StudioS
         pytest.fail("Debian chromium is not installed: `make test` (or `make test-deps`) installs it")
     if not (WEB_DIST / "index.html").is_file():
         pytest.fail("the web UI is not built: `make test` (or `make web`) builds it")
-    server = StudioServer(example, free_port(), root / "serve.log", replay=replay)
+    server = StudioServer(example, free_port(), root / "serve.log", replay=replay, extra=extra)
     server.start()
     try:
         yield server

@@ -1,8 +1,9 @@
 /// REST calls under `/api` (docs/protocol.md, "REST"): same origin, token from the page address.
-import type { CompileResult, FileEntry, FileList, FileText, GenerationDiff, ProgramStatus, SaveResult, TestDraft } from "./messages.gen";
+import type { CompileResult, FileEntry, FileList, FileText, GenerationDiff, GraphGroups, ProgramStatus, SaveResult, TestDraft } from "./messages.gen";
 
 // The REST results are defined once, in server/protocol/rest.py, and generated into messages.gen.ts.
 export type { ChangedFile, CompileResult, FileEntry, FileText, GenerationDiff, ProgramStatus, SaveResult, TestDraft } from "./messages.gen";
+import type { OptionGroup } from "./graphgroups";
 
 /// The token of a server that requires one: `?token=` of the page address.
 export const token: string | null = new URLSearchParams(globalThis.location?.search ?? "").get("token");
@@ -98,11 +99,16 @@ export async function compile(path: string, text: string): Promise<CompileResult
 const svgCache = new Map<string, Promise<string>>();
 
 /// An SVG of `/api/graph/...` (cached per address; the server caches by content hash too).
-export function graphSvg(program: string, option?: string | number, agent?: string, root?: string): Promise<string> {
+/// `collapse`: grouped by folder, with these group keys collapsed (`COLLAPSE_SEPARATOR`-joined;
+/// "" none, "*" all); undefined: the plain graph.
+export function graphSvg(program: string, option?: string | number, agent?: string, root?: string, collapse?: string): Promise<string> {
   let path = `graph/${encodeURIComponent(program)}`;
   if (option !== undefined) path += `/${encodeURIComponent(String(option))}`;
-  if (root) path += `?root=${encodeURIComponent(root)}`;
-  else if (agent) path += `?agent=${encodeURIComponent(agent)}`;
+  const query: string[] = [];
+  if (root) query.push(`root=${encodeURIComponent(root)}`);
+  else if (agent) query.push(`agent=${encodeURIComponent(agent)}`);
+  if (collapse !== undefined) query.push(`collapse=${encodeURIComponent(collapse)}`);
+  if (query.length) path += `?${query.join("&")}`;
   let svg = svgCache.get(path);
   if (!svg) {
     svg = fetch(`api/${path}`, { headers: headers() }).then(async (r) => {
@@ -113,6 +119,14 @@ export function graphSvg(program: string, option?: string | number, agent?: stri
     svgCache.set(path, svg);
   }
   return svg;
+}
+
+/// The option groups of an option graph (`/api/graph-groups`): source folders or name prefixes.
+export async function graphGroups(program: string, agent?: string, root?: string): Promise<OptionGroup[]> {
+  const query = root ? `?root=${encodeURIComponent(root)}` : agent ? `?agent=${encodeURIComponent(agent)}` : "";
+  const r = await fetch(`api/graph-groups/${encodeURIComponent(program)}${query}`, { headers: headers() });
+  if (!r.ok) throw new ApiError(`graph groups: HTTP ${r.status} ${await r.text()}`, r.status, null);
+  return ((await r.json()) as GraphGroups).groups;
 }
 
 

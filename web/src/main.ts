@@ -120,7 +120,7 @@ function main(): void {
         ["Esc then Tab (in the editor)", "move the focus out of the editor"],
         ["D / P / F", "dual dynamics / plan / facts (worlds that have them)"],
         ["A / S / X", "activation tree / symbols / test panel"],
-        ["/", "find an option in the graph"],
+        ["/", "find an option or a state (Enter: jump, Shift+Enter: open)"],
         ["J", "jump to the active option"],
         ["W", "why did the option decide this?"],
         ["Ctrl+S", "save the file: compile and hot reload"],
@@ -140,7 +140,11 @@ function main(): void {
   // Attached hosts and Connect… (xabsl attach only; hidden otherwise), under the top bar's controls
   const attachBar = new AttachBar(session, connection);
   topbar.element.append(attachBar.element);
-  const graph = new GraphPanel(session, openOption, openBehavior);
+  // Find in the graph jumps to a state by opening its option at that state.
+  const graph = new GraphPanel(session, openOption, openBehavior, (option, state) => {
+    openOption(option);
+    optionView.reveal(state);
+  });
   const plot = new PlotPanel(session);
   const editor = new EditorPanel(session);
   const tester = new TesterPanel(session, connection);

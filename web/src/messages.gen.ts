@@ -349,6 +349,11 @@ export interface GenerationInfo {
   scene?: Record<string, unknown> | null;
 }
 
+/** `GET /api/graph-groups/{program}`: the groups in the order the grouped SVG numbers them. */
+export interface GraphGroups {
+  groups: OptionGroupJson[];
+}
+
 /** Sent on connect, after every reload and reset, and in answer to `resync`: the ids from now on. */
 export interface Hello {
   type: "hello";
@@ -413,6 +418,17 @@ export interface ListBreakpoints {
 /** Which recording to open. */
 export interface OpenBody {
   name: string;
+}
+
+/**
+ * One group of an option graph (`xabsl_studio.engine.emit.groups.OptionGroup`).
+ *
+ * A source folder or name prefix with its options' ids, or the called basic behaviors' ids.
+ */
+export interface OptionGroupJson {
+  key: string;
+  options: number[];
+  behaviors: number[];
 }
 
 /** The input symbol `symbol` of `robot`'s engine reads `value`. */

@@ -1,81 +1,213 @@
 /// The option graph of the selected robot (server SVG) with the live activation path: active
-/// options, basic behaviors and the calls between them carry the class `active`; nothing is laid
-/// out on a tick. Search (/) marks matching options, Enter opens the first; J jumps to the
+/// options, basic behaviors and the calls between them carry the class `active`, and with "Fade"
+/// on everything else is faded; nothing is laid out on a tick.
+///
+/// A graph of more than `OVERVIEW_ABOVE` options opens grouped by source folder with every group
+/// collapsed (the overview); a click on a group expands it, a click on an expanded folder's frame
+/// collapses it again (the server lays each combination out once: engine/emit/groups.py).
+/// Find (/) lists options and states by name across all options (find.ts): Enter jumps to the
+/// first (an option: centred and marked here, its folder expanded if needed; a state: opened in
+/// the option view), ↑/↓ choose, Shift+Enter opens an option in the option view. J jumps to the
 /// deepest active option; a click on an option opens it in the option view.
-import { graphSvg } from "../api";
+import { graphGroups, graphSvg } from "../api";
+import { type Found, find } from "../find";
+import { GroupMap, OVERVIEW_ABOVE, type OptionGroup } from "../graphgroups";
 import { pathParents } from "../protocol";
 import type { Session, SessionEvent } from "../session";
-import { h } from "../ui";
+import { h, toggleClass } from "../ui";
 import { exportMenu, type PictureTarget } from "./exportmenu";
 import { SvgView } from "./svgview";
+
+/// Results shown under the search box.
+const LISTED = 12;
 
 export class GraphPanel {
   readonly element: HTMLElement;
   readonly search: HTMLInputElement;
   private readonly view = new SvgView("Option graph: drag to pan, wheel to zoom");
   private readonly status: HTMLElement;
+  private readonly results: HTMLElement;
+  private readonly groupButtons: HTMLElement;
+  private readonly fadeBox: HTMLInputElement;
   /// says when the graph is the one below a forced root rather than the agent's
   private readonly rootNote: HTMLElement;
   private key = "";
   private loading = "";
   private deepest: string | null = null;
   private lastShape = "";
+  /// Groups of the graph shown (null: the plain graph).
+  private groups: GroupMap | null = null;
+  /// Collapsed group keys by graph (program|agent|root), kept across reloads; absent: not grouped.
+  private readonly collapsedBy = new Map<string, Set<string>>();
+  /// Graphs shown before (the overview is opened by itself only the first time).
+  private readonly opened = new Set<string>();
+  private found: Found[] = [];
+  private chosen = 0;
+  /// What to centre and mark once the graph being loaded is shown.
+  private pending: string | null = null;
 
   constructor(
     private readonly session: Session,
     private readonly openOption: (id: number) => void,
     private readonly openBehavior: (id: number) => void,
+    private readonly openState: (option: number, state: number) => void = (option) => openOption(option),
   ) {
-    this.search = h("input.search", { type: "search", placeholder: "Find option…  (/)", "aria-label": "Find option" });
-    this.search.addEventListener("input", () => this.mark());
+    this.search = h("input.search", { type: "search", placeholder: "Find option or state…  (/)", "aria-label": "Find option or state" });
+    this.results = h("ol.find-results", { role: "listbox", hidden: true });
+    this.search.addEventListener("input", () => {
+      this.chosen = 0;
+      this.mark();
+    });
     this.search.addEventListener("keydown", (ev) => {
       if (ev.key === "Enter") {
-        const first = this.matches()[0];
-        if (first) {
-          this.view.centerOn(first);
-          this.openOption(Number(first.slice("option_".length)));
-        }
+        const target = this.found[this.chosen];
+        if (target) this.go(target, ev.shiftKey);
+      } else if (ev.key === "ArrowDown" || ev.key === "ArrowUp") {
+        ev.preventDefault();
+        const n = Math.min(this.found.length, LISTED);
+        if (n) this.chosen = (this.chosen + (ev.key === "ArrowDown" ? 1 : n - 1)) % n;
+        this.listResults();
       } else if (ev.key === "Escape") {
         this.search.value = "";
         this.mark();
         this.view.element.focus();
       }
     });
+    this.search.addEventListener("blur", () => setTimeout(() => (this.results.hidden = true), 150));
+    this.search.addEventListener("focus", () => this.listResults());
     this.status = h("span.muted");
     this.rootNote = h("span.graph-root");
+    this.fadeBox = h("input", { type: "checkbox", checked: true, onchange: () => this.highlight(true) });
+    this.groupButtons = h(
+      "span.group-buttons",
+      {},
+      h("button", { title: "Group by folder, every folder collapsed", onclick: () => this.setCollapsed(new Set(this.groups?.groups.map((g) => g.key) ?? ["*"])) }, "Overview"),
+      h("button", { title: "Every folder expanded (still framed by folder)", onclick: () => this.setCollapsed(new Set()) }, "Expand all"),
+    );
     const toolbar = h(
       "div.toolbar",
       {},
-      this.search,
+      h("span.find-box", {}, this.search, this.results),
       h("button", { title: "Jump to the active option (J)", onclick: () => this.jump() }, "Jump to active"),
       h("button", { title: "Fit (F)", onclick: () => this.view.fit() }, "Fit"),
       h("button", { title: "Zoom in (+)", onclick: () => this.view.zoomBy(1.25) }, "+"),
       h("button", { title: "Zoom out (−)", onclick: () => this.view.zoomBy(0.8) }, "−"),
+      this.groupButtons,
+      h("label.fade-toggle", { title: "Fade what the selected robot does not run" }, this.fadeBox, " Fade"),
       exportMenu(() => this.pictureTarget(), "the option graph"),
       this.status,
       this.rootNote,
     );
+    this.view.enableMinimap();
     this.element = h("div.panel.graph-panel", {}, toolbar, this.view.element);
     this.view.onClick = (id) => {
       if (id.startsWith("option_")) this.openOption(Number(id.slice(7)));
       else if (id.startsWith("behavior_")) this.openBehavior(Number(id.slice(9)));
+      else if (id.startsWith("group_")) this.expand(Number(id.slice(6)));
+      else if (id.startsWith("cluster_")) this.collapse(Number(id.slice(8)));
     };
   }
 
-  private matches(): string[] {
-    const q = this.search.value.trim().toLowerCase();
-    if (!q) return [];
-    const index = this.session.indexOf(this.session.selectedRobot);
-    const out: string[] = [];
-    for (const o of index?.description.options ?? []) if (o.name.toLowerCase().includes(q) && this.view.has(`option_${o.id}`)) out.push(`option_${o.id}`);
-    return out;
+  private index() {
+    return this.session.indexOf(this.session.selectedRobot);
+  }
+
+  /// The drawn element of option `id` (its collapsed group's node when it is in one).
+  private optionNode(id: number): string {
+    return this.groups ? this.groups.nodeId("option", id) : `option_${id}`;
   }
 
   private mark(): void {
-    const m = this.matches();
-    this.view.setClasses("match", m);
-    this.view.element.classList.toggle("searching", this.search.value.trim() !== "");
-    this.status.textContent = this.search.value.trim() ? `${m.length} match${m.length === 1 ? "" : "es"}` : "";
+    const q = this.search.value.trim();
+    this.found = find(this.index()?.description.options ?? [], q, 500);
+    const marked = new Set<string>();
+    for (const f of this.found) marked.add(this.optionNode(f.option));
+    this.view.setClasses("match", marked);
+    this.view.element.classList.toggle("searching", q !== "");
+    const options = this.found.filter((f) => f.kind === "option").length;
+    const states = this.found.length - options;
+    this.status.textContent = q ? `${options} option${options === 1 ? "" : "s"}, ${states} state${states === 1 ? "" : "s"}` : "";
+    this.listResults();
+  }
+
+  private listResults(): void {
+    const shown = this.found.slice(0, LISTED);
+    this.results.hidden = shown.length === 0 || document.activeElement !== this.search;
+    this.results.replaceChildren(
+      ...shown.map((f, i) =>
+        h(
+          "li",
+          {
+            role: "option",
+            class: i === this.chosen ? "chosen" : "",
+            "data-kind": f.kind,
+            // pointerdown, not click: the search box's blur would hide the list first
+            onpointerdown: (ev: Event) => {
+              ev.preventDefault();
+              this.go(f, (ev as PointerEvent).shiftKey);
+            },
+          },
+          h("span.found-kind", {}, f.kind),
+          h("span.found-name", {}, f.name),
+          f.kind === "state" ? h("span.muted", {}, ` in ${f.optionName}`) : null,
+        ),
+      ),
+    );
+  }
+
+  /// Jump to a search result: an option is centred and marked in the graph (its folder expanded
+  /// when collapsed; `open`: opened in the option view too), a state opened in the option view.
+  private go(target: Found, open: boolean): void {
+    this.results.hidden = true;
+    if (target.kind === "state" && target.state !== undefined) {
+      this.openState(target.option, target.state);
+      return;
+    }
+    if (open) {
+      this.openOption(target.option);
+      return;
+    }
+    const id = `option_${target.option}`;
+    const groups = this.groups;
+    const n = groups?.groupOf("option", target.option);
+    if (groups && n !== undefined && groups.isCollapsed(n)) {
+      this.pending = id;
+      this.expand(n);
+    } else this.reveal(id);
+  }
+
+  /// Centre element `id` and mark it (class `found`) until the next search.
+  private reveal(id: string): void {
+    this.view.setClasses("found", [id]);
+    this.view.centerOn(id);
+  }
+
+  private graphBase(): string {
+    const key = this.graphKey();
+    return key ? `${key.program}|${key.agent ?? ""}|${key.root ?? ""}` : "";
+  }
+
+  private setCollapsed(collapsed: Set<string>): void {
+    const base = this.graphBase();
+    if (!base) return;
+    this.collapsedBy.set(base, collapsed);
+    this.render(new Set());
+  }
+
+  private expand(n: number): void {
+    const key = this.groups?.groups[n]?.key;
+    const collapsed = this.collapsedBy.get(this.graphBase());
+    if (key === undefined || !collapsed) return;
+    this.pending ??= `cluster_${n}`;
+    this.setCollapsed(new Set([...collapsed].filter((k) => k !== key)));
+  }
+
+  private collapse(n: number): void {
+    const key = this.groups?.groups[n]?.key;
+    const collapsed = this.collapsedBy.get(this.graphBase());
+    if (key === undefined || !collapsed) return;
+    this.pending = `group_${n}`;
+    this.setCollapsed(new Set([...collapsed, key]));
   }
 
   /// Called after a new graph is shown (the coverage overlay of panels/coverage.ts re-applies).
@@ -93,7 +225,7 @@ export class GraphPanel {
     }
   }
 
-  /// Centre the deepest active option.
+  /// Centre the deepest active option (its folder's node while that is collapsed).
   jump(): void {
     if (this.deepest) this.view.centerOn(this.deepest);
   }
@@ -131,9 +263,30 @@ export class GraphPanel {
     };
   }
 
+  /// The groups and the SVG of graph `key` as the user has it grouped (opening an overview for a
+  /// graph of many options the first time it is shown).
+  private async fetchGraph(key: { program: string; agent: string | undefined; root?: string }, base: string): Promise<{ svg: string; groups: GroupMap | null }> {
+    let collapsed = this.collapsedBy.get(base);
+    if (!collapsed && !this.opened.has(base)) {
+      this.opened.add(base);
+      const options = this.index()?.description.options.length ?? 0;
+      if (options > OVERVIEW_ABOVE) this.collapsedBy.set(base, (collapsed = new Set(["*"])));
+    }
+    if (!collapsed) return { svg: await graphSvg(key.program, undefined, key.agent, key.root), groups: null };
+    const list: OptionGroup[] = await graphGroups(key.program, key.agent, key.root);
+    if (collapsed.has("*")) {
+      collapsed = new Set(list.map((g) => g.key));
+      this.collapsedBy.set(base, collapsed);
+    }
+    const groups = new GroupMap(list, collapsed);
+    return { svg: await graphSvg(key.program, undefined, key.agent, key.root, groups.query()), groups };
+  }
+
   render(changes: Set<SessionEvent>): void {
     const key = this.graphKey();
-    const k = key ? `${key.program}|${key.agent ?? ""}|${key.root ?? ""}|${this.session.hello?.generation ?? 0}` : "";
+    const base = this.graphBase();
+    const grouping = [...(this.collapsedBy.get(base) ?? ["-"])].sort().join("|");
+    const k = key ? `${base}|${this.session.hello?.generation ?? 0}|${grouping}` : "";
     if (k !== this.key && k !== this.loading) {
       if (!key) {
         this.key = k;
@@ -141,17 +294,28 @@ export class GraphPanel {
       } else {
         this.loading = k;
         this.rootNote.textContent = key.root ? `forced root: ${key.root}` : "";
-        graphSvg(key.program, undefined, key.agent, key.root)
-          .then((svg) => {
+        this.fetchGraph(key, base)
+          .then(({ svg, groups }) => {
             if (this.loading !== k) return;
             this.loading = "";
-            this.key = k;
+            // the first fetch may have decided the grouping: the key says what is shown
+            this.key = `${base}|${this.session.hello?.generation ?? 0}|${[...(this.collapsedBy.get(base) ?? ["-"])].sort().join("|")}`;
+            this.groups = groups;
             this.lastShape = "";
+            // grouped: Fit keeps labels legible (9 px), around what was asked for or the active option
+            this.view.minTextPx = groups ? 9 : 0;
+            this.view.focus = () => this.pending ?? this.deepest;
+            this.groupButtons.hidden = groups === null && (this.index()?.description.options.length ?? 0) <= OVERVIEW_ABOVE;
             if (!this.view.show(svg)) this.view.clear("The server sent an unreadable graph.");
             this.mark();
             this.highlight(true);
             this.onShown();
-            this.view.focusIfTiny(this.deepest);
+            const pending = this.pending;
+            this.pending = null;
+            if (pending && this.view.has(pending)) {
+              if (pending.startsWith("option_")) this.reveal(pending);
+              else this.view.centerOn(pending, false);
+            } else this.view.focusIfTiny(this.deepest);
           })
           .catch((error: Error) => {
             if (this.loading !== k) return;
@@ -176,20 +340,29 @@ export class GraphPanel {
     let deepestDepth = -1;
     // The graph is the current generation's: a tick before a reload is shown by option names.
     const to = this.session.currentIds(this.session.selectedRobot);
-    const optionOf = (n: { option: number }): number => to.option(n.option);
+    const groups = this.groups;
+    const nodeOf = (n: (typeof path)[number]): [kind: "option" | "behavior", id: number] => (n.kind === "option" ? ["option", to.option(n.option)] : ["behavior", to.behavior(n.behavior)]);
     path.forEach((n, i) => {
-      const id = n.kind === "option" ? `option_${optionOf(n)}` : `behavior_${to.behavior(n.behavior)}`;
-      ids.push(id);
+      const [kind, id] = nodeOf(n);
+      const element = groups ? groups.nodeId(kind, id) : `${kind}_${id}`;
+      ids.push(element);
       if (n.kind === "option" && n.depth > deepestDepth) {
-        deepest = id;
+        deepest = element;
         deepestDepth = n.depth;
       }
       const parent = path[parents[i] ?? -1];
-      if (parent?.kind === "option") ids.push(`call_${optionOf(parent)}_${n.kind === "option" ? `o${optionOf(n)}` : `b${to.behavior(n.behavior)}`}`);
+      if (parent?.kind !== "option") return;
+      const caller = to.option(parent.option);
+      const call = groups ? groups.callId(caller, kind, id) : `call_${caller}_${kind === "option" ? "o" : "b"}${id}`;
+      if (call) ids.push(call);
     });
     this.deepest = deepest;
     this.view.setClasses("active", ids);
+    toggleClass(this.view.element, "fade", this.fadeBox.checked && ids.length > 0);
     const root = path[0];
-    this.view.setClasses("root", root ? [root.kind === "option" ? `option_${optionOf(root)}` : `behavior_${to.behavior(root.behavior)}`] : []);
+    if (root) {
+      const [kind, id] = nodeOf(root);
+      this.view.setClasses("root", [groups ? groups.nodeId(kind, id) : `${kind}_${id}`]);
+    } else this.view.setClasses("root", []);
   }
 }

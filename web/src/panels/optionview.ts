@@ -52,6 +52,8 @@ export class OptionView {
   /// Breakpoints of the selected robot's behavior set (shown beside the machine).
   readonly breakpoints: BreakpointsPanel;
   private readonly menu: HTMLElement;
+  /// The state Find asked to show, until its machine is on screen.
+  private revealing: number | null = null;
 
   constructor(
     private readonly session: Session,
@@ -110,6 +112,7 @@ export class OptionView {
     // At Fit state names stay legible (12 px on screen); a large machine is then centred on the
     // active state (or the initial one) and panned by hand, Overview shows all of it.
     this.view.minTextPx = 12;
+    this.view.enableMinimap();
     this.view.legibleText = 'g.node[id^="state_"] text';
     this.view.focus = () => {
       const option = this.current();
@@ -185,7 +188,9 @@ export class OptionView {
             this.loading = "";
             this.key = k;
             if (!this.view.show(svg)) this.view.clear("The server sent an unreadable state machine.");
+            this.followed = "";
             this.highlight(option);
+            this.revealNow();
           })
           .catch((error: Error) => {
             if (this.loading !== k) return;
@@ -225,14 +230,32 @@ export class OptionView {
     return this.past;
   }
 
+  /// Centre state `state` of the option shown (or about to be) and mark it (class `found`):
+  /// where Find jumps to a state.
+  reveal(state: number): void {
+    this.revealing = state;
+    if (this.key && !this.loading) this.revealNow();
+  }
+
+  private revealNow(): void {
+    if (this.revealing === null) return;
+    const id = `state_${this.revealing}`;
+    if (!this.view.has(id)) return;
+    this.revealing = null;
+    this.view.setClasses("found", [id]);
+    this.view.centerOn(id);
+  }
+
   private highlight(option: Option): void {
     const node = this.node(option);
     this.view.setClasses("active", node ? [`state_${node.state}`] : []);
     const active = node ? `state_${node.state}` : "";
-    if (active && active !== this.followed) this.view.keepInView(active);
-    this.followed = active;
     const last = this.lastTransition(option);
     const fired = last ? `leaf_${last.from}_${last.leaf}` : null;
+    // A new active state (or the machine just shown): centre it with the transition that led
+    // there, while the placement is automatic (Fit, or Fit around the active state).
+    if (active && active !== this.followed) this.view.follow(fired && last?.to === node?.state ? [active, fired] : [active]);
+    this.followed = active;
     this.view.setClasses("fired", fired ? [fired] : []);
     this.view.setClasses("previous", last ? [`state_${last.from}`] : []);
     for (const [id, item] of this.transitionItems) toggleClass(item, "fired", id === fired);

@@ -35,7 +35,9 @@ export class SvgView {
     this.element.addEventListener("wheel", (ev) => this.wheel(ev), { passive: false });
     this.element.addEventListener("pointerdown", (ev) => this.drag(ev));
     this.element.addEventListener("click", (ev) => {
-      const target = (ev.target as Element).closest("g.node[id], g.edge[id]");
+      const hit = ev.target as Element;
+      // a node or an edge, or a cluster by its label (its inside is where one pans)
+      const target = hit.closest("g.node[id], g.edge[id]") ?? (hit.tagName === "text" ? hit.closest("g.cluster[id]") : null);
       if (target && this.onClick && !this.element.classList.contains("panned")) this.onClick(target.id, ev);
     });
     this.element.addEventListener("keydown", (ev) => {
@@ -65,7 +67,8 @@ export class SvgView {
     this.viewW = rect.width;
     this.viewH = rect.height;
     if (!this.svg || (!dw && !dh)) return;
-    if (this.fitted || first) this.refit();
+    // Not `first` alone: a centerOn made at the real size before this first report stands.
+    if (this.fitted || (first && this.pendingCentre)) this.refit();
     else {
       this.x += dw / 2;
       this.y += dh / 2;
@@ -89,6 +92,11 @@ export class SvgView {
     svg.setAttribute("height", String(hh));
     // Graphviz puts a <title> in every group: browsers show them as tooltips, which is welcome.
     this.stage.replaceChildren(svg);
+    if (this.minimap) {
+      if (this.minimap.url) URL.revokeObjectURL(this.minimap.url);
+      this.minimap.url = URL.createObjectURL(new Blob([text], { type: "image/svg+xml" }));
+      this.minimap.image.src = this.minimap.url;
+    }
     this.fit();
     return true;
   }
@@ -98,6 +106,7 @@ export class SvgView {
     this.ids.clear();
     this.marked.clear();
     this.stage.replaceChildren(h("div.empty", {}, message));
+    if (this.minimap) this.minimap.box.hidden = true;
     this.x = 0;
     this.y = 0;
     this.zoom = 1;
@@ -128,15 +137,86 @@ export class SvgView {
 
   private apply(): void {
     this.stage.style.transform = `translate(${this.x}px, ${this.y}px) scale(${this.zoom})`;
+    if (this.minimap) this.drawMinimap();
+  }
+
+  /// A minimap in the corner: the whole picture small, the part in view framed; a click or a
+  /// drag on it moves the view there. Shown while the picture is larger than the view. The
+  /// picture is an <img> of the server's SVG text, so it costs no DOM and no work on a tick.
+  enableMinimap(): void {
+    if (this.minimap) return;
+    const frame = h("div.minimap-view");
+    const image = h("img", { alt: "", draggable: false });
+    const box = h("div.minimap", { title: "Minimap: click or drag to move the view", hidden: true }, image, frame);
+    this.minimap = { box, image, frame, url: "" };
+    this.element.append(box);
+    box.addEventListener("pointerdown", (ev) => {
+      ev.stopPropagation();
+      ev.preventDefault();
+      const move = (e: PointerEvent): void => this.minimapTo(e);
+      move(ev);
+      box.setPointerCapture(ev.pointerId);
+      box.addEventListener("pointermove", move);
+      box.addEventListener("pointerup", () => box.removeEventListener("pointermove", move), { once: true });
+    });
+  }
+
+  private minimap: { box: HTMLElement; image: HTMLImageElement; frame: HTMLElement; url: string } | null = null;
+
+  /// The minimap's scale: picture pixels to minimap pixels.
+  private minimapScale(): number {
+    return Math.min(MINIMAP_W / (this.width || 1), MINIMAP_H / (this.height || 1));
+  }
+
+  private drawMinimap(): void {
+    const m = this.minimap;
+    if (!m) return;
+    const view = this.element.getBoundingClientRect();
+    const w = this.width * this.zoom;
+    const hh = this.height * this.zoom;
+    const show = this.svg !== null && view.width > 0 && (w > view.width + 1 || hh > view.height + 1);
+    if (m.box.hidden !== !show) m.box.hidden = !show;
+    if (!show) return;
+    const s = this.minimapScale();
+    m.box.style.width = `${this.width * s}px`;
+    m.box.style.height = `${this.height * s}px`;
+    const k = s / this.zoom; // screen px -> minimap px
+    const left = Math.max(0, -this.x * k);
+    const top = Math.max(0, -this.y * k);
+    m.frame.style.left = `${left}px`;
+    m.frame.style.top = `${top}px`;
+    m.frame.style.width = `${Math.max(4, Math.min(this.width * s, (view.width - this.x) * k) - left)}px`;
+    m.frame.style.height = `${Math.max(4, Math.min(this.height * s, (view.height - this.y) * k) - top)}px`;
+  }
+
+  private minimapTo(ev: PointerEvent): void {
+    const m = this.minimap;
+    if (!m) return;
+    const r = m.box.getBoundingClientRect();
+    const s = this.minimapScale();
+    const ux = (ev.clientX - r.left) / s;
+    const uy = (ev.clientY - r.top) / s;
+    const view = this.element.getBoundingClientRect();
+    this.fitted = false;
+    this.x = view.width / 2 - ux * this.zoom;
+    this.y = view.height / 2 - uy * this.zoom;
+    this.apply();
+  }
+
+  /// Whether the minimap is shown (tests read it).
+  get minimapShown(): boolean {
+    return this.minimap !== null && !this.minimap.box.hidden;
   }
 
   /// Fit the picture into the view; `overview`: the whole of it, however small its text gets.
   fit(overview = false): void {
     const rect = this.element.getBoundingClientRect();
     if (!this.width || !rect.width) {
+      this.fitPending = true;
       requestAnimationFrame(() => this.element.isConnected && this.width && this.element.getBoundingClientRect().width && this.fit(overview));
       return;
     }
+    this.fitPending = false;
     this.fitted = true;
     this.refit = () => this.fit(overview);
     const applied = this.zoom; // the stage is still drawn at this zoom
@@ -153,7 +233,14 @@ export class SvgView {
       this.y = place(this.height * this.zoom, rect.height, uy * this.zoom);
     }
     this.apply();
+    const centre = this.pendingCentre;
+    this.pendingCentre = null;
+    centre?.();
   }
+
+  /// A fit waits for the view to have a size (a tab just shown): centring waits for it too.
+  private fitPending = false;
+  private pendingCentre: (() => void) | null = null;
 
   /// The zoom at which the smallest legible-class text is `minTextPx` on screen (0: no floor).
   private legibleZoom(): number {
@@ -176,18 +263,21 @@ export class SvgView {
     return [(box.left + box.width / 2 - stageBox.left) / zoom, (box.top + box.height / 2 - stageBox.top) / zoom];
   }
 
-  /// While at Fit, bring element `id` into view when it is outside (same zoom): a machine shown
-  /// at a legible size around its active state follows that state. Once panned, it stays put.
-  keepInView(id: string): void {
+  /// While the placement is automatic (Fit, not panned since): centre the box around elements
+  /// `ids` at the same zoom (a machine follows its active state and the transition that led
+  /// there); a picture that fits stays centred as a whole.
+  follow(ids: readonly string[]): void {
     if (!this.fitted || !this.svg) return;
-    const el = this.ids.get(id);
-    if (!el) return;
+    const boxes = ids.map((id) => this.ids.get(id)?.getBoundingClientRect()).filter((b): b is DOMRect => !!b && (b.width > 0 || b.height > 0));
+    if (!boxes.length) return;
     const view = this.element.getBoundingClientRect();
-    const box = el.getBoundingClientRect();
-    if (!view.width || (box.left >= view.left && box.right <= view.right && box.top >= view.top && box.bottom <= view.bottom)) return;
-    const target = this.unscaledCentre(id, this.zoom);
-    if (!target) return;
-    const [ux, uy] = target;
+    const stageBox = this.stage.getBoundingClientRect();
+    const left = Math.min(...boxes.map((b) => b.left));
+    const right = Math.max(...boxes.map((b) => b.right));
+    const top = Math.min(...boxes.map((b) => b.top));
+    const bottom = Math.max(...boxes.map((b) => b.bottom));
+    const ux = ((left + right) / 2 - stageBox.left) / this.zoom;
+    const uy = ((top + bottom) / 2 - stageBox.top) / this.zoom;
     this.x = place(this.width * this.zoom, view.width, ux * this.zoom);
     this.y = place(this.height * this.zoom, view.height, uy * this.zoom);
     this.apply();
@@ -224,17 +314,21 @@ export class SvgView {
     });
   }
 
-  /// Centre the element `id` in the view (zooming in to a readable size if needed).
-  centerOn(id: string): void {
+  /// Centre the element `id` in the view (zooming in to a readable size if needed and `zoomIn`).
+  centerOn(id: string, zoomIn = true): void {
     const el = this.ids.get(id) as SVGGraphicsElement | undefined;
     if (!el || !this.svg) return;
     const rect = this.element.getBoundingClientRect();
+    if (!rect.width || this.fitPending) {
+      this.pendingCentre = () => this.centerOn(id, zoomIn);
+      return;
+    }
     const box = el.getBoundingClientRect();
     const stageBox = this.stage.getBoundingClientRect();
     // Element centre in unscaled SVG pixels.
     const ux = (box.left + box.width / 2 - stageBox.left) / this.zoom;
     const uy = (box.top + box.height / 2 - stageBox.top) / this.zoom;
-    if (this.zoom < 0.8) this.zoom = 1;
+    if (zoomIn && this.zoom < 0.8) this.zoom = 1;
     this.fitted = false;
     this.x = rect.width / 2 - ux * this.zoom;
     this.y = rect.height / 2 - uy * this.zoom;
@@ -281,6 +375,10 @@ export class SvgView {
     this.element.addEventListener("pointerup", up);
   }
 }
+
+/// The minimap's largest size (CSS px).
+const MINIMAP_W = 200;
+const MINIMAP_H = 150;
 
 /// The offset that shows a picture `size` long in a view `view` long with point `at` of it in the
 /// middle: centred when it fits, else as close to `at` as its edges allow (no empty margin).
