@@ -241,6 +241,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         print(f"xabsl {args.command}: {error}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # The reader went away (`xabsl diverge A B | head`): not the command's failure, and no
+        # traceback; what is still buffered goes nowhere instead of failing again at exit.
+        with contextlib.suppress(OSError, ValueError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         return 130
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import subprocess
 import sys
@@ -169,3 +170,16 @@ def test_the_summary_counts_in_the_singular_too(tmp_path: Path, capsys: pytest.C
     assert main(["compile", str(source)]) == 0
     summary = capsys.readouterr().out.strip().splitlines()[-1]
     assert summary.startswith("ok: 3 files, 1 option, 0 errors, 1 warning in "), summary
+
+
+class _GoneReader(io.StringIO):
+    """Standard output whose reader went away (``xabsl … | head`` after head exits)."""
+
+    def write(self, text: str) -> int:
+        raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_a_reader_that_goes_away_is_no_failure_and_no_traceback(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sys, "stdout", _GoneReader())
+    case = KIT / "logic"
+    assert main(["trace", str(case / "agents.xabsl"), "--inputs", str(case / "in.jsonl")]) == 0
