@@ -79,6 +79,8 @@ NUMERIC_ARGS: list[tuple[dict[str, Any], str]] = [
     ({"type": "command", "op": "history"}, "t1"),
     ({"type": "command", "op": "history"}, "every"),
     ({"type": "command", "op": "explain", "robot": 0, "option": "x"}, "seq"),
+    ({"type": "command", "op": "explain", "robot": 0, "option": "x"}, "why_not"),
+    ({"type": "command", "op": "query", "condition": "ball.seen"}, "robot"),
     ({"type": "command", "op": "world_command", "name": "x"}, "args"),
     ({"type": "command", "op": "set_breakpoint", "kind": "leaf", "option": "x"}, "breakpoint"),
     ({"type": "command", "op": "set_breakpoint", "kind": "leaf", "option": "x"}, "leaf"),
