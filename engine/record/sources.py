@@ -80,7 +80,7 @@ def compile_sources(sources: Mapping[str, Any], what: str = "the recorded behavi
 def write_sources(sources: Mapping[str, Any], folder: Path, what: str = "the recorded behavior") -> tuple[Path, Path]:
     """Write recorded ``sources`` under ``folder`` with the recorded layout: (their base folder, the agents file).
 
-    Names may climb out of the agents file's folder (``../shared/x.xabsl``), never out of ``folder``.
+    Names may climb out of the agents file's folder (``../common/x.xabsl``), never out of ``folder``.
 
     Raises:
         RecordingError: malformed ``sources`` (names leaving their folder, texts that are not text).

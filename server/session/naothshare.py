@@ -93,8 +93,9 @@ class SharedSlot:
                 self.served += 1
                 writer.write(_REPLY.pack(ident, len(answer)) + answer)
                 await writer.drain()
-        except (asyncio.IncompleteReadError, TimeoutError, ConnectionError, M.DecodeError):
-            pass  # gone, silent or not NaoTH's wire: the client is dropped
+        except (asyncio.IncompleteReadError, TimeoutError, ConnectionError, M.DecodeError) as error:
+            # gone, silent or not NaoTH's wire: the client is dropped, the robot's slot kept
+            log.debug("shared NaoTH port: a client dropped: %r", error)
         except Exception as error:  # the robot went away under the command: the client is dropped
             log.info("shared NaoTH port: %s", error)
         finally:
