@@ -422,16 +422,10 @@ class Recording:
         Raises:
             RecordingError: an agent in ``agents`` is not a recorded XABSL agent.
         """
-        names = self.agents if agents is None else agents
-        for name in names:
-            if name not in self.agents:
-                raise RecordingError(f"no agent {name!r} in {self.path} (agents: {', '.join(self.agents)})")
-        start = max(start, self.first)
-        stop = self.end if stop is None else min(stop, self.end)
-        if start >= stop:
+        window = self._agent_window(start, stop, agents)
+        if window is None:
             return
-        wanted = {S.agent_topic(name): name for name in names}
-        channels = {cid: wanted[topic] for cid, topic in self._topics.items() if topic in wanted}
+        channels, start, stop = window
         first, last = self.time_ns(start), self.time_ns(stop - 1)
         descriptions: dict[tuple[str, int], dict[str, Any]] = {}
         for channel, _time, raw in self._file.messages(channels, first, last + 1):
@@ -443,6 +437,25 @@ class Recording:
                 description = descriptions[(agent, gen)] = self.program(agent, gen).description
             self._check(V.check_path, message["path"], description)
             yield message["seq"], message["t"], agent, gen, message["path"]
+
+    def _agent_window(
+        self, start: int, stop: int | None, agents: list[str] | None
+    ) -> tuple[dict[int, str], int, int] | None:
+        """The tick channels of ``agents`` (channel id -> agent) and ``start`` .. ``stop`` clamped; None: empty.
+
+        Raises:
+            RecordingError: an agent in ``agents`` is not a recorded XABSL agent.
+        """
+        names = self.agents if agents is None else agents
+        for name in names:
+            if name not in self.agents:
+                raise RecordingError(f"no agent {name!r} in {self.path} (agents: {', '.join(self.agents)})")
+        start = max(start, self.first)
+        stop = self.end if stop is None else min(stop, self.end)
+        if start >= stop:
+            return None
+        wanted = {S.agent_topic(name): name for name in names}
+        return {cid: wanted[topic] for cid, topic in self._topics.items() if topic in wanted}, start, stop
 
     def agent_messages(
         self, start: int = 0, stop: int | None = None, agents: list[str] | None = None
@@ -456,16 +469,10 @@ class Recording:
         Raises:
             RecordingError: an agent in ``agents`` is not a recorded XABSL agent; a damaged message.
         """
-        names = self.agents if agents is None else agents
-        for name in names:
-            if name not in self.agents:
-                raise RecordingError(f"no agent {name!r} in {self.path} (agents: {', '.join(self.agents)})")
-        start = max(start, self.first)
-        stop = self.end if stop is None else min(stop, self.end)
-        if start >= stop:
+        window = self._agent_window(start, stop, agents)
+        if window is None:
             return
-        wanted = {S.agent_topic(name): name for name in names}
-        channels = {cid: wanted[topic] for cid, topic in self._topics.items() if topic in wanted}
+        channels, start, stop = window
         # from the key frame at or before start, so that the first message yielded is a key frame
         key = max(self.first, start - start % self.key_every)
         first, last = self.time_ns(key), self.time_ns(stop - 1)
