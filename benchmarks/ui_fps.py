@@ -34,8 +34,8 @@ import uvicorn
 from xabsl_studio.engine.host import Example
 from xabsl_studio.engine.worlds.bench import BenchExample
 from xabsl_studio.server.api.app import WEB_DIST, create_app
+from xabsl_studio.server.api.listen import uvicorn_config
 from xabsl_studio.server.api.security import SecurityPolicy
-from xabsl_studio.server.protocol.limits import MAX_MESSAGE_BYTES
 from xabsl_studio.server.session.live import Session
 
 REPO = Path(__file__).resolve().parents[1]
@@ -140,7 +140,7 @@ def serve(example: Example) -> tuple[uvicorn.Server, int]:
     session = Session(example)
     port = free_port()
     app = create_app(session, SecurityPolicy(token=None), WEB_DIST)
-    config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", ws_max_size=MAX_MESSAGE_BYTES)
+    config = uvicorn_config(app, "127.0.0.1", port)
     server = uvicorn.Server(config)
     threading.Thread(target=server.run, daemon=True).start()
     while not server.started:

@@ -194,9 +194,8 @@ def run_attach(args: argparse.Namespace) -> int:
     from xabsl_studio.engine.host import BehaviorSource, ExampleError, behavior_source, common_root
     from xabsl_studio.server.api.app import WEB_DIST, create_app
     from xabsl_studio.server.api.library import RecordingLibrary
+    from xabsl_studio.server.api.listen import uvicorn_config
     from xabsl_studio.server.api.security import SecurityPolicy, TokenError
-    from xabsl_studio.server.api.transport import WebSocketProtocol
-    from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
     from xabsl_studio.server.protocol.naoth import parse_naoth_address
     from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
     from xabsl_studio.server.session.recording import LiveRecorder, cache_folder, default_folder
@@ -257,15 +256,7 @@ def run_attach(args: argparse.Namespace) -> int:
         session.live_recorder = LiveRecorder(folder, example.name, example.behavior_hz, example.physics_hz)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
     app = create_app(session, policy, web_dist, RecordingLibrary(folder, []))
-    config = uvicorn.Config(
-        app,
-        host=args.host,
-        port=args.port,
-        ws=WebSocketProtocol,
-        ws_max_size=MAX_LSP_MESSAGE_BYTES,
-        log_level="warning",
-        lifespan="on",
-    )
+    config = uvicorn_config(app, args.host, args.port)
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"
     logging.basicConfig(level=logging.INFO, format="%(message)s")
@@ -296,9 +287,9 @@ def run(args: argparse.Namespace) -> int:
     from xabsl_studio.engine.cli import UsageError
     from xabsl_studio.engine.worlds.loader import ExampleError, load_example
     from xabsl_studio.server.api.app import WEB_DIST, create_app
+    from xabsl_studio.server.api.listen import uvicorn_config
     from xabsl_studio.server.api.security import SecurityPolicy, TokenError
-    from xabsl_studio.server.api.transport import WebSocketProtocol
-    from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES, MAX_SPEED, MIN_SPEED
+    from xabsl_studio.server.protocol.limits import MAX_SPEED, MIN_SPEED
     from xabsl_studio.server.session.live import Session
 
     if args.example is not None:
@@ -379,16 +370,7 @@ def run(args: argparse.Namespace) -> int:
     library = RecordingLibrary(listed, [Path(args.replay)] if args.replay is not None else [])
     app = create_app(session, policy, web_dist, library)
 
-    config = uvicorn.Config(
-        app,
-        host=args.host,
-        port=args.port,
-        ws=WebSocketProtocol,
-        ws_max_size=MAX_LSP_MESSAGE_BYTES,
-        ws_per_message_deflate=args.compress,
-        log_level="warning",
-        lifespan="on",
-    )
+    config = uvicorn_config(app, args.host, args.port, compress=args.compress)
     server = uvicorn.Server(config)
     shown = "localhost" if args.host in ("127.0.0.1", "::1") else args.host
     query = f"/?token={policy.token}" if policy.token else "/"

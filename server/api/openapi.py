@@ -12,6 +12,8 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
+from xabsl_studio.server.protocol.limits import MAX_BODY_BYTES, MAX_HEAD_BYTES, MAX_TARGET_BYTES
+
 
 class ErrorBody(BaseModel):
     """A refused request: what was wrong."""
@@ -25,10 +27,12 @@ _WHY = {
     403: "a foreign Origin, or a path outside the behavior folders",
     404: "no such file, folder, behavior set or option",
     409: "the file changed since the version given, or the target exists; a command that does not fit the session now",
-    413: "a request body over 1 MiB",
+    413: f"a request body over {MAX_BODY_BYTES // 1024} KiB",
+    414: f"a request target (path and query) over {MAX_TARGET_BYTES // 1024} KiB",
     415: "a file that is not UTF-8 text",
     422: "saved or compiled, but a behavior set has errors (the body lists them); or a malformed parameter",
     428: "overwriting without the version edited",
+    431: f"a request head (request line and headers) over {MAX_HEAD_BYTES // 1024} KiB",
     503: "Graphviz (dot) is not installed",
 }
 
@@ -45,8 +49,12 @@ _UNPROCESSABLE_JSON = {
 
 
 def error_responses(*codes: int) -> dict[int | str, dict[str, Any]]:
-    """OpenAPI ``responses`` for error statuses a route answers (besides 401/403 on every /api route)."""
+    """OpenAPI ``responses`` for error statuses a route answers (besides those of every /api route).
+
+    Every route may answer 401 and 403 (the token, Origin and Host checks) and 414 and 431 (an
+    oversized request): ``server/api/security.py`` answers them before the route is reached.
+    """
     return {
         code: {"description": _WHY[code], "content": _UNPROCESSABLE_JSON if code == 422 else _ERROR_JSON}
-        for code in sorted({401, 403, *codes})
+        for code in sorted({401, 403, 414, 431, *codes})
     }

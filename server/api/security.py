@@ -15,8 +15,9 @@ Threats, and the check for each:
   ``--allow-origin``);
 * DNS rebinding (a foreign name resolving to 127.0.0.1): a loopback server only answers requests
   whose ``Host`` is a loopback name;
-* resource exhaustion: request bodies are capped (413) before the app reads them; websocket
-  messages are capped by uvicorn (``ws_max_size``) and again by the client handler.
+* resource exhaustion: request bodies are capped (413) before the app reads them, request
+  targets (414) and heads (431) before anything looks at them; websocket messages are capped by
+  uvicorn (``ws_max_size``) and again by the client handler.
 
 :class:`SecurityMiddleware` applies the HTTP and handshake checks to every request in one place
 (pure ASGI, so it also sees websocket handshakes and streamed bodies).
@@ -39,7 +40,7 @@ from starlette.requests import cookie_parser
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from xabsl_studio.server.api.studios import split_prefix
-from xabsl_studio.server.protocol.limits import MAX_BODY_BYTES
+from xabsl_studio.server.protocol.limits import MAX_BODY_BYTES, MAX_HEAD_BYTES, MAX_TARGET_BYTES
 from xabsl_studio.server.protocol.tokens import MIN_TOKEN_CHARS as MIN_TOKEN_CHARS
 from xabsl_studio.server.protocol.tokens import TokenError as TokenError
 from xabsl_studio.server.protocol.tokens import check_token, is_loopback, new_token, token_matches
@@ -228,9 +229,16 @@ class SecurityMiddleware:
         return given is not None and secrets.compare_digest(given.encode("utf-8", "surrogateescape"), expected.encode())
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        """Check one request or handshake, then pass it on (or answer 401/403/413 here)."""
+        """Check one request or handshake, then pass it on (or answer 401/403/413/414/431 here)."""
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
+            return
+        oversized = _oversized_head(scope)
+        if oversized is not None:
+            if scope["type"] == "websocket":
+                await send({"type": "websocket.close", "code": 1008})
+            else:
+                await _json(send, *oversized)
             return
         headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
         query = scope.get("query_string", b"").decode("latin-1")
@@ -274,6 +282,20 @@ class SecurityMiddleware:
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, send)
+
+
+def _oversized_head(scope: Scope) -> tuple[int, str] | None:
+    """``(414 or 431, why)`` for a request target or head over the limits, else None.
+
+    Measured on what the server parsed, so the answer is the same however the request arrived.
+    """
+    target = len(scope.get("raw_path") or scope["path"].encode("utf-8")) + len(scope.get("query_string", b"")) + 1
+    if target > MAX_TARGET_BYTES:
+        return 414, f"request target over {MAX_TARGET_BYTES} bytes"
+    head = target + sum(len(name) + len(value) + 4 for name, value in scope.get("headers", []))
+    if head > MAX_HEAD_BYTES:
+        return 431, f"request head over {MAX_HEAD_BYTES} bytes"
+    return None
 
 
 def _cookie_name(scope: Scope) -> str:

@@ -28,6 +28,16 @@ MAX_LSP_WORKERS = 2
 MAX_LSP_PENDING = 4096
 #: Largest REST request body in bytes (413 above).
 MAX_BODY_BYTES = 1024 * 1024
+#: Longest request target (path and query, as sent) in bytes (414 above): room for the longest
+#: ``collapse`` of a graph request, 4,000 characters percent-encoded at up to 12 bytes each.
+MAX_TARGET_BYTES = 64 * 1024
+#: Largest request head (request line and headers) in bytes (431 above).
+MAX_HEAD_BYTES = 96 * 1024
+#: uvicorn's HTTP parser buffer (``h11_max_incomplete_event_size``). h11 refuses a head over it
+#: only while the head is incomplete, so by how TCP happened to cut the request: it lies well
+#: above :data:`MAX_HEAD_BYTES` so that the studio's own check, which does not depend on that,
+#: decides.
+PARSER_HEAD_BYTES = 2 * MAX_HEAD_BYTES
 #: Most websocket clients at once (close 1013 above).
 MAX_CLIENTS = 64
 #: Control messages (replies, events, history chunks) waiting for one client; a client that sends

@@ -26,9 +26,8 @@ from websockets.sync.client import ClientConnection, connect
 from xabsl_studio.engine.worlds.bench import BenchExample
 from xabsl_studio.examples.soccer.studio import SoccerExample
 from xabsl_studio.server.api.app import create_app
+from xabsl_studio.server.api.listen import uvicorn_config
 from xabsl_studio.server.api.security import SecurityPolicy
-from xabsl_studio.server.api.transport import WebSocketProtocol
-from xabsl_studio.server.protocol.limits import MAX_LSP_MESSAGE_BYTES
 from xabsl_studio.server.session.live import Session
 
 REPO = Path(__file__).resolve().parents[2]
@@ -66,16 +65,7 @@ class LiveServer:
         self.policy = policy or SecurityPolicy(token=None)
         self.app = create_app(session, self.policy, web_dist=None)
         self.port = free_port()
-        config = uvicorn.Config(
-            self.app,
-            host="127.0.0.1",
-            port=self.port,
-            log_level="warning",
-            ws=WebSocketProtocol,
-            ws_max_size=MAX_LSP_MESSAGE_BYTES,  # as `xabsl serve` (the /ws limit is the client handler's)
-            ws_per_message_deflate=False,
-            lifespan="on",
-        )
+        config = uvicorn_config(self.app, "127.0.0.1", self.port)  # as `xabsl serve`
         self.server = uvicorn.Server(config)
         self.thread = threading.Thread(target=self.server.run, daemon=True)
 
