@@ -1,7 +1,8 @@
 """``xabsl compile``: check a behavior and write its intermediate code and JSON description.
 
 Text diagnostics are one per line (``path:line:col: error|warning: message [code]``) followed by
-a summary line; ``--format json`` prints one JSON object instead. Exit status: 0 without errors,
+a summary line; ``--format json`` prints one JSON object instead. An output named ``-`` is written
+to standard output; the diagnostics then go to standard error. Exit status: 0 without errors,
 1 with errors (or warnings under ``--werror``), 2 for usage or I/O problems.
 """
 
@@ -27,8 +28,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         ),
     )
     parser.add_argument("agents_file", metavar="AGENTS_FILE", help="the agents file, e.g. agents.xabsl")
-    parser.add_argument("--ic", metavar="OUT", help="write the intermediate code for the C++ XabslEngine")
-    parser.add_argument("--json", metavar="OUT", help="write the behavior description the studio reads")
+    parser.add_argument(
+        "--ic", metavar="OUT", help="write the intermediate code for the C++ XabslEngine ('-': standard output)"
+    )
+    parser.add_argument(
+        "--json", metavar="OUT", help="write the behavior description the studio reads ('-': standard output)"
+    )
     parser.add_argument("--format", choices=("text", "json"), default="text", help="diagnostics format")
     parser.add_argument("--werror", action="store_true", help="treat warnings as errors")
     parser.add_argument(
@@ -50,11 +55,14 @@ def run(args: argparse.Namespace) -> int:
     gc.disable()
     # Imported here, not at the top: `xabsl --help` and the other subcommands need none of it;
     # the emitters and orjson (which imports uuid, platform, datetime) only when asked for.
-    from xabsl_studio.engine.files import write_atomically
     from xabsl_studio.engine.lang import compile_file, deep_recursion
 
     if not os.path.isfile(args.agents_file):
         raise UsageError(f"no such file: {args.agents_file}")
+    if args.ic == STDOUT and args.json == STDOUT:
+        raise UsageError("only one of --ic and --json can be written to standard output")
+    # with an output on standard output, the diagnostics must not mix into it
+    report = sys.stderr if STDOUT in (args.ic, args.json) else sys.stdout
     started = time.perf_counter()
     compilation = compile_file(args.agents_file)
     diagnostics = [d for d in compilation.diagnostics if not (args.no_lint and d.is_lint)]
@@ -70,12 +78,12 @@ def run(args: argparse.Namespace) -> int:
 
                 with deep_recursion():
                     text = emit_ic(compilation.program)
-                write_atomically(args.ic, text.encode("utf-8"))
+                _write(args.ic, text.encode("utf-8"))
             if args.json:
                 from xabsl_studio.engine.emit.json import dumps, program_to_json
 
                 document = program_to_json(compilation.program, compilation.source_text)
-                write_atomically(args.json, dumps(document))
+                _write(args.json, dumps(document))
         except OSError as error:
             raise UsageError(f"cannot write output: {error.strerror}: {error.filename}") from error
     finished = time.perf_counter()
@@ -93,13 +101,13 @@ def run(args: argparse.Namespace) -> int:
     if args.format == "json":
         import orjson
 
-        sys.stdout.buffer.write(
+        report.buffer.write(
             orjson.dumps({"ok": not failed, "diagnostics": [d.as_dict() for d in diagnostics], "summary": summary})
         )
-        sys.stdout.write("\n")
+        report.write("\n")
     else:
         for diagnostic in diagnostics:
-            print(diagnostic.format())
+            print(diagnostic.format(), file=report)
         verdict = "failed" if failed else "ok"
         counts = ", ".join(
             _count(n, noun)
@@ -110,8 +118,23 @@ def run(args: argparse.Namespace) -> int:
                 (warnings, "warning"),
             )
         )
-        print(f"{verdict}: {counts} in {summary['milliseconds']} ms")
+        print(f"{verdict}: {counts} in {summary['milliseconds']} ms", file=report)
     return 1 if failed else 0
+
+
+#: The output name that means standard output.
+STDOUT = "-"
+
+
+def _write(out: str, data: bytes) -> None:
+    """``data`` to the file ``out`` (atomically), or to standard output for ``-``."""
+    from xabsl_studio.engine.files import write_atomically
+
+    if out == STDOUT:
+        sys.stdout.buffer.write(data)
+        sys.stdout.buffer.flush()
+    else:
+        write_atomically(out, data)
 
 
 def _count(n: object, noun: str) -> str:

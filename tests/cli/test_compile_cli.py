@@ -184,3 +184,23 @@ def test_a_reader_that_goes_away_is_no_failure_and_no_traceback(monkeypatch: pyt
     monkeypatch.setattr(sys, "stdout", _GoneReader())
     case = KIT / "logic"
     assert main(["trace", str(case / "agents.xabsl"), "--inputs", str(case / "in.jsonl")]) == 0
+
+
+def test_an_output_named_dash_is_standard_output(tmp_path: Path) -> None:
+    """``--ic -`` pipes the intermediate code (a file named ``-`` was written before)."""
+    case = KIT / "demo-approach"
+    done = subprocess.run(
+        [sys.executable, "-m", "xabsl_studio.engine.cli", "compile", str(case / "agents.xabsl"), "--ic", "-"],
+        capture_output=True,
+        cwd=tmp_path,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == (case / "expected.ic").read_bytes()
+    assert done.stderr.decode().startswith("ok: 4 files, 1 option")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_only_one_output_can_be_standard_output(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["compile", str(DEMO), "--ic", "-", "--json", "-"]) == 2
+    assert "only one of --ic and --json" in capsys.readouterr().err
