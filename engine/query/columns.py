@@ -329,11 +329,24 @@ class ColumnsBuilder:
     def message(self, data: dict[str, Any]) -> None:
         """Add the tick of one recorded ``xabsl.AgentTick`` message (the first must be a key frame)."""
         row = self._tick(data["seq"], data["t"], data["gen"], data["path"], data.get("reads"))
-        values = self._values(data)
-        symbols = self.selection.symbols
-        for unread in data.get("unread", ()):
-            if symbols is None or unread in symbols:
-                values[unread] = None
+        keys = self._keys
+        if keys is None:
+            values = self._values(data)
+        else:  # _values inlined: this runs for every tick of every robot a query reads
+            values = {}
+            inputs, outputs = data["inputs"], data["outputs"]
+            for name, path in keys:
+                value = _lookup(inputs, path)
+                if value is _MISSING:
+                    value = _lookup(outputs, path)
+                if value is not _MISSING:
+                    values[name] = value
+        unread_names = data.get("unread")
+        if unread_names:
+            symbols = self.selection.symbols
+            for unread in unread_names:
+                if symbols is None or unread in symbols:
+                    values[unread] = None
         if data["key"]:
             # a key frame holds every value: what it lacks is not in this generation
             for name in self._present.difference(values):

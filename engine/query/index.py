@@ -31,6 +31,7 @@ from xabsl_studio.engine.query.columns import Codes, ColumnsBuilder, RobotColumn
 from xabsl_studio.engine.query.evaluate import evaluate
 from xabsl_studio.engine.query.language import CompiledQuery, compile_query
 from xabsl_studio.engine.query.result import Interval, QueryResult
+from xabsl_studio.engine.query.scan import read_columns, seed_codes
 from xabsl_studio.engine.record.reader import ProgramView, Recording, TickView
 
 __all__ = ["QueryConditionError", "QueryIndex", "query_recording", "query_ticks"]
@@ -94,7 +95,8 @@ class QueryIndex:
             RecordingError: a robot the recording does not have.
         """
         codes = Codes()
-        columns = _read_columns(recording, recording.agents if robots is None else robots, codes, selection)
+        seed_codes(recording, codes)
+        columns = read_columns(recording, recording.agents if robots is None else robots, codes, selection)
         decimals = recording.header.get("decimals")
         return cls(columns, codes, None if decimals is None else int(decimals), recording.path)
 
@@ -201,7 +203,7 @@ class QueryIndex:
             return
         with Recording(self.recording) as recording:
             for name, selection in missing.items():
-                self.robots.update(_read_columns(recording, [name], self.codes, selection))
+                self.robots.update(read_columns(recording, [name], self.codes, selection))
 
 
 def needs(query: CompiledQuery) -> Selection:
@@ -215,15 +217,6 @@ def _message(query: CompiledQuery) -> str:
     """The first error, ``line:col: message`` (why a robot was not evaluated)."""
     first = query.errors()[0]
     return f"{first.span.line}:{first.span.col}: {first.message}" if first.span else first.message
-
-
-def _read_columns(
-    recording: Recording, robots: list[str], codes: Codes, selection: Selection | None
-) -> dict[str, RobotColumns]:
-    builders = {name: ColumnsBuilder(name, recording.program, codes, selection) for name in robots}
-    for name, message in recording.agent_messages(agents=robots):
-        builders[name].message(message)
-    return {name: b.finish() for name, b in builders.items()}
 
 
 def _intervals(robot: str, columns: RobotColumns, true: np.ndarray) -> list[Interval]:

@@ -285,6 +285,16 @@ class Recording:
         except orjson.JSONDecodeError as error:
             raise self._invalid(f"{what} is not JSON ({error})") from None
 
+    def _tick_message(self, raw: bytes, agent: str) -> dict[str, Any]:
+        """An agent's tick message, checked (the common case without building an error text)."""
+        try:
+            message = orjson.loads(raw)
+        except orjson.JSONDecodeError as error:
+            raise self._invalid(f"a message of {agent} is not JSON ({error})") from None
+        if not V.tick_ok(message):
+            self._check(V.check_tick, message)
+        return message  # type: ignore[no-any-return]
+
     def _check(self, checker: Any, *args: Any) -> None:
         try:
             checker(*args)
@@ -429,8 +439,7 @@ class Recording:
         first, last = self.time_ns(start), self.time_ns(stop - 1)
         descriptions: dict[tuple[str, int], dict[str, Any]] = {}
         for channel, _time, raw in self._file.messages(channels, first, last + 1):
-            message = self._json(raw, f"a message of {channels[channel]}")
-            self._check(V.check_tick, message)
+            message = self._tick_message(raw, channels[channel])
             agent, gen = channels[channel], message["gen"]
             description = descriptions.get((agent, gen))
             if description is None:
@@ -477,9 +486,8 @@ class Recording:
         key = max(self.first, start - start % self.key_every)
         first, last = self.time_ns(key), self.time_ns(stop - 1)
         for channel, _time, raw in self._file.messages(channels, first, last + 1):
-            message = self._json(raw, f"a message of {channels[channel]}")
-            self._check(V.check_tick, message)
-            yield channels[channel], message
+            agent = channels[channel]
+            yield agent, self._tick_message(raw, agent)
 
     def _decode(self, start: int, stop: int) -> Iterator[TickView]:
         """Views of ticks ``start`` .. ``stop - 1``; ``start`` must be a key frame tick."""
