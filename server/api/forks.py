@@ -1,54 +1,29 @@
-"""``GET /api/fork/original``: the original run beside a fork, at the fork's ticks (docs/studio.md "Fork").
+"""The original run beside a live fork (docs/studio.md "Fork").
 
-After a ``fork`` the ring still holds the original run's ticks at older seqs: for a tick of the
-fork this finds the original's tick with the same world time (``xabsl_studio.server.session.live.original_tick``)
-and answers every robot's activation path by name (the two runs may have different program
-versions, so ids would not compare), for the studio to show next to the fork's own path.
+After a ``fork`` the ring still holds the original run's ticks at older seqs.
+
+* ``GET /api/fork/original?seq=``: for a tick of the fork, the original's tick with the same
+  world time (``xabsl_studio.server.session.forkdiff.original_tick``) and every robot's activation
+  path by name (the two runs may have different program versions, so ids would not compare), for
+  the studio to show next to the fork's own path;
+* ``GET /api/fork/diverge``: per robot, the first fork tick whose path differs from the
+  original's (``xabsl_studio.server.session.forkdiff``), both paths, the option where they part
+  and what its decision did on each side, for the timeline's mark.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import orjson
 from fastapi import APIRouter, HTTPException, Query, Request
 
-from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.server.api.openapi import error_responses
-from xabsl_studio.server.protocol.types import ID_INDEX
-from xabsl_studio.server.session.frames import Entry
-from xabsl_studio.server.session.live import Session, original_tick
+from xabsl_studio.server.protocol.commands import Explain
+from xabsl_studio.server.protocol.rest import DecisionJson, ForkDivergenceJson, RobotDivergenceJson
+from xabsl_studio.server.session.forkdiff import ForkDivergence, RobotDivergence, named_paths, original_tick
+from xabsl_studio.server.session.live import CommandError, Session
 
 router = APIRouter()
-
-
-def named_paths(entry: Entry) -> list[dict[str, Any]]:
-    """Every robot of ``entry``: id, name, path (``{"depth", "option", "state"}``, ``{"depth", "behavior"}``)."""
-    structure = entry.gen.structure
-    frame = orjson.loads(entry.delta)
-    robots = []
-    for robot in frame["robots"]:
-        info = structure["robots"][robot["id"]]
-        program = structure["programs"].get(info["program"]) if info["program"] is not None else None
-        options = {o["id"]: o for o in program["options"]} if program else {}
-        behaviors = {b["id"]: b["name"] for b in program["behaviors"]} if program else {}
-        path: list[dict[str, Any]] = []
-        for node in robot["path"]:
-            if node[0] == OPTION_NODE and node[ID_INDEX] in options:
-                option = options[node[ID_INDEX]]
-                state = node[ID_INDEX + 1]
-                states = option["states"]
-                path.append(
-                    {
-                        "depth": node[1],
-                        "option": option["name"],
-                        "state": states[state]["name"] if 0 <= state < len(states) else None,
-                    }
-                )
-            elif node[0] == BEHAVIOR_NODE and node[ID_INDEX] in behaviors:
-                path.append({"depth": node[1], "behavior": behaviors[node[ID_INDEX]]})
-        robots.append({"id": robot["id"], "name": info["name"], "path": path})
-    return robots
 
 
 @router.get("/api/fork/original", tags=["session"], responses=error_responses(404))
@@ -67,3 +42,67 @@ async def original(request: Request, seq: int = Query(ge=0, le=2**62, descriptio
         raise HTTPException(404, f"no tick of the original run at the time of tick {seq} is in the history")
     origin = {"seq": fork.seq, "t": fork.t, "start": fork.start}
     return {"seq": entry.seq, "t": entry.t, "fork": origin, "robots": named_paths(entry)}
+
+
+@router.get("/api/fork/diverge", tags=["session"], responses=error_responses(404))
+async def diverge(request: Request) -> ForkDivergenceJson:
+    """Where the running fork first acts differently from the run it was forked from, per robot.
+
+    Compares the fork's ticks with the original's at the same world times as they arrive (each
+    tick once per fork). 404: the running world is no fork.
+    """
+    session: Session = request.app.state.studio.session
+    fork = session.fork
+    if fork is None:
+        raise HTTPException(404, "the running world is not a fork (fork: run from a tick of the timeline)")
+    state = request.app.state
+    scan: ForkDivergence | None = getattr(state, "fork_divergence", None)
+    if scan is None or scan.fork != fork:
+        scan = state.fork_divergence = ForkDivergence(fork)
+        state.fork_whys = {}
+    scan.update(session.ring)
+    whys: dict[int, RobotDivergenceJson] = state.fork_whys
+    for robot, found in scan.found.items():
+        if robot not in whys:
+            whys[robot] = await _with_whys(session, found)
+    robots = sorted(whys.values(), key=lambda d: (d["seq"], d["robot"]))
+    return {
+        "fork_seq": fork.seq,
+        "fork_t": fork.t,
+        "start": fork.start,
+        "scanned": scan.scanned,
+        "ended": scan.beyond,
+        "robots": robots,
+        "earliest": robots[0] if robots else None,
+    }
+
+
+async def _with_whys(session: Session, found: RobotDivergence) -> RobotDivergenceJson:
+    """The divergence with what the parting option's decision did at the two ticks."""
+
+    async def why(seq: int) -> DecisionJson | None:
+        if found.option is None:
+            return None
+        try:
+            answer = await session.explain(Explain(op="explain", robot=found.robot, option=found.option, seq=seq), None)
+        except CommandError:  # the tick left the ring, or the option did not run in it
+            return None
+        return {
+            "decided_in": str(answer["decided_in_name"]),
+            "target": str(answer["target_name"]),
+            "stay": bool(answer["stay"]),
+            "leaf": int(answer["leaf"]),
+        }
+
+    return {
+        "robot": found.robot,
+        "name": found.name,
+        "seq": found.seq,
+        "t": found.t,
+        "original_seq": found.original_seq,
+        "fork_path": found.fork_path,
+        "original_path": found.original_path,
+        "option": found.option,
+        "why_fork": await why(found.seq),
+        "why_original": await why(found.original_seq),
+    }

@@ -283,6 +283,68 @@ class GraphGroups(TypedDict):
     groups: list[OptionGroupJson]
 
 
+@with_config(_RESULT)
+class _NamedNode(TypedDict):
+    depth: int
+
+
+@with_config(_RESULT)
+class NamedNode(_NamedNode, total=False):
+    """A path node by name (``xabsl_studio.server.session.forkdiff``): an option and its state, or a basic behavior."""
+
+    option: str
+    state: str | None
+    behavior: str
+
+
+@with_config(_RESULT)
+class DecisionJson(TypedDict):
+    """What one decision did at a tick (from the recorded values of that tick: ``explain``)."""
+
+    decided_in: str
+    target: str
+    stay: bool
+    leaf: int
+
+
+@with_config(_RESULT)
+class RobotDivergenceJson(TypedDict):
+    """One robot's first fork tick ``seq`` whose path differs from the original's tick ``original_seq``.
+
+    ``option`` is the option whose decision makes them part (null: no option, e.g. a fault);
+    ``why_fork`` and ``why_original`` what it did on each side (null: not explainable).
+    """
+
+    robot: int
+    name: str
+    seq: int
+    t: int
+    original_seq: int
+    fork_path: list[NamedNode]
+    original_path: list[NamedNode]
+    option: str | None
+    why_fork: DecisionJson | None
+    why_original: DecisionJson | None
+
+
+@with_config(_RESULT)
+class ForkDivergenceJson(TypedDict):
+    """``GET /api/fork/diverge``: where the running fork first acts differently from its original, per robot.
+
+    Every fork tick up to ``scanned`` was compared; ``ended``: the original run ends (or left the
+    history) before the fork's next tick, so nothing later compares. ``earliest``: the first of
+    ``robots`` (null: no robot acts differently so far).
+    """
+
+    fork_seq: int
+    fork_t: int
+    start: int
+    scanned: int
+    ended: bool
+    robots: list[RobotDivergenceJson]
+    earliest: RobotDivergenceJson | None
+
+
 #: Every result, printed as a TypeScript interface by ``tsgen``.
 RESULTS: tuple[type, ...] = (
     FileStat,
@@ -299,6 +361,10 @@ RESULTS: tuple[type, ...] = (
     GenerationDiff,
     OptionGroupJson,
     GraphGroups,
+    NamedNode,
+    DecisionJson,
+    RobotDivergenceJson,
+    ForkDivergenceJson,
 )
 #: Every body, printed as a TypeScript interface by ``tsgen`` (what the web UI sends).
 BODIES: tuple[type, ...] = (FileBody, RenameBody, CompileBody, TestDraftBody, OpenBody, ForkBody)

@@ -95,7 +95,7 @@ from xabsl_studio.server.simulation.worker import CommandError, WorkerConfig, ch
 if TYPE_CHECKING:
     from xabsl_studio.engine.record import Recording
 
-__all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session", "fork_request", "original_tick"]
+__all__ = ["RING_SECONDS", "CommandError", "ProgramState", "Session", "fork_request"]
 
 log = logging.getLogger("xabsl.server")
 
@@ -831,25 +831,6 @@ def fork_request(ring: frames.Ring, seq: int) -> ForkAt:
             frame = orjson.loads(entry.delta)  # every frame holds every path and the scene
             recorded[at] = (tuple(r["path"] for r in frame["robots"]), frame["scene"])
     return ForkAt(seq, recorded)
-
-
-def original_tick(ring: frames.Ring, fork: ForkOrigin, seq: int) -> Entry | None:
-    """The original run's tick at the time of the fork's tick ``seq`` (None: not in the ring, or not run that far).
-
-    The original is the run before the fork's first sample: its ticks are the newest ones with
-    that time before ``fork.start``, back to where time goes down (a reset before them).
-    """
-    entry = ring.get(seq)
-    if entry is None or seq < fork.start:
-        return None
-    t, at, previous = entry.t, fork.start - 1, None
-    while (candidate := ring.get(at)) is not None:
-        if candidate.t == t:
-            return candidate
-        if candidate.t < t or (previous is not None and candidate.t > previous):
-            return None
-        previous, at = candidate.t, at - 1
-    return None
 
 
 def _store_partial(state: ProgramState, compilation: Compilation) -> None:

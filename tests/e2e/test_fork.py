@@ -1,7 +1,10 @@
-"""Fork in headless chromium: "Run from here" on the timeline, the fork mark, the original's path beside the fork's."""
+"""Fork in headless chromium: "Run from here" on the timeline, the fork mark, the original's path beside the fork's,
+and where a fork of an edited behavior parts from the original."""
 
 from __future__ import annotations
 
+import json
+import urllib.request
 from typing import Any
 
 from tests.e2e.conftest import StudioServer, screenshot
@@ -72,3 +75,52 @@ def test_run_from_here_forks_marks_the_timeline_and_shows_the_original_path(page
         hit = page.evaluate(f"() => document.elementFromPoint({x}, {y}).className")
         assert hit == "timeline-canvas", (fraction, hit)
     assert page.evaluate("() => document.querySelector('dialog.recordings')?.open ?? false") is False
+
+
+def _api(studio: StudioServer, method: str, path: str, body: Any = None, headers: dict[str, str] | None = None) -> Any:
+    data = None if body is None else json.dumps(body).encode()
+    request = urllib.request.Request(
+        studio.url + path, data=data, headers={"Content-Type": "application/json", **(headers or {})}, method=method
+    )
+    with urllib.request.urlopen(request, timeout=30) as response:
+        return json.loads(response.read())
+
+
+def test_a_fork_of_an_edited_behavior_shows_where_it_parts_from_the_original(page: Any, studio: StudioServer) -> None:
+    """The chasers' edit sends them from `chase` to `search` at once: the fork names the tick and the decision."""
+    assert studio.command("resume")["ok"]
+    page.wait_for_function(f"() => {STUDIO}.session.live && {STUDIO}.session.live.t > 16000", timeout=60000)
+    files = _api(studio, "GET", "api/files")["files"]
+    path = next(f["path"] for f in files if f["path"].endswith("chase_ball.xabsl"))
+    file = _api(studio, "GET", f"api/files/{path}")
+    text = file["text"].replace("      else\n        stay;", "      else\n        goto search;", 1)
+    assert text != file["text"]
+    _api(studio, "PUT", f"api/files/{path}", {"text": text}, {"If-Match": f'"{file["version"]}"'})
+    page.wait_for_function(f"() => {STUDIO}.session.hello.reason === 'reload'", timeout=60000)
+    assert studio.command("pause")["ok"]
+    canvas = page.locator(".timeline-canvas")
+    box = canvas.bounding_box()
+    canvas.click(position={"x": box["width"] * 0.8, "y": 30})
+    page.wait_for_function(f"() => {STUDIO}.session.cursor !== null")
+    page.locator("#run-from-here").click()
+    page.wait_for_function(f"() => {STUDIO}.session.hello.reason === 'fork'", timeout=60000)
+    head = page.locator(".fork-diverge strong")
+    page.wait_for_function(
+        "() => (document.querySelector('.fork-diverge strong')?.textContent ?? '').startsWith('The fork parts')",
+        timeout=60000,
+    )
+    assert head.inner_text().startswith("The fork parts from the original: red")
+    first = page.locator(".fork-diverge-list li").first
+    assert "chase_ball: fork chase → search · original chase stays" in first.inner_text()
+    marked = page.evaluate("() => JSON.parse(document.querySelector('.timeline-canvas').dataset.divergence || 'null')")
+    assert marked is not None and marked["agent"].startswith("red")
+    seq = int(first.get_attribute("data-seq"))
+    robot = int(first.get_attribute("data-robot"))
+    first.locator("button.fork-diverge-go").first.click()
+    # the tick, or the last the client holds before it (frames may skip ticks)
+    page.wait_for_function(
+        f"() => {STUDIO}.session.view.seq <= {seq} && {STUDIO}.session.view.seq > {seq - 4}"
+        f" && {STUDIO}.session.selectedRobot === {robot}"
+    )
+    assert marked["seq"] == seq
+    screenshot(page, "fork-diverge")

@@ -175,7 +175,11 @@ function main(): void {
   };
   const fork = new ForkControls(session, connection);
   timeline.toolbar.append(fork.button, fork.badge);
-  activation.element.firstElementChild?.after(fork.original);
+  activation.element.firstElementChild?.after(fork.original, fork.divergence);
+  fork.onDivergence = (divergence) => {
+    timeline.markDivergence(divergence);
+    pending.add("cursor"); // paused: no tick follows that would redraw
+  };
   // Recordings (a dialog, opens a replay in a new tab) and, in a replay, "Run from here" at the
   // tick in view: in the timeline's toolbar, beside the history they are about.
   const recordings = new Recordings(session);

@@ -131,6 +131,14 @@ export interface CrashEvent {
   t: number | null;
 }
 
+/** What one decision did at a tick (from the recorded values of that tick: `explain`). */
+export interface DecisionJson {
+  decided_in: string;
+  target: string;
+  stay: boolean;
+  leaf: number;
+}
+
 /**
  * A `Diagnostic` as JSON (`--format json`, the studio's saves, compiles and status).
  *
@@ -290,6 +298,23 @@ export interface ForkBody {
 }
 
 /**
+ * `GET /api/fork/diverge`: where the running fork first acts differently from its original, per robot.
+ *
+ * Every fork tick up to `scanned` was compared; `ended`: the original run ends (or left the
+ * history) before the fork's next tick, so nothing later compares. `earliest`: the first of
+ * `robots` (null: no robot acts differently so far).
+ */
+export interface ForkDivergenceJson {
+  fork_seq: number;
+  fork_t: number;
+  start: number;
+  scanned: number;
+  ended: boolean;
+  robots: RobotDivergenceJson[];
+  earliest: RobotDivergenceJson | null;
+}
+
+/**
  * Where the running world was forked (`fork`): the original's tick `seq` (time `t`) ran again as `start`.
  *
  * The original run's ticks stay in the ring at the older seqs (`GET /api/fork/original`).
@@ -413,6 +438,14 @@ export interface ListBreakpoints {
   id?: number | string | null;
   op: "list_breakpoints";
   program?: string | null;
+}
+
+/** A path node by name (`xabsl_studio.server.session.forkdiff`): an option and its state, or a basic behavior. */
+export interface NamedNode {
+  depth: number;
+  option?: string;
+  state?: string | null;
+  behavior?: string;
 }
 
 /** Which recording to open. */
@@ -639,6 +672,25 @@ export interface Resume {
 /** Ask for a `hello` and a full frame (a frame's `gen` did not match the last hello). */
 export interface Resync {
   type: "resync";
+}
+
+/**
+ * One robot's first fork tick `seq` whose path differs from the original's tick `original_seq`.
+ *
+ * `option` is the option whose decision makes them part (null: no option, e.g. a fault);
+ * `why_fork` and `why_original` what it did on each side (null: not explainable).
+ */
+export interface RobotDivergenceJson {
+  robot: number;
+  name: string;
+  seq: number;
+  t: number;
+  original_seq: number;
+  fork_path: NamedNode[];
+  original_path: NamedNode[];
+  option: string | null;
+  why_fork: DecisionJson | null;
+  why_original: DecisionJson | null;
 }
 
 /** One robot in a frame; values only for subscribed robots, extras only while they apply. */

@@ -5,10 +5,13 @@
 /// goes on live (op `fork`, a hello with reason `fork` follows). While the running world is a
 /// fork, the activation panel shows a line with the selected robot's option path in the original
 /// run at the same world time, fetched from the server (`GET /api/fork/original`: the ring still
-/// holds the original's ticks at older seqs).
-import { ApiError, token } from "../api";
+/// holds the original's ticks at older seqs), and where each robot first acts differently from
+/// the original (`GET /api/fork/diverge`): the earliest marked on the timeline, each robot's
+/// tick, the option whose decision parts the runs and what it did on each side, with buttons to
+/// the two ticks (the why pane there shows the values).
+import { ApiError, apiJson, token } from "../api";
 import type { Connection } from "../connection";
-import type { ForkOrigin } from "../messages.gen";
+import type { DecisionJson, ForkDivergenceJson, ForkOrigin, RobotDivergenceJson } from "../messages.gen";
 import type { Session, SessionEvent } from "../session";
 import { formatClock, h, setText, toast } from "../ui";
 
@@ -30,7 +33,20 @@ export function pathLine(path: readonly OriginalNode[]): string {
   return path.map((n) => (n.option !== undefined ? `${n.option}/${n.state ?? "?"}` : `${n.behavior ?? "?"}`)).join(" › ");
 }
 
+function decision(why: DecisionJson | null): string {
+  return why ? (why.stay ? `${why.decided_in} stays` : `${why.decided_in} → ${why.target}`) : "?";
+}
+
+/// How often a fork's divergence is asked again while some robot still acts like the original.
+const DIVERGE_POLL_MS = 1000;
+
 export class ForkControls {
+  /// Where the fork first acts differently from its original (null: nowhere yet, or no fork): the timeline marks it.
+  onDivergence: (divergence: { seq: number; t: number; agent: string } | null) => void = () => undefined;
+  /// Each robot's first divergence from the original, for the activation panel.
+  readonly divergence: HTMLElement;
+  private divergenceFor: number | null = null;
+  private divergencePoll: ReturnType<typeof setTimeout> | null = null;
   /// "Run from here", for the timeline's toolbar.
   readonly button: HTMLButtonElement;
   /// Where the running world was forked (empty when it is no fork), for the timeline's toolbar.
@@ -59,6 +75,66 @@ export class ForkControls {
     this.badge = h("span.fork-badge", { hidden: true });
     this.originalText = h("span.fork-original-path");
     this.original = h("div.fork-original.muted", { hidden: true, title: "The selected robot's option path in the original run at this world time" }, h("strong", {}, "original: "), this.originalText);
+    this.divergence = h("div.fork-diverge", { hidden: true });
+  }
+
+  /// Ask where the fork parts from its original, again every second while some robot has not.
+  private watchDivergence(origin: ForkOrigin | null): void {
+    const start = origin?.start ?? null;
+    if (start === this.divergenceFor) return;
+    this.divergenceFor = start;
+    if (this.divergencePoll !== null) clearTimeout(this.divergencePoll);
+    this.divergencePoll = null;
+    this.divergence.hidden = true;
+    this.divergence.replaceChildren();
+    this.onDivergence(null);
+    if (start !== null) void this.askDivergence(start);
+  }
+
+  private async askDivergence(start: number): Promise<void> {
+    let report: ForkDivergenceJson | null = null;
+    try {
+      report = await apiJson<ForkDivergenceJson>("GET", "fork/diverge");
+    } catch {
+      report = null; // no fork any more (a reset), or the server is gone: the next hello says
+    }
+    if (this.divergenceFor !== start) return;
+    if (report) this.showDivergence(report);
+    const robots = this.session.robots.filter((r) => r.program !== null).length;
+    if (!report || (!report.ended && report.robots.length < robots)) {
+      this.divergencePoll = setTimeout(() => void this.askDivergence(start), DIVERGE_POLL_MS);
+    }
+  }
+
+  private showDivergence(report: ForkDivergenceJson): void {
+    const first = report.earliest;
+    this.onDivergence(first ? { seq: first.seq, t: first.t, agent: first.name } : null);
+    const go = (d: RobotDivergenceJson, seq: number, label: string): HTMLButtonElement =>
+      h("button.fork-diverge-go", { title: `Show tick ${seq} with ${d.name} selected (the why pane gives the values)`, onclick: () => this.show(d, seq) }, label);
+    const rows = report.robots.map((d) =>
+      h(
+        "li",
+        { "data-robot": String(d.robot), "data-seq": String(d.seq) },
+        `${d.name}: tick ${d.seq} (${formatClock(d.t)}), ${d.option ?? "?"}: fork ${decision(d.why_fork)} · original ${decision(d.why_original)} `,
+        go(d, d.seq, "fork's tick"),
+        " ",
+        go(d, d.original_seq, "original's tick"),
+      ),
+    );
+    const alike = report.ended ? "acts like the original in every tick they share" : "acts like the original so far";
+    this.divergence.replaceChildren(
+      h("strong", {}, first ? `The fork parts from the original: ${first.name} first, at ${formatClock(first.t)}` : `The fork ${alike}`),
+      h("ol.fork-diverge-list", {}, ...rows),
+    );
+    this.divergence.hidden = false;
+  }
+
+  private show(d: RobotDivergenceJson, seq: number): void {
+    this.session.selectRobot(d.robot);
+    // the tick itself, else the last one before it the client holds (frames may skip ticks)
+    const tick = this.session.buffer.bySeq(seq) ?? this.session.buffer.all.filter((t) => t.seq <= seq).at(-1);
+    if (tick) this.session.setCursor(tick.x);
+    else toast(`Tick ${seq} is no longer in the history`, "info");
   }
 
   /// The fork the running world comes from (null: none).
@@ -101,6 +177,7 @@ export class ForkControls {
     this.button.hidden = session.replay !== null;
     this.button.disabled = this.busy || session.cursor === null || session.replay !== null || !session.view;
     const origin = this.origin;
+    this.watchDivergence(origin);
     this.badge.hidden = origin === null;
     if (origin) setText(this.badge, `fork of t = ${formatClock(origin.t)}`);
     const tick = session.view;
