@@ -311,9 +311,13 @@ def play_match(
             recorder.tick(now_ms)
 
     # Generous bound: the referee ends the match; pre-game and kick-off phases add a few seconds each.
-    run = run_headless(world, duration_s=2 * half_duration_s + 600.0, on_tick=on_tick)
-    if recorder is not None:
-        recorder.close()
+    try:
+        run = run_headless(world, duration_s=2 * half_duration_s + 600.0, on_tick=on_tick)
+    finally:
+        # a match that fails (a timeout, an error) keeps the ticks it played: the odd match is
+        # the one worth opening
+        if recorder is not None:
+            recorder.close()
     stats.finish()
     digest = hashlib.blake2b(digest_size=16)
     activations: tuple[dict[str, int], dict[str, int]] = ({}, {})

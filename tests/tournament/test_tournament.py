@@ -263,3 +263,49 @@ def test_a_git_tree_with_a_link_out_of_it_is_a_usage_error(tmp_path, name, targe
     assert "Traceback" not in done.stderr and "Error" not in done.stderr, done.stderr
     assert "git:HEAD:team" in done.stderr and f"team/{name}" in done.stderr and why in done.stderr, done.stderr
     assert target in done.stderr
+
+
+def test_record_keeps_every_match_and_the_report_links_each(tmp_path, capsys):
+    """Every match's recording: both versions by name, their sources (for a fork), what the match scored."""
+    from xabsl_studio.engine.record import Recording
+
+    folder, page = tmp_path / "recorded", tmp_path / "report.html"
+    argv = [str(DEFAULT_HOME), str(DEFAULT_AWAY), "-n", "2", "--duration", "12", "-j", "2", "--json"]
+    assert run_cli(*argv, "--record", str(folder), "--html", str(page)) == 0
+    summary = orjson.loads(capsys.readouterr().out)
+    names = sorted(p.name for p in folder.iterdir())
+    assert names == ["match-000-seed1-home-blue.mcap", "match-001-seed1-home-red.mcap"]
+    for entry in summary["matches"]:
+        path = Path(entry["recording"])
+        assert path.parent == folder.resolve()
+        with Recording(path) as recording:
+            blue = "home" if entry["home_colour"] == "blue" else "away"
+            red = "away" if blue == "home" else "home"
+            assert {a: recording.program_key(a) for a in recording.agents} == {
+                **{a: blue for a in recording.agents if a.startswith("blue")},
+                **{a: red for a in recording.agents if a.startswith("red")},
+            }
+            assert all(recording.programs[(key, 0)].sources for key in ("home", "away"))
+            status = list(recording.ticks())[-1].status
+            assert [status["score"][0], status["score"][1]][0 if blue == "home" else 1] == entry["score"]["home"]
+        assert f"href='recorded/{path.name}'" in page.read_text()  # relative to the report: the folder travels
+    # recording does not change what is played
+    assert run_cli(*argv) == 0
+    plain = orjson.loads(capsys.readouterr().out)
+    assert [m["trace_hash"] for m in plain["matches"]] == [m["trace_hash"] for m in summary["matches"]]
+
+
+def test_a_failed_match_keeps_the_ticks_it_played(tmp_path):
+    home, away = load_team(DEFAULT_HOME), load_team(DEFAULT_AWAY)
+    spec = match.plan(1, 3, 600.0, timeout_s=1.0, record_dir=tmp_path)[0]  # 10 minutes never fit in 1 s
+    result = match.play(spec, home, away)
+    assert not result["ok"] and "MatchTimeout" in result["error"]
+    from xabsl_studio.engine.record import Recording
+
+    with Recording(result["recording"]) as recording:
+        assert len(recording) > 10  # what ran until the timeout, a readable recording
+
+
+def test_record_refuses_a_cluster_of_other_machines(tmp_path):
+    with pytest.raises(UsageError, match="where each match runs"):
+        run_cli(str(DEFAULT_HOME), str(DEFAULT_AWAY), "-n", "1", "--record", str(tmp_path), "--ray", "127.0.0.1:6379")

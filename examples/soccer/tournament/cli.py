@@ -93,6 +93,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         default=600.0,
         help="wall-clock limit per match; a match over it is reported as failed (default 600)",
     )
+    parser.add_argument(
+        "--record",
+        metavar="DIR",
+        help=(
+            "record every match into DIR (created if missing; match-NNN-seedS-home-COLOUR.mcap, "
+            "with both versions' sources, so each can be replayed and forked); the report lists them"
+        ),
+    )
     parser.add_argument("--json", action="store_true", help="print the report as one JSON object")
     parser.add_argument("--html", metavar="OUT", help="also write the report as one self-contained HTML file")
     parser.set_defaults(func=main)
@@ -119,7 +127,14 @@ def main(args: argparse.Namespace) -> int:
             print("\n".join(error.diagnostics), file=sys.stderr)
             print(f"xabsl tournament: {error}", file=sys.stderr)
             return 1
-    specs = match.plan(args.matches, args.seed, args.duration, players=args.players, timeout_s=args.timeout)
+        sources: runners.Sources = (None, None)
+        record_dir = None
+        if args.record is not None:
+            record_dir = _record_dir(args.record, args.ray)
+            sources = (_sources(sides[0].folder, programs[0]), _sources(sides[1].folder, programs[1]))
+    specs = match.plan(
+        args.matches, args.seed, args.duration, players=args.players, timeout_s=args.timeout, record_dir=record_dir
+    )
     results: list[dict[str, Any]] = []
     interrupted = False
     start = time.perf_counter()
@@ -132,9 +147,9 @@ def main(args: argparse.Namespace) -> int:
 
         try:
             if args.ray:
-                jobs = runners.run_ray(specs, programs, args.ray, args.jobs, collect)
+                jobs = runners.run_ray(specs, programs, args.ray, args.jobs, collect, sources)
             else:
-                runners.run_local(specs, programs, jobs, collect)
+                runners.run_local(specs, programs, jobs, collect, sources)
         except KeyboardInterrupt:
             interrupted = True
     wall = time.perf_counter() - start
@@ -150,7 +165,8 @@ def main(args: argparse.Namespace) -> int:
     )
     if args.html:
         try:
-            write_atomically(args.html, report.html_report(summary).encode("utf-8"))
+            page = report.html_report(summary, os.path.dirname(os.path.abspath(args.html)))
+            write_atomically(args.html, page.encode("utf-8"))
         except OSError as error:
             raise UsageError(f"cannot write {args.html}: {error.strerror}") from error
     if args.json:
@@ -161,6 +177,28 @@ def main(args: argparse.Namespace) -> int:
     if interrupted:
         return 130
     return 1 if summary["failed"] else 0
+
+
+def _record_dir(folder: str, ray: str | None) -> str:
+    """The absolute folder ``--record`` writes to, created; a cluster of other machines is refused."""
+    if ray is not None and ray != "local":
+        # a match's recording is written by the process that plays it: on a cluster, another machine's disk
+        raise UsageError("--record writes where each match runs: use it with the process pool or --ray local")
+    path = Path(folder).expanduser().resolve()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--record {folder}: {error.strerror}") from None
+    if not os.access(path, os.W_OK):
+        raise UsageError(f"--record {folder}: not writable")
+    return str(path)
+
+
+def _sources(folder: Path, program: Program) -> dict[str, Any]:
+    """A version's source files, for its recordings (forks re-simulate with them)."""
+    from xabsl_studio.engine.record.sources import program_sources
+
+    return program_sources(folder / "agents.xabsl", program.files)
 
 
 class _progress:

@@ -10,6 +10,7 @@ pool size or cluster plays it, the score, statistics and ``trace_hash`` are the 
 
 from __future__ import annotations
 
+import os
 import time
 import traceback
 from collections.abc import Callable
@@ -36,15 +37,38 @@ class MatchSpec:
     half_duration_s: float
     players: int = 5
     timeout_s: float = 600.0
+    #: the MCAP file to record the match into (None: not recorded)
+    record: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready."""
         return asdict(self)
 
 
-def plan(n: int, seed: int, duration_s: float, *, players: int = 5, timeout_s: float = 600.0) -> list[MatchSpec]:
-    """``n`` matches: seeds ``seed, seed, seed + 1, seed + 1, ...``, colours alternating."""
-    return [MatchSpec(k, seed + k // 2, k % 2 == 0, duration_s / 2.0, players, timeout_s) for k in range(n)]
+def plan(
+    n: int,
+    seed: int,
+    duration_s: float,
+    *,
+    players: int = 5,
+    timeout_s: float = 600.0,
+    record_dir: str | os.PathLike[str] | None = None,
+) -> list[MatchSpec]:
+    """``n`` matches: seeds ``seed, seed, seed + 1, seed + 1, ...``, colours alternating.
+
+    With ``record_dir`` each match is recorded there (:func:`recording_name`).
+    """
+    specs = []
+    for k in range(n):
+        home_blue, match_seed = k % 2 == 0, seed + k // 2
+        record = None if record_dir is None else os.path.join(record_dir, recording_name(k, match_seed, home_blue))
+        specs.append(MatchSpec(k, match_seed, home_blue, duration_s / 2.0, players, timeout_s, record))
+    return specs
+
+
+def recording_name(index: int, seed: int, home_blue: bool) -> str:
+    """``match-003-seed2-home-red.mcap``: the file a recorded match is kept in."""
+    return f"match-{index:03d}-seed{seed}-home-{'blue' if home_blue else 'red'}.mcap"
 
 
 class MatchTimeout(HostError):
@@ -55,7 +79,13 @@ class MatchInterrupted(HostError):
     """The tournament was stopped (Ctrl+C) while this match ran."""
 
 
-def play(spec: MatchSpec, home: Program, away: Program, stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+def play(
+    spec: MatchSpec,
+    home: Program,
+    away: Program,
+    stop: Callable[[], bool] | None = None,
+    sources: tuple[dict[str, Any] | None, dict[str, Any] | None] = (None, None),
+) -> dict[str, Any]:
     """Play ``spec`` and return its result as JSON-ready data; never raises for a failed match.
 
     A result has ``index``, ``seed``, ``home_colour`` and ``ok``. A played match (``ok`` true)
@@ -69,6 +99,8 @@ def play(spec: MatchSpec, home: Program, away: Program, stop: Callable[[], bool]
         home: the HOME version's program.
         away: the AWAY version's program.
         stop: polled every simulated second; True ends the match as interrupted.
+        sources: HOME's and AWAY's source files (``xabsl_studio.engine.record.sources``), kept in
+            a recording so that it can be forked (``xabsl serve --replay``, Run from here).
     """
     result: dict[str, Any] = {
         "index": spec.index,
@@ -76,6 +108,7 @@ def play(spec: MatchSpec, home: Program, away: Program, stop: Callable[[], bool]
         "home_colour": "blue" if spec.home_blue else "red",
     }
     blue, red = (home, away) if spec.home_blue else (away, home)
+    keys, blue_red_sources = (("home", "away"), sources) if spec.home_blue else (("away", "home"), sources[::-1])
     deadline = time.perf_counter() + spec.timeout_s
 
     def check(_time_ms: int, _game: Any) -> None:
@@ -87,16 +120,24 @@ def play(spec: MatchSpec, home: Program, away: Program, stop: Callable[[], bool]
     cpu = time.process_time()
     try:
         report = play_match(
-            spec.seed, blue, red, players=spec.players, half_duration_s=spec.half_duration_s, progress=check
+            spec.seed,
+            blue,
+            red,
+            players=spec.players,
+            half_duration_s=spec.half_duration_s,
+            progress=check,
+            record=spec.record,
+            record_keys=keys,
+            record_sources=(blue_red_sources[0], blue_red_sources[1]),
         )
     except MatchInterrupted:
         result.update(ok=False, interrupted=True, error="interrupted")
-        return result
+        return _with_recording(result, spec)
     except Exception as error:  # a failing match is reported with its seed, never dropped
         last = traceback.extract_tb(error.__traceback__)[-1:] if error.__traceback__ else []
         where = f" ({last[0].filename}:{last[0].lineno})" if last and not isinstance(error, MatchTimeout) else ""
         result.update(ok=False, error=f"{type(error).__name__}: {error}{where}")
-        return result
+        return _with_recording(result, spec)
     # Colour order (team 0 = blue) to version order.
     order = (0, 1) if spec.home_blue else (1, 0)
     data = report.as_dict()
@@ -117,6 +158,13 @@ def play(spec: MatchSpec, home: Program, away: Program, stop: Callable[[], bool]
         cpu_seconds=round(time.process_time() - cpu, 3),
         faults=report.faults,
     )
+    return _with_recording(result, spec)
+
+
+def _with_recording(result: dict[str, Any], spec: MatchSpec) -> dict[str, Any]:
+    """``result`` with the match's recording, when one was written."""
+    if spec.record is not None and os.path.isfile(spec.record):
+        result["recording"] = spec.record
     return result
 
 

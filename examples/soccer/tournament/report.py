@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import html
 import math
+import os
+import urllib.parse
 from collections.abc import Sequence
 from typing import Any
 
@@ -115,6 +117,7 @@ def summarize(
                     if r["ok"]
                     else {"error": r["error"]}
                 ),
+                **({"recording": r["recording"]} if "recording" in r else {}),
             }
             for r in results
         ],
@@ -257,6 +260,15 @@ def print_report(summary: dict[str, Any]) -> None:
         )
     for fault in summary["faults"]:
         console.print(f"fault in match {fault['index']} (seed {fault['seed']}): {fault['fault']}", markup=False)
+    recorded = [m for m in summary["matches"] if "recording" in m]
+    if recorded:
+        folder = os.path.dirname(recorded[0]["recording"])
+        console.print(f"{len(recorded)} matches recorded in {folder}", markup=False)
+        # the odd ones first: failed matches, then the losses of HOME
+        odd = [m for m in recorded if "error" in m] + [m for m in recorded if m.get("result") == "loss"]
+        for m in odd[:5]:
+            why = "failed" if "error" in m else "HOME lost"
+            console.print(f"  match {m['index']} ({why}): xabsl serve --replay {m['recording']}", markup=False)
 
     teams = Table(title="per match (mean)", title_justify="left")
     teams.add_column("version")
@@ -328,8 +340,21 @@ def _bar(share: float, side: str) -> str:
     return f'<span class="bar {side}" style="width:{max(1, round(120 * share))}px"></span> {_percent(share)}'
 
 
-def html_report(summary: dict[str, Any]) -> str:
-    """The report as one self-contained HTML page."""
+def _recording_link(path: str | None, base: str | None) -> str:
+    """A link to a match's recording, relative to the report's folder when it is below it."""
+    if path is None:
+        return ""
+    href = path
+    if base is not None:
+        relative = os.path.relpath(path, base)
+        if not relative.startswith(".."):
+            href = relative
+    name, e = os.path.basename(path), html.escape
+    return f"<a href='{e(urllib.parse.quote(href))}' title='xabsl serve --replay {e(path)}'>{e(name)}</a>"
+
+
+def html_report(summary: dict[str, Any], base: str | None = None) -> str:
+    """The report as one self-contained HTML page (``base``: the page's folder, for links to recordings)."""
     e = html.escape
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{e(headline(summary)[0])}</title>"]
     parts.append(f"<style>{_STYLE}</style></head><body>")
@@ -396,7 +421,7 @@ def html_report(summary: dict[str, Any]) -> str:
     parts.append(
         _table(
             "matches",
-            ["match", "seed", "HOME plays", "score (HOME : AWAY)", "result", "trace hash"],
+            ["match", "seed", "HOME plays", "score (HOME : AWAY)", "result", "trace hash", "recording"],
             [
                 [
                     str(m["index"]),
@@ -407,6 +432,7 @@ def html_report(summary: dict[str, Any]) -> str:
                     else "<span class='failed'>failed</span>",
                     e(m.get("result", m.get("error", ""))),
                     f"<code>{e(m.get('trace_hash', ''))}</code>",
+                    _recording_link(m.get("recording"), base),
                 ]
                 for m in summary["matches"]
             ],

@@ -31,20 +31,24 @@ OnResult = Callable[[dict[str, Any]], None]
 
 # -- local process pool ---------------------------------------------------------------------------
 
+#: HOME's and AWAY's source files, kept in the recordings of recorded matches (None: not kept)
+Sources = tuple[dict[str, Any] | None, dict[str, Any] | None]
+
 _programs: tuple[Program, Program] | None = None
+_sources: Sources = (None, None)
 _stop: Any = None
 
 
-def _init_worker(programs: tuple[Program, Program], stop: Any) -> None:
-    global _programs, _stop
+def _init_worker(programs: tuple[Program, Program], stop: Any, sources: Sources) -> None:
+    global _programs, _stop, _sources
     # Ctrl+C goes to the whole process group: the parent decides, workers finish or stop on ``stop``.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _programs, _stop = programs, stop
+    _programs, _stop, _sources = programs, stop, sources
 
 
 def _play_in_worker(spec: MatchSpec) -> dict[str, Any]:
     assert _programs is not None
-    return play(spec, *_programs, stop=_stop.is_set)
+    return play(spec, *_programs, stop=_stop.is_set, sources=_sources)
 
 
 def _failure(spec: MatchSpec, error: str) -> dict[str, Any]:
@@ -57,7 +61,13 @@ def _failure(spec: MatchSpec, error: str) -> dict[str, Any]:
     }
 
 
-def run_local(specs: Sequence[MatchSpec], programs: tuple[Program, Program], jobs: int, on_result: OnResult) -> None:
+def run_local(
+    specs: Sequence[MatchSpec],
+    programs: tuple[Program, Program],
+    jobs: int,
+    on_result: OnResult,
+    sources: Sources = (None, None),
+) -> None:
     """Play ``specs`` in ``jobs`` worker processes (forkserver: no threads are forked)."""
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["xabsl_studio.examples.soccer.tournament.match"])
@@ -66,7 +76,7 @@ def run_local(specs: Sequence[MatchSpec], programs: tuple[Program, Program], job
         max_workers=max(1, min(jobs, len(specs))),
         mp_context=context,
         initializer=_init_worker,
-        initargs=(programs, stop),
+        initargs=(programs, stop, sources),
     )
     futures: dict[Future[dict[str, Any]], MatchSpec] = {}
     try:
@@ -171,6 +181,7 @@ def run_ray(
     address: str,
     jobs: int | None,
     on_result: OnResult,
+    sources: Sources = (None, None),
 ) -> int:
     """Play ``specs`` as Ray tasks (one CPU each); returns the CPUs of the cluster.
 
@@ -184,6 +195,8 @@ def run_ray(
             nodes need only the dependencies (pymunk, numpy, ...), not the sources.
         jobs: CPUs of a ``local`` instance (None: all cores); a joined cluster has its own.
         on_result: called with each match's result as it arrives.
+        sources: the versions' source files for recorded matches (a recording is written by the
+            node that plays the match, where its ``MatchSpec.record`` points).
     """
     token = False
     if address != "local":
@@ -218,7 +231,8 @@ def run_ray(
         cpus = int(ray.cluster_resources().get("CPU", 0))
         remote_play = ray.remote(num_cpus=1, max_retries=0)(play)
         home, away = (ray.put(p) for p in programs)
-        refs = {remote_play.remote(spec, home, away): spec for spec in specs}
+        kept = ray.put(sources)
+        refs = {remote_play.remote(spec, home, away, None, kept): spec for spec in specs}
         pending = list(refs)
         while pending:
             done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
