@@ -55,6 +55,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"failing tests leave a recording here (default: {DEFAULT_RECORDINGS}/)",
     )
     parser.add_argument("--no-recordings", action="store_true", help="leave no recordings")
+    parser.add_argument(
+        "--record-all",
+        action="store_true",
+        help="record every test's run into --recordings, passed or failed (a run then costs its recording)",
+    )
     parser.add_argument("-q", "--quiet", action="store_true", help="print failures and the summary only")
 
 
@@ -80,20 +85,25 @@ def collect(paths: Iterable[str | Path]) -> list[Case]:
     return cases
 
 
-def run_cases(cases: Sequence[Case], jobs: int = 1, recordings: Path | None = None) -> list[CaseResult]:
-    """Run ``cases`` (in ``jobs`` processes); the results are in the order of ``cases``."""
+def run_cases(
+    cases: Sequence[Case], jobs: int = 1, recordings: Path | None = None, record_all: bool = False
+) -> list[CaseResult]:
+    """Run ``cases`` (in ``jobs`` processes); the results are in the order of ``cases``.
+
+    Failing tests leave a recording in ``recordings``; with ``record_all`` every test does.
+    """
     import concurrent.futures
     import multiprocessing
 
     from xabsl_studio.engine.testing.runner import run_case
 
     if jobs <= 1 or len(cases) <= 1:
-        return [run_case(case, recordings) for case in cases]
+        return [run_case(case, recordings, record_all) for case in cases]
     # forkserver: the workers start from a clean interpreter (no threads of the parent), and each
     # compiles a behavior once for all the tests it runs.
     context = multiprocessing.get_context("forkserver")
     with concurrent.futures.ProcessPoolExecutor(min(jobs, len(cases)), mp_context=context) as pool:
-        return list(pool.map(run_case, cases, [recordings] * len(cases)))
+        return list(pool.map(run_case, cases, [recordings] * len(cases), [record_all] * len(cases)))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -122,13 +132,17 @@ def _run(args: argparse.Namespace) -> int:
     if not cases:
         print("xabsl test: no tests selected", file=sys.stderr)
         return 1
+    if args.record_all and args.no_recordings:
+        print("xabsl test: --record-all and --no-recordings contradict each other", file=sys.stderr)
+        return 2
     recordings = None if args.no_recordings else Path(args.recordings)
-    results = run_cases(cases, args.jobs, recordings)
+    results = run_cases(cases, args.jobs, recordings, args.record_all)
     for result in results:  # names and values from the test files are shown, never obeyed
         if not result.ok:
             print(printable(result.report(), lines=True))
         elif not args.quiet:
-            print(printable(f"{result.id}: passed ({result.ticks} ticks, {result.seconds:.2f} s)"))
+            kept = f"; recording {result.recording}" if result.recording else ""
+            print(printable(f"{result.id}: passed ({result.ticks} ticks, {result.seconds:.2f} s{kept})"))
     for line in Coverage.total(r.coverage for r in results).lines():
         print(line)
     passed = sum(r.ok for r in results)

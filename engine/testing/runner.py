@@ -294,12 +294,21 @@ class _Run:
             raise TestSetupError(f"command {name}: {error}") from None
 
 
-def run_case(case: Case, recordings: Path | None = None) -> CaseResult:
-    """Run ``case``; on a failure with ``recordings`` set, leave a recording of the run in that folder."""
+def run_case(case: Case, recordings: Path | None = None, record_all: bool = False) -> CaseResult:
+    """Run ``case``; on a failure with ``recordings`` set, leave a recording of the run in that folder.
+
+    With ``record_all`` (and ``recordings``) every run is recorded, passed or failed, in the one run
+    the test makes; otherwise a failing test is run again under a recorder (a passing one costs no
+    recording).
+    """
     result = CaseResult(case.id, case.suite.name, case.name, str(case.suite.file))
     started = time.perf_counter()
     try:
-        monitors, coverage, ticks, fault = _Run(case).run()
+        if record_all and recordings is not None:
+            path, (monitors, coverage, ticks, fault) = _recorded_run(case, recordings)
+            result.recording = str(path.resolve())
+        else:
+            monitors, coverage, ticks, fault = _Run(case).run()
     except (TestSetupError, AssertionSpecError) as error:
         result.status, result.error = "error", str(error)
         result.seconds = time.perf_counter() - started
@@ -316,7 +325,8 @@ def run_case(case: Case, recordings: Path | None = None) -> CaseResult:
         result.status = "failed"
         if recordings is not None:
             first = min(f.tick for f in result.failures)
-            result.recording = str(_record(case, recordings, first).resolve())
+            if result.recording is None:
+                result.recording = str(_record(case, recordings, first).resolve())
             result.recording_tick = first
     result.seconds = time.perf_counter() - started
     return result
@@ -341,6 +351,13 @@ def recording_name(case: Case) -> str:
 
 def _record(case: Case, folder: Path, failing_tick: int) -> Path:
     """Run ``case`` again under a recorder, up to a second past the failing tick."""
+    return _recorded_run(case, folder, failing_tick + _plugin(case.suite).behavior_hz)[0]
+
+
+def _recorded_run(
+    case: Case, folder: Path, stop_after: int | None = None
+) -> tuple[Path, tuple[list[Monitor], Coverage, int, Failure | None]]:
+    """Run ``case`` under a recorder into ``folder`` (up to tick ``stop_after``): the file and what the run gave."""
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / recording_name(case)
     run = _Run(case)
@@ -360,9 +377,9 @@ def _record(case: Case, folder: Path, failing_tick: int) -> Path:
         if case.force is not None:
             kind, name, params = case.force
             recorder.event("force", run.start_ms, run.robot, **{kind: name, "params": dict(params)})
-        run.run(recorder, stop_after=failing_tick + plugin.behavior_hz)
+        outcome = run.run(recorder, stop_after=stop_after)
     except BaseException:
         recorder.abort()
         raise
     recorder.close()
-    return path
+    return path, outcome

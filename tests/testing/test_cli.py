@@ -109,6 +109,30 @@ def test_failure_leaves_a_recording_at_the_failing_tick(suite: Path, tmp_path: P
         assert "override" in kinds
 
 
+def test_record_all_keeps_every_run_in_the_one_run_it_makes(
+    suite: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = tmp_path / "rec"
+    cases = collect([suite])
+    results = run_cases(cases, recordings=folder, record_all=True)
+    assert [r.status for r in results] == ["passed", "failed", "passed"]
+    assert sorted(p.name for p in folder.iterdir()) == sorted(Path(r.recording or "").name for r in results)
+    for result, case in zip(results, cases, strict=True):
+        assert result.recording is not None
+        with Recording(result.recording) as recording:
+            # the whole test, not a second past a failure: every tick the test observed
+            assert len(recording) == result.ticks
+            assert any(case.id in e["data"].get("text", "") for e in recording.events)
+    failed = results[1]
+    assert failed.recording_tick == 20
+    # the same verdicts as without recordings: recording changes nothing the test sees
+    assert [r.status for r in run_cases(cases)] == ["passed", "failed", "passed"]
+    assert main([str(suite), "--record-all", "--recordings", str(tmp_path / "cli")]) == 1
+    out = capsys.readouterr().out
+    assert out.count("; recording ") == 2  # the passed ones say where theirs is; the failure's report too
+    assert main([str(suite), "--record-all", "--no-recordings"]) == 2
+
+
 def test_keyword_expressions() -> None:
     match = keyword_matcher("(goalie or striker) and not kick")
     assert match("soccer::Goalie clears")  # type: ignore[operator]
