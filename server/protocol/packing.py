@@ -5,16 +5,21 @@ node, leaf, transition and action; as objects with the file path spelled out, sp
 than half of a description's bytes, and the description is the bulk of the first message of a
 session (``hello``; 186 KB for a 31-option set, 2 MB for a 180-option team set). On the wire to
 a browser each description therefore carries ``span_files`` (the paths, once) and every span
-becomes ``[file index, line, col, end_line, end_col, start, end]``; ``web/src/description.ts``
-``unpackDescription`` restores the objects when the hello arrives, so no panel sees the packed
-form. Recordings, ``xabsl compile --json`` and ``GET /api/structure`` keep the plain description.
+becomes ``[file index, line, col, end_line, end_col, start, end]``. An option's ``transitions``
+(the leaves of its states' decision trees, in order) and ``calls`` (its states' option and
+behavior calls) are derived data, a fifth of a team set's description: they stay off the wire when
+every option's are what its trees and actions give (:func:`derived_transitions`,
+:func:`derived_calls`), and the description's ``derived`` names the fields the receiver derives.
+``web/src/description.ts`` ``unpackDescription`` restores all of it when the hello arrives, so no
+panel sees the packed form. Recordings, ``xabsl compile --json`` and ``GET /api/structure`` keep
+the plain description.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["SPAN_FIELDS", "pack_structure", "unpack_description"]
+__all__ = ["SPAN_FIELDS", "derived_calls", "derived_transitions", "pack_structure", "unpack_description"]
 
 #: The order of a packed span's numbers after the file index (``xabsl_studio.engine.types.Span``).
 SPAN_FIELDS = ("line", "col", "end_line", "end_col", "start", "end")
@@ -45,7 +50,53 @@ def _pack_description(description: dict[str, Any]) -> dict[str, Any]:
 
     packed = pack(description)
     packed["span_files"] = list(files)
+    options = packed.get("options") or []
+    derived = [
+        field
+        for field, derive in (("transitions", derived_transitions), ("calls", derived_calls))
+        # only what the receiver derives exactly (a foreign description may say otherwise)
+        if options and all(field in o and o[field] == derive(o) for o in options)
+    ]
+    if derived:
+        for option in options:
+            for field in derived:
+                del option[field]
+        packed["derived"] = derived
     return packed  # type: ignore[no-any-return]
+
+
+def derived_transitions(option: dict[str, Any]) -> list[dict[str, Any]]:
+    """The transitions of an option: each state's decision leaves in pre-order (then before else)."""
+    out: list[dict[str, Any]] = []
+    for state in option.get("states", ()):
+        stack = [state.get("decision")]
+        while stack:  # no recursion: an else-if chain of a thousand links is a tree that deep
+            node = stack.pop()
+            if not isinstance(node, dict):
+                continue
+            if "if" in node:
+                stack.extend((node.get("else"), node.get("then")))
+            else:
+                out.append(
+                    {
+                        "from": state["name"],
+                        "to": node["to"],
+                        "leaf": node["leaf"],
+                        "stay": node["stay"],
+                        "span": node["span"],
+                    }
+                )
+    return out
+
+
+def derived_calls(option: dict[str, Any]) -> list[dict[str, Any]]:
+    """The option and basic-behavior calls of an option's states, in state and action order."""
+    return [
+        {"state": state["name"], "type": action["type"], "name": action["name"]}
+        for state in option.get("states", ())
+        for action in state.get("actions", ())
+        if action.get("type") in ("option", "behavior")
+    ]
 
 
 def unpack_description(packed: dict[str, Any]) -> dict[str, Any]:
@@ -61,10 +112,15 @@ def unpack_description(packed: dict[str, Any]) -> dict[str, Any]:
                     else unpack(item)
                 )
                 for key, item in value.items()
-                if key != "span_files"
+                if key not in ("span_files", "derived")
             }
         if isinstance(value, list):
             return [unpack(item) for item in value]
         return value
 
-    return unpack(packed)  # type: ignore[no-any-return]
+    plain: dict[str, Any] = unpack(packed)
+    derive = {"transitions": derived_transitions, "calls": derived_calls}
+    for field in packed.get("derived", ()):
+        for option in plain.get("options", ()):
+            option[field] = derive[field](option)
+    return plain

@@ -200,7 +200,7 @@ export function unpackDescription(packed: BehaviorDescription & { span_files?: s
     if (value === null || typeof value !== "object") return value;
     const out: Record<string, unknown> = {};
     for (const [key, item] of Object.entries(value)) {
-      if (key === "span_files") continue;
+      if (key === "span_files" || key === "derived") continue;
       if (key === "span" && Array.isArray(item)) {
         const span: Record<string, unknown> = { file: files[item[0] as number] };
         SPAN_FIELDS.forEach((field, i) => (span[field] = item[i + 1]));
@@ -209,7 +209,39 @@ export function unpackDescription(packed: BehaviorDescription & { span_files?: s
     }
     return out;
   };
-  return unpack(packed) as BehaviorDescription;
+  const plain = unpack(packed) as BehaviorDescription;
+  // derived data left off the wire (server/protocol/packing.py): rebuilt exactly as the server derives it
+  const derived = (packed as { derived?: string[] }).derived ?? [];
+  for (const option of plain.options) {
+    if (derived.includes("transitions")) option.transitions = derivedTransitions(option);
+    if (derived.includes("calls")) option.calls = derivedCalls(option);
+  }
+  return plain;
+}
+
+/// An option's transitions: each state's decision leaves in pre-order (then before else).
+function derivedTransitions(option: Option): Transition[] {
+  const out: Transition[] = [];
+  for (const state of option.states) {
+    const stack: Array<DecisionTree | null | undefined> = [state.decision];
+    while (stack.length) {
+      // no recursion: an else-if chain of a thousand links is a tree that deep
+      const node = stack.pop();
+      if (!node) continue;
+      if ("if" in node) stack.push(node.else, node.then);
+      else out.push({ from: state.name, to: node.to, leaf: node.leaf, stay: node.stay, span: node.span });
+    }
+  }
+  return out;
+}
+
+/// An option's option and basic-behavior calls, in state and action order.
+function derivedCalls(option: Option): Call[] {
+  const calls: Call[] = [];
+  for (const state of option.states) {
+    for (const action of state.actions) if (action.type !== "assign") calls.push({ state: state.name, type: action.type, name: action.name });
+  }
+  return calls;
 }
 
 /// Build the lookup tables of a description.

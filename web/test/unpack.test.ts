@@ -30,6 +30,40 @@ describe("unpackDescription", () => {
       ],
     });
   });
+  it("derives the transitions and calls the server left off the wire, as the server derives them", () => {
+    const leaf = (to: string, n: number, stay = false): Record<string, unknown> => ({ to, stay, leaf: n, span: null });
+    const packed = {
+      options: [
+        {
+          name: "a",
+          span: null,
+          states: [
+            {
+              name: "s",
+              span: null,
+              actions: [{ type: "assign", symbol: "x", value: "1", span: null }, { type: "option", name: "b", args: [], span: null }, { type: "behavior", name: "kick", args: [], span: null }],
+              decision: { if: "p", span: null, then: leaf("t", 0), else: { if: "q", span: null, then: leaf("u", 1), else: leaf("s", 2, true) } },
+            },
+            { name: "t", span: null, actions: [], decision: leaf("s", 0) },
+          ],
+        },
+      ],
+      span_files: [],
+      derived: ["transitions", "calls"],
+    } as unknown as BehaviorDescription & { span_files: string[] };
+    const [option] = unpackDescription(packed).options;
+    expect(option?.transitions).toEqual([
+      { from: "s", to: "t", leaf: 0, stay: false, span: null },
+      { from: "s", to: "u", leaf: 1, stay: false, span: null },
+      { from: "s", to: "s", leaf: 2, stay: true, span: null },
+      { from: "t", to: "s", leaf: 0, stay: false, span: null },
+    ]);
+    expect(option?.calls).toEqual([
+      { state: "s", type: "option", name: "b" },
+      { state: "s", type: "behavior", name: "kick" },
+    ]);
+    expect("derived" in unpackDescription(packed)).toBe(false);
+  });
   it("leaves a plain description as it is", () => {
     const plain = { options: [{ name: "a", span: { file: "f", line: 1, col: 1, end_line: 1, end_col: 2, start: 0, end: 1 } }] } as unknown as BehaviorDescription;
     expect(unpackDescription(plain)).toBe(plain);
