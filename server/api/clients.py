@@ -318,7 +318,9 @@ class Hub:
             token_required=self.token_required,
             offset=gen.offset,
         )
-        return encode_hello(reason, gen.number, info, gen.wire_structure()[1], gen.scene_bytes, session.fork)
+        return encode_hello(
+            reason, gen.number, info, gen.wire_structure()[1], gen.scene_bytes, session.fork, gen.wire_structure_z()
+        )
 
     token_required = False
 

@@ -13,13 +13,39 @@ every option's are what its trees and actions give (:func:`derived_transitions`,
 ``web/src/description.ts`` ``unpackDescription`` restores all of it when the hello arrives, so no
 panel sees the packed form. Recordings, ``xabsl compile --json`` and ``GET /api/structure`` keep
 the plain description.
+
+A ``hello`` whose structure is still over :data:`COMPRESS_FROM` (a team's set: 700 KB for 200
+options) carries it compressed (:func:`compress_structure`: zlib, then base64, in
+``structure_z``, ``structure`` null): a tenth of the bytes. The browser inflates it with its own
+``DecompressionStream`` (``web/src/connection.ts``) before anything sees the hello;
+:func:`decode_hello` does the same for Python clients. Smaller structures (the soccer example's
+110 KB) go as they are: nothing to wait for.
 """
 
 from __future__ import annotations
 
+import base64
+import binascii
+import zlib
 from typing import Any
 
-__all__ = ["SPAN_FIELDS", "derived_calls", "derived_transitions", "pack_structure", "unpack_description"]
+import orjson
+
+__all__ = [
+    "COMPRESS_FROM",
+    "SPAN_FIELDS",
+    "compress_structure",
+    "decode_hello",
+    "derived_calls",
+    "derived_transitions",
+    "pack_structure",
+    "unpack_description",
+]
+
+#: An encoded structure this large (bytes) travels compressed in a ``hello``.
+COMPRESS_FROM = 128 * 1024
+#: The most a compressed structure may inflate to in :func:`decode_hello` (a hostile server).
+MAX_STRUCTURE_BYTES = 256 * 1024 * 1024
 
 #: The order of a packed span's numbers after the file index (``xabsl_studio.engine.types.Span``).
 SPAN_FIELDS = ("line", "col", "end_line", "end_col", "start", "end")
@@ -124,3 +150,33 @@ def unpack_description(packed: dict[str, Any]) -> dict[str, Any]:
         for option in plain.get("options", ()):
             option[field] = derive[field](option)
     return plain
+
+
+def compress_structure(encoded: bytes) -> bytes | None:
+    """The hello's ``structure_z`` for an encoded structure (ASCII bytes), None when it goes as it is."""
+    if len(encoded) < COMPRESS_FROM:
+        return None
+    return base64.b64encode(zlib.compress(encoded, 6))
+
+
+def decode_hello(message: dict[str, Any]) -> dict[str, Any]:
+    """A hello as received, with a compressed structure inflated into ``structure`` (others as they are).
+
+    Raises:
+        ValueError: ``structure_z`` is not base64 of zlib data of a JSON object, or inflates past
+            :data:`MAX_STRUCTURE_BYTES`.
+    """
+    packed = message.get("structure_z")
+    if message.get("type") != "hello" or packed is None:
+        return message
+    try:
+        inflater = zlib.decompressobj()
+        data = inflater.decompress(base64.b64decode(packed, validate=True), MAX_STRUCTURE_BYTES)
+        if inflater.unconsumed_tail:
+            raise ValueError(f"the structure inflates past {MAX_STRUCTURE_BYTES} bytes")
+        structure = orjson.loads(data)
+    except (zlib.error, orjson.JSONDecodeError, binascii.Error) as error:
+        raise ValueError(f"a hello's structure_z does not decode: {error}") from None
+    decoded = {key: value for key, value in message.items() if key != "structure_z"}
+    decoded["structure"] = structure
+    return decoded

@@ -162,11 +162,16 @@ class Hello:
     reason: HelloReason
     generation: int
     session: SessionInfo
-    structure: Structure
+    #: the robots and behavior descriptions (spans packed: ``xabsl_studio.server.protocol.packing``);
+    #: null when ``structure_z`` carries it
+    structure: Structure | None
     #: the world's static scene (world-defined)
     scene: dict[str, Any]
     #: the fork the running world comes from (null: none since the last reset); kept across reloads
     fork: ForkOrigin | None = None
+    #: a large structure, compressed: base64 of the zlib-compressed JSON of ``structure``
+    #: (``packing.compress_structure``; the receiver inflates it before use)
+    structure_z: str | None = None
 
 
 @with_config(SCHEMA)
@@ -531,14 +536,20 @@ def encode_hello(
     structure: bytes,
     scene: bytes,
     fork: ForkOrigin | None = None,
+    structure_z: bytes | None = None,
 ) -> bytes:
-    """A :class:`Hello` spliced from the generation's pre-encoded ``structure`` and ``scene``."""
+    """A :class:`Hello` spliced from the generation's pre-encoded ``structure`` and ``scene``.
+
+    With ``structure_z`` (the compressed structure, base64 ASCII) that is sent instead.
+    """
     head = b'{"type":"hello","version":%d,"reason":%s,"generation":%d,"session":' % (
         VERSION,
         orjson.dumps(reason),
         generation,
     )
     tail = b',"fork":%s}' % orjson.dumps(fork)
+    if structure_z is not None:
+        structure, tail = b"null", b',"fork":%s,"structure_z":"%s"}' % (orjson.dumps(fork), structure_z)
     return b"".join([head, orjson.dumps(session), b',"structure":', structure, b',"scene":', scene, tail])
 
 

@@ -34,7 +34,7 @@ import orjson
 from xabsl_studio.engine.types import Value
 from xabsl_studio.server.protocol.host import NewGeneration, Sample
 from xabsl_studio.server.protocol.limits import FULL_EVERY
-from xabsl_studio.server.protocol.packing import pack_structure
+from xabsl_studio.server.protocol.packing import compress_structure, pack_structure
 from xabsl_studio.server.protocol.types import (
     HelloReason,
     WireValue,
@@ -74,6 +74,8 @@ class Generation:
     enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
     #: the structure as browsers get it (spans packed), made on first use
     _wire: tuple[dict[str, Any], bytes] | None = field(default=None, repr=False)
+    #: it compressed for a hello (None: it goes as it is), made on first use
+    _wire_z: tuple[bytes | None] | None = field(default=None, repr=False)
 
     def wire_structure(self) -> tuple[dict[str, Any], bytes]:
         """The structure as a browser gets it, and encoded (``xabsl_studio.server.protocol.packing``).
@@ -84,6 +86,12 @@ class Generation:
             packed = pack_structure(self.structure)
             self._wire = (packed, orjson.dumps(packed))
         return self._wire
+
+    def wire_structure_z(self) -> bytes | None:
+        """The hello's ``structure_z`` (``xabsl_studio.server.protocol.packing.compress_structure``), once."""
+        if self._wire_z is None:
+            self._wire_z = (compress_structure(self.wire_structure()[1]),)
+        return self._wire_z[0]
 
     @classmethod
     def from_message(cls, message: NewGeneration) -> Generation:

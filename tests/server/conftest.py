@@ -28,6 +28,7 @@ from xabsl_studio.examples.soccer.studio import SoccerExample
 from xabsl_studio.server.api.app import create_app
 from xabsl_studio.server.api.listen import uvicorn_config
 from xabsl_studio.server.api.security import SecurityPolicy
+from xabsl_studio.server.protocol.packing import decode_hello
 from xabsl_studio.server.session.live import Session
 
 REPO = Path(__file__).resolve().parents[2]
@@ -118,6 +119,7 @@ class WsClient:
         message = orjson.loads(data)
         kind = message["type"]
         if kind == "hello":
+            message = decode_hello(message)  # a team-sized structure comes compressed
             self.hello = message
             self.hellos.append(message)
             self.values = {}

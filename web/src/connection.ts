@@ -19,7 +19,16 @@ import {
   parseServerMessage,
   type Reply,
   type ServerEvent,
+  type ServerMessage,
+  type Structure,
 } from "./protocol";
+
+/// A hello's compressed structure (base64 of zlib data: server/protocol/packing.py) as JSON.
+export async function inflateStructure(packed: string): Promise<Structure> {
+  const bytes = Uint8Array.from(atob(packed), (c) => c.charCodeAt(0));
+  const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+  return JSON.parse(await new Response(stream).text()) as Structure;
+}
 
 export type LinkState = "connecting" | "live" | "waiting";
 
@@ -78,6 +87,8 @@ export class Connection {
   framesPerSecond = 0;
   lastFrameAt = 0;
   private socket: SocketLike | null = null;
+  /// Messages received while a hello's compressed structure inflates (null: none inflating).
+  private waiting: string[] | null = null;
   private nextId = 1;
   private pending = new Map<number, Pending>();
   private histories = new Map<number, HistoryCollector>();
@@ -157,6 +168,7 @@ export class Connection {
     socket.onclose = (ev) => {
       if (this.socket !== socket) return;
       this.socket = null;
+      this.waiting = null; // what waited behind a hello of this socket is of no use now
       this.failPending(`connection closed (${ev.code})`);
       if (!this.stopped) this.scheduleRetry(ev.code);
     };
@@ -182,9 +194,39 @@ export class Connection {
   }
 
   /// Handle one text message from the server (public for tests).
+  ///
+  /// A hello with a compressed structure (`structure_z`, a team-sized set) is inflated first;
+  /// the messages after it wait, in order, until it is handled.
   receive(text: string): void {
+    if (this.waiting !== null) {
+      this.waiting.push(text);
+      return;
+    }
     const message = parseServerMessage(text);
     if (!message) return;
+    const compressed = message.type === "hello" ? message.structure_z : null;
+    if (message.type === "hello" && compressed) {
+      const queue: string[] = (this.waiting = []);
+      const socket = this.socket;
+      void inflateStructure(compressed).then(
+        (structure) => {
+          if (this.waiting !== queue || this.socket !== socket) return; // that socket is gone
+          this.waiting = null;
+          this.handle({ ...message, structure, structure_z: null });
+          for (let next = queue.shift(); next !== undefined; next = queue.shift()) this.receive(next);
+        },
+        (error: unknown) => {
+          console.error("a hello's compressed structure does not inflate:", error);
+          if (this.waiting === queue) this.waiting = null;
+          this.socket?.close(4000, "bad hello");
+        },
+      );
+      return;
+    }
+    this.handle(message);
+  }
+
+  private handle(message: ServerMessage): void {
     switch (message.type) {
       case "hello":
         if (message.version !== PROTOCOL_VERSION) console.warn(`server speaks protocol ${message.version}, UI ${PROTOCOL_VERSION}`);

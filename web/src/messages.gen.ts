@@ -386,9 +386,10 @@ export interface Hello {
   reason: HelloReason;
   generation: number;
   session: SessionInfo;
-  structure: Structure;
+  structure: Structure | null;
   scene: Record<string, unknown>;
   fork?: ForkOrigin | null;
+  structure_z?: string | null;
 }
 
 /** Stream the ring buffer between behavior times `t0` and `t1` (every `every`-th frame). */

@@ -59,7 +59,38 @@ function setup() {
   return { connection, sockets, timers, events };
 }
 
+/// What the server sends in `structure_z` (zlib, then base64), made with the platform's own streams.
+async function deflateBase64(text: string): Promise<string> {
+  const stream = new Blob([text]).stream().pipeThrough(new CompressionStream("deflate"));
+  const bytes = new Uint8Array(await new Response(stream).arrayBuffer());
+  let binary = "";
+  for (const byte of bytes) binary += String.fromCharCode(byte);
+  return btoa(binary);
+}
+
 describe("Connection", () => {
+  it("inflates a hello's compressed structure before it, and the messages after it, are handled", async () => {
+    const structures: unknown[] = [];
+    const { connection, sockets, events } = setup();
+    (connection as unknown as { handlers: { hello: (h: { structure: unknown }) => void } }).handlers.hello = (h) => {
+      events.hellos++;
+      structures.push(h.structure);
+    };
+    connection.start();
+    sockets[0]?.open();
+    const plain = hello(4);
+    const packed = await deflateBase64(JSON.stringify(plain.structure));
+    sockets[0]?.serve({ ...plain, structure: null, structure_z: packed });
+    sockets[0]?.serve(frame(7, 100, [], true, 4)); // arrives while the structure inflates
+    expect(events.frames).toEqual([]);
+    await vi.waitFor(() => expect(events.hellos).toBe(1));
+    expect(structures[0]).toEqual(plain.structure);
+    expect(connection.generation).toBe(4);
+    expect(events.frames).toEqual([7]); // after the hello, in order
+    sockets[0]?.serve(frame(8, 125, [], false, 4));
+    expect(events.frames).toEqual([7, 8]); // nothing waits any more
+  });
+
   it("subscribes on open and goes live on hello", () => {
     const { connection, sockets, events } = setup();
     connection.start();

@@ -68,3 +68,44 @@ def test_a_missing_span_stays_missing() -> None:
     packed = pack_structure({"programs": {"k": plain}, "robots": []})["programs"]["k"]
     assert packed["options"][0]["span"] is None and packed["options"][0]["states"][0]["span"] == [0, 1, 2, 3, 4, 5, 6]
     assert packed["span_files"] == ["f"] and unpack_description(packed) == plain
+
+
+def test_a_large_structure_travels_compressed_and_decodes_to_the_same(tmp_path: Path) -> None:
+    from tests.navset import write_set
+    from xabsl_studio.server.protocol.packing import COMPRESS_FROM, compress_structure, decode_hello
+    from xabsl_studio.server.protocol.replies import encode_hello
+
+    compilation = compile_file(write_set(tmp_path / "team"))
+    assert compilation.program is not None
+    structure = pack_structure({"programs": {"team": program_to_json(compilation.program)}, "robots": []})
+    encoded = orjson.dumps(structure)
+    packed = compress_structure(encoded)
+    assert packed is not None and len(encoded) > COMPRESS_FROM
+    session = {"example": "team"}
+    hello = encode_hello("connect", 1, session, encoded, b"{}", None, packed)  # type: ignore[arg-type]
+    # the first message of a session with a 200-option set: at most 500 KB (694 KB uncompressed)
+    assert len(hello) < 500_000 and len(hello) < 0.2 * len(encoded), len(hello)
+    message = orjson.loads(hello)
+    assert message["structure"] is None
+    assert decode_hello(message)["structure"] == structure
+    assert "structure_z" not in decode_hello(message)
+    # a small one goes as it is
+    assert compress_structure(orjson.dumps({"robots": [], "programs": {}})) is None
+    plain = orjson.loads(encode_hello("connect", 1, session, b'{"robots":[]}', b"{}"))  # type: ignore[arg-type]
+    assert decode_hello(plain) is plain and "structure_z" not in plain
+
+
+@pytest.mark.parametrize("packed", ["not base64!", "aGVsbG8=", "bomb"])
+def test_a_compressed_structure_that_does_not_decode_is_one_clear_error(
+    packed: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import base64
+    import zlib
+
+    from xabsl_studio.server.protocol import packing
+
+    if packed == "bomb":  # inflates past the bound (lowered here: the real one is 256 MiB)
+        monkeypatch.setattr(packing, "MAX_STRUCTURE_BYTES", 1024 * 1024)
+        packed = base64.b64encode(zlib.compress(b'{"a":"' + b"0" * (4 * 1024 * 1024) + b'"}')).decode()
+    with pytest.raises(ValueError, match="structure"):
+        packing.decode_hello({"type": "hello", "structure": None, "structure_z": packed})
