@@ -31,6 +31,7 @@ x, direction 0 points at the opponent goal).
 
 from __future__ import annotations
 
+import array
 import enum
 import hashlib
 import math
@@ -414,24 +415,39 @@ def make_bindings(perception: WorldModel, motion: MotionRequest) -> tuple[Bindin
 class ActivationRecorder:
     """Counts, per option, the ticks it was active and in which state, and hashes the activation trace.
 
-    After each tick it appends the engine's cheap per-tick views (``Engine.ran_options()``, one
-    ``bytes`` of active flags, and ``Engine.active_states()``) to two ``bytearray`` buffers; counts
-    (numpy) and the trace hash are computed from them on request, so a tick costs two appends.
+    After each tick it appends the engine's tick stamps and active states (its storage lists, as
+    they are: ``array.fromlist`` and ``bytearray.extend`` copy them in C) and the tick; which
+    options ran (a stamp equal to the tick, as ``Engine.ran_options()`` says), the counts (numpy)
+    and the trace hash are computed from them on request, so a tick costs three appends.
     """
 
-    __slots__ = ("_active", "_engine", "_states", "option_names")
+    __slots__ = ("_engine", "_stamps", "_states", "_ticks", "option_names")
 
     def __init__(self, engine: Engine) -> None:
         self._engine = engine
         self.option_names: list[str] = list(engine.option_names)
-        self._active = bytearray()
+        self._stamps = array.array("q")
         self._states = bytearray()
+        self._ticks = array.array("q")
 
     def record(self) -> None:
         """Count this tick's activations for the match report."""
         engine = self._engine
-        self._active += engine.ran_options()
-        self._states += bytes(engine.active_states())
+        loaded = engine.loaded
+        self._stamps.fromlist(loaded.last_tick)
+        self._states.extend(loaded.states)
+        self._ticks.append(engine.tick)
+
+    @property
+    def _active(self) -> bytes:
+        """Per tick and option: 1 if it ran (``Engine.ran_options()`` of every recorded tick)."""
+        n = len(self.option_names)
+        if not self._ticks or not n:
+            return b""
+        stamps = np.frombuffer(self._stamps, dtype=np.int64).reshape(-1, n)
+        ticks = np.frombuffer(self._ticks, dtype=np.int64)
+        ran: bytes = (stamps == ticks[:, None]).astype(np.uint8).tobytes()
+        return ran
 
     @property
     def hash(self) -> hashlib.blake2b:
