@@ -237,7 +237,7 @@ LAYERS: dict[str, frozenset[str]] = {
 
 #: The engine's stages, lowest first: a module imports only its own stage's and lower ones.
 ENGINE_LAYERS: tuple[frozenset[str], ...] = (
-    frozenset({"types", "errors", ""}),
+    frozenset({"types", "errors", "recursion", ""}),
     frozenset({"files", "ir"}),
     frozenset({"lang", "emit", "codegen", "dynamics", "planning"}),
     frozenset({"runtime"}),

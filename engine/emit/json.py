@@ -249,10 +249,6 @@ def program_to_json(program: ir.Program, source_text: SourceText | None = None) 
     return _Exporter(source_text).program(program)
 
 
-#: Nesting the standard library's encoder may need: a decision tree nests one object per level.
-_DEEP_RECURSION = 12_000
-
-
 def dumps(document: Any, *, indent: bool = True) -> bytes:
     """``document`` as UTF-8 JSON, at any nesting depth.
 
@@ -265,12 +261,9 @@ def dumps(document: Any, *, indent: bool = True) -> bytes:
         return orjson.dumps(document, option=orjson.OPT_INDENT_2 if indent else 0)
     except orjson.JSONEncodeError:
         import json
-        import sys
 
-        previous = sys.getrecursionlimit()
-        sys.setrecursionlimit(max(previous, _DEEP_RECURSION))
-        try:
+        from xabsl_studio.engine.recursion import deep_recursion
+
+        with deep_recursion():
             text = json.dumps(document, indent=2 if indent else None, ensure_ascii=False, allow_nan=False)
-        finally:
-            sys.setrecursionlimit(previous)
         return text.encode("utf-8")

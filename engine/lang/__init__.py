@@ -16,7 +16,6 @@ IR), :mod:`.lint` (whole-program checks). User mistakes never raise: they are di
 from __future__ import annotations
 
 import gc
-import sys
 import time
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -28,26 +27,10 @@ from xabsl_studio.engine.lang.check import OptionChecker, title_fields
 from xabsl_studio.engine.lang.diagnostics import Diagnostic, Diagnostics, Severity
 from xabsl_studio.engine.lang.loader import load
 from xabsl_studio.engine.lang.symbols import Declarations, SymbolTable
+from xabsl_studio.engine.recursion import deep_recursion as deep_recursion
 from xabsl_studio.engine.types import Span
 
 __all__ = ["Compilation", "Diagnostic", "Severity", "assemble_program", "compile_file"]
-
-
-#: Recursion limit while compiling: deeply nested expressions and long ``else if`` chains recurse
-#: in the parser and checker. Python 3.11 keeps pure-Python frames off the C stack, so this is safe;
-#: deeper input still gets a ``nesting-too-deep`` diagnostic instead of a RecursionError.
-RECURSION_LIMIT = 12_000
-
-
-@contextmanager
-def deep_recursion() -> Iterator[None]:
-    """Temporarily allow :data:`RECURSION_LIMIT` nested calls (never lowers the limit)."""
-    previous = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(previous, RECURSION_LIMIT))
-    try:
-        yield
-    finally:
-        sys.setrecursionlimit(previous)
 
 
 @dataclass

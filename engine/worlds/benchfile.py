@@ -38,6 +38,9 @@ from xabsl_studio.engine.worlds.benchmath import normalize_degrees
 BENCH_FILE = "bench.toml"
 #: The longest expression a bench file may hold (characters): a formula, not a program.
 MAX_EXPRESSION = 2000
+#: Deepest expression tree. Checked on the parsed tree, so the refusal does not depend on the
+#: process's recursion limit (which another thread's compile, or a test runner, may have raised).
+MAX_DEPTH = 200
 #: The keys of ``[pose]``.
 POSE_KEYS = ("forward", "sideways", "turn", "when")
 
@@ -121,11 +124,22 @@ def compile_expression(text: str, resolve: Resolver) -> Getter:
         raise ExpressionError(f"an expression of at most {MAX_EXPRESSION} characters")
     try:
         tree = ast.parse(text.strip(), mode="eval")
+        _check_depth(tree.body)
         return _compile(tree.body, resolve)
     except SyntaxError as error:
         raise ExpressionError(f"not an expression: {error.msg} in {text!r}") from None
     except RecursionError:
         raise ExpressionError("an expression nested too deeply") from None
+
+
+def _check_depth(node: ast.AST) -> None:
+    """Raise RecursionError for a tree deeper than :data:`MAX_DEPTH` (walked without recursion)."""
+    stack = [(node, 1)]
+    while stack:
+        current, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise RecursionError(f"an expression nested deeper than {MAX_DEPTH}")
+        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(current))
 
 
 def _compile(node: ast.expr, resolve: Resolver) -> Getter:

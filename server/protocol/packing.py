@@ -18,8 +18,8 @@ A ``hello`` whose structure is still over :data:`COMPRESS_FROM` (a team's set: 7
 options) carries it compressed (:func:`compress_structure`: zlib, then base64, in
 ``structure_z``, ``structure`` null): a tenth of the bytes. The browser inflates it with its own
 ``DecompressionStream`` (``web/src/connection.ts``) before anything sees the hello;
-:func:`decode_hello` does the same for Python clients. Smaller structures (the soccer example's
-110 KB) go as they are: nothing to wait for.
+:func:`decode_hello` does the same for Python clients. Smaller structures (a set of a few dozen
+options: about 100 KB) go as they are: nothing to wait for.
 """
 
 from __future__ import annotations

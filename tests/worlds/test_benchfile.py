@@ -244,3 +244,18 @@ def test_the_documented_bench_file_reads_and_the_documented_table_is_the_bench_s
     table = doc.split("| name | parameters, in declaration order | computes |", 1)[1].split("\n\n", 1)[0]
     documented = {name.strip("` ") for line in table.splitlines()[2:] for name in line.split("|")[1].split(",")}
     assert documented == {row.name for row in TABLE}
+
+
+def test_a_deep_expression_is_refused_whatever_the_recursion_limit(tmp_path: Path) -> None:
+    """Found by CI: with the process's limit raised elsewhere, 1,500 nested minus signs parsed and ran."""
+    import sys
+
+    folder = team_set(tmp_path / "team", '[functions]\n"team.helper" = "' + "-" * 1500 + 'a"\n')
+    before = sys.getrecursionlimit()
+    sys.setrecursionlimit(20_000)
+    try:
+        _, sim = simulation(BenchExample(folder, robots=1))
+    finally:
+        sys.setrecursionlimit(before)
+    (error,) = sim.errors.values()
+    assert error is not None and "nested too deeply" in error, error
