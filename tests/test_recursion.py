@@ -25,16 +25,18 @@ def test_overlapping_sections_restore_the_limit_once_the_last_closes() -> None:
 def test_threads_compiling_at_once_leave_the_limit_as_it_was() -> None:
     before = sys.getrecursionlimit()
     start = threading.Barrier(8)
+    inside: list[int] = []  # the limit each section saw (asserts in threads would not fail the test)
 
     def deep() -> None:
         start.wait()
         for _ in range(200):
             with deep_recursion():
-                pass
+                inside.append(sys.getrecursionlimit())
 
     threads = [threading.Thread(target=deep) for _ in range(8)]
     for thread in threads:
         thread.start()
     for thread in threads:
         thread.join()
+    assert len(inside) == 1600 and min(inside) >= RECURSION_LIMIT, "every section ran deep"
     assert sys.getrecursionlimit() == before
