@@ -13,14 +13,12 @@ and the time the server spends on it once per generation. Goal (issue: performan
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import tempfile
 import time
 from pathlib import Path
-from types import ModuleType
 
 import orjson
+from _sets import navset  # benchmarks/ is the script's folder
 
 from xabsl_studio.engine.emit.json import program_to_json
 from xabsl_studio.engine.lang import compile_file
@@ -29,16 +27,6 @@ from xabsl_studio.server.protocol.replies import encode_hello
 
 REPO = Path(__file__).resolve().parents[1]
 GOAL = 500_000
-
-
-def navset() -> ModuleType:
-    """``tests/navset.py`` by path (benchmarks/ is no package; the tests own the generator)."""
-    spec = importlib.util.spec_from_file_location("navset", REPO / "tests" / "navset.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def measure(name: str, agents: Path) -> None:

@@ -18,18 +18,16 @@ Needs /usr/bin/chromium.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import shutil
 import socket
-import sys
 import tempfile
 import threading
 import time
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import uvicorn
+from _sets import navset  # benchmarks/ is the script's folder
 
 from xabsl_studio.engine.host import Example
 from xabsl_studio.engine.worlds.bench import BenchExample
@@ -98,16 +96,6 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
-
-
-def navset() -> ModuleType:
-    """``tests/navset.py`` by path (benchmarks/ is no package; the tests own the generator)."""
-    spec = importlib.util.spec_from_file_location("navset", REPO / "tests" / "navset.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def measure(page: Any, seconds: float) -> tuple[float, float, float]:

@@ -86,13 +86,13 @@ def compile_file(
     Returns:
         a :class:`Compilation`; ``program`` is None when there is any error.
     """
-    with deep_recursion(), _no_cycle_collection():
+    with deep_recursion(), no_cycle_collection():
         return _compile(path, base, overrides)
 
 
 @contextmanager
-def _no_cycle_collection() -> Iterator[None]:
-    """Pause the cyclic garbage collector while compiling.
+def no_cycle_collection() -> Iterator[None]:
+    """Pause the cyclic garbage collector while compiling (or building anything else that large).
 
     A compile allocates hundreds of thousands of tokens, spans and nodes that all stay alive
     until it ends, so every collection the allocations trigger traverses them all for nothing:

@@ -20,18 +20,16 @@ pass.
 
 from __future__ import annotations
 
-import gc
 import itertools
 import multiprocessing
 import os
 import threading
-from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
-from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 
+from xabsl_studio.engine.lang import no_cycle_collection
 from xabsl_studio.engine.query.columns import (
     CallTable,
     Codes,
@@ -65,18 +63,6 @@ def seed_codes(recording: Recording, codes: Codes) -> None:
                     codes.code(element)
 
 
-@contextmanager
-def _no_cyclic_gc() -> Iterator[None]:
-    """The pass creates hundreds of thousands of lists that all live to the end: nothing for the cycle collector."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
-
-
 def _one_pass(
     recording: Recording,
     robots: list[str],
@@ -86,7 +72,7 @@ def _one_pass(
     stop: int | None = None,
 ) -> dict[str, RobotColumns]:
     builders = {name: ColumnsBuilder(name, recording.program, codes, selection) for name in robots}
-    with _no_cyclic_gc():
+    with no_cycle_collection():  # hundreds of thousands of lists that all live to the end
         for name, message in recording.agent_messages(start, stop, agents=robots):
             builders[name].message(message)
         return {name: b.finish() for name, b in builders.items()}

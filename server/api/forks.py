@@ -20,7 +20,7 @@ from fastapi import APIRouter, HTTPException, Query, Request
 from xabsl_studio.server.api.openapi import error_responses
 from xabsl_studio.server.protocol.commands import Explain
 from xabsl_studio.server.protocol.rest import DecisionJson, ForkDivergenceJson, RobotDivergenceJson
-from xabsl_studio.server.session.forkdiff import ForkDivergence, RobotDivergence, named_paths, original_tick
+from xabsl_studio.server.session.forkdiff import ForkDivergence, named_paths, original_tick
 from xabsl_studio.server.session.live import CommandError, Session
 
 router = APIRouter()
@@ -77,14 +77,15 @@ async def diverge(request: Request) -> ForkDivergenceJson:
     }
 
 
-async def _with_whys(session: Session, found: RobotDivergence) -> RobotDivergenceJson:
+async def _with_whys(session: Session, found: RobotDivergenceJson) -> RobotDivergenceJson:
     """The divergence with what the parting option's decision did at the two ticks."""
+    option = found["option"]
 
     async def why(seq: int) -> DecisionJson | None:
-        if found.option is None:
+        if option is None:
             return None
         try:
-            answer = await session.explain(Explain(op="explain", robot=found.robot, option=found.option, seq=seq), None)
+            answer = await session.explain(Explain(op="explain", robot=found["robot"], option=option, seq=seq), None)
         except CommandError:  # the tick left the ring, or the option did not run in it
             return None
         return {
@@ -94,15 +95,4 @@ async def _with_whys(session: Session, found: RobotDivergence) -> RobotDivergenc
             "leaf": int(answer["leaf"]),
         }
 
-    return {
-        "robot": found.robot,
-        "name": found.name,
-        "seq": found.seq,
-        "t": found.t,
-        "original_seq": found.original_seq,
-        "fork_path": found.fork_path,
-        "original_path": found.original_path,
-        "option": found.option,
-        "why_fork": await why(found.seq),
-        "why_original": await why(found.original_seq),
-    }
+    return {**found, "why_fork": await why(found["seq"]), "why_original": await why(found["original_seq"])}

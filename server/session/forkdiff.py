@@ -24,11 +24,11 @@ import orjson
 
 from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.server.protocol.replies import ForkOrigin
-from xabsl_studio.server.protocol.rest import NamedNode
+from xabsl_studio.server.protocol.rest import NamedNode, RobotDivergenceJson
 from xabsl_studio.server.protocol.types import ID_INDEX
 from xabsl_studio.server.session.frames import Entry, Ring
 
-__all__ = ["ForkDivergence", "RobotDivergence", "named_paths", "original_run", "original_tick"]
+__all__ = ["ForkDivergence", "named_paths", "original_run", "original_tick"]
 
 
 def named_paths(entry: Entry) -> list[dict[str, Any]]:
@@ -83,20 +83,6 @@ def _caller(path: list[NamedNode], index: int, depth: int) -> str | None:
     return None
 
 
-@dataclass(frozen=True, slots=True)
-class RobotDivergence:
-    """One robot's first fork tick whose path differs from the original's at the same world time."""
-
-    robot: int
-    name: str
-    seq: int
-    t: int
-    original_seq: int
-    fork_path: list[NamedNode]
-    original_path: list[NamedNode]
-    option: str | None
-
-
 @dataclass
 class ForkDivergence:
     """The scan of one fork (see the module docstring)."""
@@ -110,7 +96,8 @@ class ForkDivergence:
     original_end: int = 0
     #: the original run ended (or left the ring) before this fork tick's time: nothing later compares
     beyond: bool = False
-    found: dict[int, RobotDivergence] = field(default_factory=dict)
+    #: per robot id its divergence (``why_fork`` and ``why_original`` not filled in here: null)
+    found: dict[int, RobotDivergenceJson] = field(default_factory=dict)
 
     def update(self, ring: Ring) -> None:
         """Compare the fork's ticks the ring received since the last update."""
@@ -142,16 +129,18 @@ class ForkDivergence:
             other = originals.get(robot["id"])
             if robot["id"] in self.found or other is None or robot["path"] == other["path"]:
                 continue
-            self.found[robot["id"]] = RobotDivergence(
-                robot["id"],
-                robot["name"],
-                entry.seq,
-                entry.t,
-                before.seq,
-                robot["path"],
-                other["path"],
-                parting_option(robot["path"], other["path"]),
-            )
+            self.found[robot["id"]] = {
+                "robot": robot["id"],
+                "name": robot["name"],
+                "seq": entry.seq,
+                "t": entry.t,
+                "original_seq": before.seq,
+                "fork_path": robot["path"],
+                "original_path": other["path"],
+                "option": parting_option(robot["path"], other["path"]),
+                "why_fork": None,
+                "why_original": None,
+            }
 
 
 def original_run(ring: Ring, fork: ForkOrigin) -> dict[int, Entry]:
