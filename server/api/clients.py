@@ -318,9 +318,8 @@ class Hub:
             token_required=self.token_required,
             offset=gen.offset,
         )
-        return encode_hello(
-            reason, gen.number, info, gen.wire_structure()[1], gen.scene_bytes, session.fork, gen.wire_structure_z()
-        )
+        _, structure, compressed = gen.wire_structure()
+        return encode_hello(reason, gen.number, info, structure, gen.scene_bytes, session.fork, compressed)
 
     token_required = False
 

@@ -59,13 +59,11 @@ async def diverge(request: Request) -> ForkDivergenceJson:
     scan: ForkDivergence | None = getattr(state, "fork_divergence", None)
     if scan is None or scan.fork != fork:
         scan = state.fork_divergence = ForkDivergence(fork)
-        state.fork_whys = {}
     scan.update(session.ring)
-    whys: dict[int, RobotDivergenceJson] = state.fork_whys
     for robot, found in scan.found.items():
-        if robot not in whys:
-            whys[robot] = await _with_whys(session, found)
-    robots = sorted(whys.values(), key=lambda d: (d["seq"], d["robot"]))
+        if robot not in scan.explained:
+            scan.explained[robot] = await _with_whys(session, found)
+    robots = sorted(scan.explained.values(), key=lambda d: (d["seq"], d["robot"]))
     return {
         "fork_seq": fork.seq,
         "fork_t": fork.t,

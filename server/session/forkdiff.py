@@ -98,6 +98,8 @@ class ForkDivergence:
     beyond: bool = False
     #: per robot id its divergence (``why_fork`` and ``why_original`` not filled in here: null)
     found: dict[int, RobotDivergenceJson] = field(default_factory=dict)
+    #: the ones the API has asked the decisions of (``why_fork``, ``why_original`` filled), by robot id
+    explained: dict[int, RobotDivergenceJson] = field(default_factory=dict)
 
     def update(self, ring: Ring) -> None:
         """Compare the fork's ticks the ring received since the last update."""

@@ -73,25 +73,18 @@ class Generation:
     #: per behavior key: enum name -> host value -> element (the raw enum values of an entry's ``reads``)
     enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
     #: the structure as browsers get it (spans packed), made on first use
-    _wire: tuple[dict[str, Any], bytes] | None = field(default=None, repr=False)
-    #: it compressed for a hello (None: it goes as it is), made on first use
-    _wire_z: tuple[bytes | None] | None = field(default=None, repr=False)
+    _wire: tuple[dict[str, Any], bytes, bytes | None] | None = field(default=None, repr=False)
 
-    def wire_structure(self) -> tuple[dict[str, Any], bytes]:
-        """The structure as a browser gets it, and encoded (``xabsl_studio.server.protocol.packing``).
+    def wire_structure(self) -> tuple[dict[str, Any], bytes, bytes | None]:
+        """The structure as a browser gets it, encoded, and compressed for a hello (None: sent as it is).
 
-        Made once per generation, when the first client needs it.
+        Made once per generation, when the first client needs it (``xabsl_studio.server.protocol.packing``).
         """
         if self._wire is None:
             packed = pack_structure(self.structure)
-            self._wire = (packed, orjson.dumps(packed))
+            encoded = orjson.dumps(packed)
+            self._wire = (packed, encoded, compress_structure(encoded))
         return self._wire
-
-    def wire_structure_z(self) -> bytes | None:
-        """The hello's ``structure_z`` (``xabsl_studio.server.protocol.packing.compress_structure``), once."""
-        if self._wire_z is None:
-            self._wire_z = (compress_structure(self.wire_structure()[1]),)
-        return self._wire_z[0]
 
     @classmethod
     def from_message(cls, message: NewGeneration) -> Generation:
