@@ -313,6 +313,9 @@ class RobotDivergenceJson(TypedDict):
 
     ``option`` is the option whose decision makes them part (null: no option, e.g. a fault);
     ``why_fork`` and ``why_original`` what it did on each side (null: not explainable).
+    ``uncompared_before``: fork ticks just before ``seq`` that could not be compared (a sample of
+    either run was dropped: the paths may have parted in one of them; 0: the tick before was
+    compared and equal).
     """
 
     robot: int
@@ -320,6 +323,7 @@ class RobotDivergenceJson(TypedDict):
     seq: int
     t: int
     original_seq: int
+    uncompared_before: int
     fork_path: list[NamedNode]
     original_path: list[NamedNode]
     option: str | None

@@ -1,18 +1,19 @@
 """Where a live fork first acts differently from the run it was forked from, per robot.
 
-After a ``fork`` the ring holds the original run's ticks at the seqs before the fork's first
-sample and the fork's ticks after it. The original run is the one the fork's tick came from: the
-fork's first sample is the world as the tick before ``ForkOrigin.seq`` left it, then tick ``seq``
-runs again; the original's ticks from there on count up to where time goes down (a reset, or an
-earlier fork) or the fork began (:func:`original_run`,
-:func:`original_tick`). Both ran from the same world state, so until some decision goes another way each fork tick's
-activation path equals the original's at the same world time. :class:`ForkDivergence` scans the
-fork's ticks as they arrive (each one once) and keeps, per robot, the first whose path differs:
-options by name and state, basic behaviors by name, at their depths (the two runs may run
-different versions of a behavior set, so ids would not compare; parameter values are not
-compared, as in ``xabsl diverge``). The first differing decision is the option where the two
-paths part: the first option in both with another state, else the option above the first node
-that differs (its action calls something else).
+After a ``fork`` the ring holds the original run's ticks at the seqs before the fork's first sample
+and the fork's ticks after it. The original run is the one the fork's tick came from: the fork's
+first sample is the world as the tick before ``ForkOrigin.seq`` left it, then tick ``seq`` runs
+again; the original's ticks from there on count up to where time goes down (a reset, or an earlier
+fork) or the fork began (:func:`original_run`, :func:`original_tick`). Both ran from the same world
+state, so until some decision goes another way each fork tick's activation path equals the
+original's at the same world time. :class:`ForkDivergence` scans the fork's ticks as they arrive
+(each one once) and keeps, per robot, the first whose path differs, with how many fork ticks just
+before it were not compared (a sample of either run the pipe dropped: the paths may have parted in
+one of those). Paths compare by options by name and state, basic behaviors by name, at their depths
+(the two runs may run different versions of a behavior set, so ids would not compare; parameter
+values are not compared, as in ``xabsl diverge``). The first differing decision is the option where
+the two paths part: the first option in both with another state, else the option above the first
+node that differs (its action calls something else).
 """
 
 from __future__ import annotations
@@ -100,6 +101,8 @@ class ForkDivergence:
     found: dict[int, RobotDivergenceJson] = field(default_factory=dict)
     #: the ones the API has asked the decisions of (``why_fork``, ``why_original`` filled), by robot id
     explained: dict[int, RobotDivergenceJson] = field(default_factory=dict)
+    #: fork ticks since the last compared one that could not be compared (a sample the pipe dropped)
+    uncompared: int = 0
 
     def update(self, ring: Ring) -> None:
         """Compare the fork's ticks the ring received since the last update."""
@@ -112,13 +115,15 @@ class ForkDivergence:
         seq = max(self.scanned + 1, self.fork.start)
         while seq <= latest.seq:
             entry = ring.get(seq)
-            if entry is not None:
-                before = self.original.get(entry.t)
-                if before is not None:
-                    self._compare(entry, before)
-                elif not self.original or entry.t > self.original_end:
-                    self.beyond = True  # the original did not run that far (or left the ring)
-                    break
+            before = self.original.get(entry.t) if entry is not None else None
+            if entry is not None and before is not None:
+                self._compare(entry, before)
+                self.uncompared = 0
+            elif entry is not None and (not self.original or entry.t > self.original_end):
+                self.beyond = True  # the original did not run that far (or left the ring)
+                break
+            else:
+                self.uncompared += 1
             self.scanned = seq
             seq += 1
 
@@ -137,6 +142,7 @@ class ForkDivergence:
                 "seq": entry.seq,
                 "t": entry.t,
                 "original_seq": before.seq,
+                "uncompared_before": self.uncompared,
                 "fork_path": robot["path"],
                 "original_path": other["path"],
                 "option": parting_option(robot["path"], other["path"]),

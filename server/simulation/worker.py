@@ -18,7 +18,8 @@ The loop (:func:`run`) ticks when a tick is due and otherwise waits on the chann
 :class:`~xabsl_studio.server.protocol.host.WorkerRequest` messages: a command the server validated already (a
 dataclass of ``xabsl_studio.server.protocol``), answered with a
 :class:`~xabsl_studio.server.protocol.host.WorkerReply` after the samples the command produced. Samples
-are droppable (``xabsl_studio.server.protocol.channel``): a server that falls behind never blocks a tick. An
+are droppable (``xabsl_studio.server.protocol.channel``): a server that falls behind never blocks a tick
+(except a generation's first second: :meth:`Simulation.sample_droppable`). An
 exception escaping the world ends the process after a :class:`~xabsl_studio.server.protocol.host.Crash`
 message; the server reports it and starts a fresh process on ``reset``.
 
@@ -180,6 +181,8 @@ class Simulation(EngineSet):
         self.history_ticks = config.history_ticks
         #: whether commands are logged (not while re-simulating a run for a fork)
         self.logging = True
+        #: samples still sent behind a backlog instead of dropped (:meth:`sample_droppable`)
+        self.kept_samples = 0
         if config.fork is not None:
             self._fork_world(config.fork)
         else:
@@ -240,6 +243,7 @@ class Simulation(EngineSet):
         """Start a new generation of ids; returns its message for the server (``fork``: its origin)."""
         self.generation_number += 1
         self.reason = reason
+        self.kept_samples = self.behavior_hz
         robots, input_ids, output_ids = self.sampling_tables(
             self.generation_number, ((r.name, r.team, r.number) for r in self.world.agents)
         )
@@ -259,6 +263,18 @@ class Simulation(EngineSet):
             fork,
             {key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
         )
+
+    def sample_droppable(self) -> bool:
+        """Whether the next tick's sample may be dropped when the server falls behind.
+
+        Not in the first second of a generation: a fork's first divergence from its original and
+        what a reload or reset changed are looked for in exactly those ticks, and the server is
+        busiest then (a new structure for every client). One second of samples is a bounded queue.
+        """
+        if self.kept_samples > 0:
+            self.kept_samples -= 1
+            return False
+        return True
 
     def _tick_time(self) -> int:
         # The clock of the tick just run (the loop's now_ms is already the next tick's).
@@ -353,7 +369,7 @@ class Simulation(EngineSet):
             sample = self.tick()
             if self.hits:  # a breakpoint stops the steps too
                 break
-            sent = self.emit(sample, True)
+            sent = self.emit(sample, self.sample_droppable())
         if sample is not None and (not sent or self.hits):  # the state a paused client looks at must arrive
             self.emit(sample, False)
         for hit in self.take_hits():
@@ -741,7 +757,7 @@ def run(channel: WorkerChannel, sim: Simulation) -> None:
             for hit in sim.take_hits():
                 channel.send(hit)
             continue
-        channel.send(sample, droppable=True)
+        channel.send(sample, droppable=sim.sample_droppable())
         next_due += 1.0 / (sim.behavior_hz * sim.speed)
         if time.perf_counter() - next_due > 0.25:
             next_due = time.perf_counter()

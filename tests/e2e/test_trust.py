@@ -153,7 +153,13 @@ def test_the_why_after_a_breakpoint_hit_shows_values(page: Any, studio: StudioSe
         studio.command("resume")
         wait_until(page, f"() => ({hits})() > {before}", timeout=40000)
         why = page.locator(".why")
-        wait_until(page, "() => document.querySelector('.why').innerText.includes('Values')", timeout=10000)
+        # The why of the hit's own decision (init → ready) with values: the why of the tick before
+        # the hit showed values too, a moment before the hit's frame redrew it.
+        answered = (
+            "() => { const text = document.querySelector('.why').innerText;"
+            " return text.startsWith('Decision of this tick: init → ready') && text.includes('Values'); }"
+        )
+        wait_until(page, answered, timeout=10000)
         text = str(why.inner_text())
         assert "Asking the server for values" not in text, text
         assert page.locator(".why .why-tree .tree-leaf.taken").count() == 1

@@ -680,6 +680,9 @@ export interface Resync {
  *
  * `option` is the option whose decision makes them part (null: no option, e.g. a fault);
  * `why_fork` and `why_original` what it did on each side (null: not explainable).
+ * `uncompared_before`: fork ticks just before `seq` that could not be compared (a sample of
+ * either run was dropped: the paths may have parted in one of them; 0: the tick before was
+ * compared and equal).
  */
 export interface RobotDivergenceJson {
   robot: number;
@@ -687,6 +690,7 @@ export interface RobotDivergenceJson {
   seq: number;
   t: number;
   original_seq: number;
+  uncompared_before: number;
   fork_path: NamedNode[];
   original_path: NamedNode[];
   option: string | null;

@@ -11,9 +11,15 @@ import pytest
 from pydantic import TypeAdapter
 
 from tests.server.conftest import LiveServer
+from tests.server.session.test_fork import Joined
+from xabsl_studio.engine.emit.json import program_to_json
 from xabsl_studio.examples.soccer.studio import SoccerExample
+from xabsl_studio.server.protocol.commands import Pause, Step
+from xabsl_studio.server.protocol.host import Apply, FromWorker, Sample
+from xabsl_studio.server.protocol.replies import ForkOrigin
 from xabsl_studio.server.protocol.rest import ForkDivergenceJson, NamedNode
-from xabsl_studio.server.session.forkdiff import parting_option
+from xabsl_studio.server.session.forkdiff import ForkDivergence, parting_option
+from xabsl_studio.server.session.frames import FrameRecorder, Ring
 from xabsl_studio.server.session.live import Session
 
 
@@ -98,3 +104,79 @@ def _option(depth: int, option: str, state: str) -> NamedNode:
 )
 def test_the_parting_option(fork: list[NamedNode], original: list[NamedNode], option: str | None) -> None:
     assert parting_option(fork, original) == option
+
+
+class Lossy(Joined):
+    """The joined harness with a second ring that misses the samples of ``lost`` seqs, and a pipe
+    that drops what the simulation lets it drop when ``congested``."""
+
+    def __init__(self, example: Any) -> None:
+        self.lost: set[int] = set()
+        self.congested = False
+        self.received: list[int] = []
+        self.lossy_ring: Ring | None = None
+        super().__init__(example)
+        self.lossy_ring = Ring(4800 / self.sim.behavior_hz, self.sim.behavior_hz)
+        self.lossy = FrameRecorder(self.lossy_ring)
+        for generation in self.generations[-1:]:
+            self._emit(generation)
+
+    def _emit(self, message: FromWorker, droppable: bool = False) -> bool:
+        if isinstance(message, Sample) and self.congested and droppable:
+            return False
+        super()._emit(message, droppable)
+        if isinstance(message, Sample):
+            self.received.append(message.seq)
+            if self.lossy_ring is not None and message.seq not in self.lost:
+                self.lossy.record(self.generation, message)
+        return True
+
+
+def _search_at_once(joined: Joined, root: Path) -> Apply:
+    """The chasers' behavior leaving `chase` for `search` on every tick (compiled clean)."""
+    path = root / "chase" / "chase_ball.xabsl"
+    text = path.read_text(encoding="utf-8").replace("      else\n        stay;", "      else\n        goto search;", 1)
+    compilation = joined.session.compile("chase", {str(path.resolve()): text})
+    assert compilation.program is not None, [d.as_dict() for d in compilation.diagnostics]
+    return Apply("chase", compilation.program, program_to_json(compilation.program, compilation.source_text))
+
+
+def test_a_divergence_behind_dropped_samples_says_the_ticks_it_could_not_compare(soccer_dir: Path) -> None:
+    """CI (a loaded machine) dropped the fork's first samples: the divergence was named at a later
+    tick, "fork search stays", as if that were where the paths part."""
+    joined = Lossy(SoccerExample(soccer_dir, players_per_team=2))
+    joined.run(900)  # playing: the chasers chase
+    fork_at = max(joined.samples) - 60
+    joined.do(_search_at_once(joined, soccer_dir))
+    result = joined.fork(fork_at)
+    start = result["start"]
+    joined.lost = {start + 1, start + 2}
+    joined.run(60)
+    fork = ForkOrigin(seq=fork_at, t=joined.samples[fork_at].t, start=start)
+    whole, lossy = ForkDivergence(fork), ForkDivergence(fork)
+    whole.update(joined.ring)
+    assert joined.lossy_ring is not None
+    lossy.update(joined.lossy_ring)
+    parted = [d for d in whole.found.values() if d["seq"] == start + 1]
+    assert parted and all(d["uncompared_before"] == 0 for d in parted), "all compared: the very tick, nothing unsure"
+    for divergence in parted:
+        seen = lossy.found[divergence["robot"]]
+        assert (seen["seq"], seen["uncompared_before"]) == (start + 3, 2)
+        assert seen["option"] == divergence["option"] == "chase_ball"
+
+
+def test_a_new_generations_first_second_of_samples_is_never_dropped(soccer_dir: Path) -> None:
+    """A fork's parting tick and what a reload changed are in a generation's first ticks, when the
+    server is busiest: a congested pipe drops samples only after them."""
+    joined = Lossy(SoccerExample(soccer_dir, players_per_team=2))
+    joined.run(200)
+    fork_at = max(joined.samples) - 60
+    hz = joined.sim.behavior_hz
+    joined.do(Pause(op="pause"))
+    joined.congested = True
+    start = joined.fork(fork_at)["start"]
+    joined.received.clear()
+    joined.do(Step(op="step", ticks=hz + 20))
+    kept = list(range(start + 1, start + 1 + hz))
+    # the first second arrives whole, the rest is dropped but the tick a paused client shows
+    assert joined.received == [*kept, start + hz + 20]

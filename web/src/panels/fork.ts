@@ -37,6 +37,13 @@ function decision(why: DecisionJson | null): string {
   return why ? (why.stay ? `${why.decided_in} stays` : `${why.decided_in} → ${why.target}`) : "?";
 }
 
+/// One robot's divergence in words: the tick, the parting option and what it did on each side.
+/// Where samples were dropped just before it the paths may have parted earlier: said, not hidden.
+export function divergenceLine(d: RobotDivergenceJson): string {
+  const unsure = d.uncompared_before > 0 ? `(or in one of the ${d.uncompared_before} tick${d.uncompared_before > 1 ? "s" : ""} before it, not sampled) ` : "";
+  return `${d.name}: tick ${d.seq} (${formatClock(d.t)}), ${d.option ?? "?"}: fork ${decision(d.why_fork)} · original ${decision(d.why_original)} ${unsure}`;
+}
+
 /// How often a fork's divergence is asked again while some robot still acts like the original.
 const DIVERGE_POLL_MS = 1000;
 
@@ -115,7 +122,7 @@ export class ForkControls {
       h(
         "li",
         { "data-robot": String(d.robot), "data-seq": String(d.seq) },
-        `${d.name}: tick ${d.seq} (${formatClock(d.t)}), ${d.option ?? "?"}: fork ${decision(d.why_fork)} · original ${decision(d.why_original)} `,
+        divergenceLine(d),
         go(d, d.seq, "fork's tick"),
         " ",
         go(d, d.original_seq, "original's tick"),
