@@ -116,10 +116,9 @@ class Lossy(Joined):
         self.received: list[int] = []
         self.lossy_ring: Ring | None = None
         super().__init__(example)
+        # from here on every sample but the lost ones, with the generation the harness records under
         self.lossy_ring = Ring(4800 / self.sim.behavior_hz, self.sim.behavior_hz)
         self.lossy = FrameRecorder(self.lossy_ring)
-        for generation in self.generations[-1:]:
-            self._emit(generation)
 
     def _emit(self, message: FromWorker, droppable: bool = False) -> bool:
         if isinstance(message, Sample) and self.congested and droppable:
