@@ -210,14 +210,41 @@ def option_names(options: int = 200, seed: int = 31) -> dict[str, str]:
     return {o.name: o.folder for o in _plan(options, seed)}
 
 
-def write_set(folder: Path, options: int = 200, seed: int = 31, agent: str = "soccer") -> Path:
-    """Write the set into ``folder`` (created if missing) and return its agents file."""
+def sensor_symbols(inputs: int, outputs: int) -> str:
+    """A symbols file of ``inputs`` more input and ``outputs`` more output symbols (floats, booleans, enums).
+
+    A team's set declares a couple of hundred (naoth-2018: 195 inputs, 71 outputs) of which a
+    tick reads a few: what the studio samples per robot and tick.
+    """
+    lines = ["/** Sensors and actuators of the generated team set. */", 'namespace team_sensors("Sensors") {']
+    lines.append("  enum sensor.level { low, medium, high };")
+    kinds = ("float", "bool", "float", "enum sensor.level", "float")
+    for i in range(inputs):
+        kind = kinds[i % len(kinds)]
+        lines.append(f"  {kind} input sensor.{_WORDS[i % len(_WORDS)]}.s{i};")
+    for i in range(outputs):
+        kind = kinds[i % len(kinds)]
+        lines.append(f"  {kind} output actuator.{_WORDS[i % len(_WORDS)]}.a{i};")
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def write_set(
+    folder: Path, options: int = 200, seed: int = 31, agent: str = "soccer", inputs: int = 0, outputs: int = 0
+) -> Path:
+    """Write the set into ``folder`` (created if missing) and return its agents file.
+
+    ``inputs``/``outputs``: that many more symbols declared (:func:`sensor_symbols`), none read.
+    """
     folder.mkdir(parents=True, exist_ok=True)
     rnd = random.Random(seed + 1)
     (folder / "Symbols").mkdir(exist_ok=True)
     (folder / "Symbols" / "team_symbols.xabsl").write_text(SYMBOLS)
     (folder / "Symbols" / "team_skills.xabsl").write_text(BEHAVIORS)
     includes = ['include "Symbols/team_symbols.xabsl";', 'include "Symbols/team_skills.xabsl";']
+    if inputs or outputs:
+        (folder / "Symbols" / "team_sensors.xabsl").write_text(sensor_symbols(inputs, outputs))
+        includes.append('include "Symbols/team_sensors.xabsl";')
     for option in _plan(options, seed):
         path = folder / option.folder / f"{option.name}.xabsl"
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -509,7 +509,9 @@ class BenchController:
                     assert self.bench_file is not None
                     self.followers[symbol.name] = self.bench_file.compiled(entry, self._resolver(program, None))
                     self.followed.add(symbol.name)
-                bindings.input(symbol.name, symbol.kind, _reader(values, symbol.name), enum=symbol.enum)
+                # Subscripted by the generated code and read in C by samplers (a getter per input and
+                # tick showed in team-sized sets: hundreds of inputs per robot).
+                bindings.input_item(symbol.name, symbol.kind, values, symbol.name, enum=symbol.enum)
             ours[symbol.name] = bindings.inputs[symbol.name]
         for out in program.outputs.values():
             if not out.internal and out.name not in bindings.outputs:
@@ -774,10 +776,6 @@ def _computed_function(agent: BenchAgent, name: str, function: Callable[..., Val
         return value
 
     return read
-
-
-def _reader(values: dict[str, Value], name: str) -> Callable[[], Value]:
-    return lambda: values[name]
 
 
 def _note(agent: BenchAgent, name: str, args: tuple[Value, ...], value: Value) -> None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
+from itertools import compress
 from typing import Any
 
 import orjson
@@ -103,9 +104,10 @@ class FrameSampler:
 
     __slots__ = (
         "_behavior_params",
-        "_input_converters",
+        "_inputs",
         "_option_params",
-        "_output_converters",
+        "_outputs",
+        "_shown_params",
         "codec",
         "engine",
         "index",
@@ -119,8 +121,10 @@ class FrameSampler:
         #: the shared sampler (assignment values are not part of frames)
         self.reader = AgentSampler(engine, codec.tables, assignments=False)
         # Per symbol (in the sampler's order, which is the codec's): the conversion to a display value.
-        self._input_converters = tuple(self._converter(kind, enum) for _, _, kind, enum in codec.inputs)
-        self._output_converters = tuple(self._converter(kind, enum) for _, _, kind, enum in codec.outputs)
+        self._inputs = Displayed(tuple(self._converter(kind, enum) for _, _, kind, enum in codec.inputs))
+        self._outputs = Displayed(tuple(self._converter(kind, enum) for _, _, kind, enum in codec.outputs))
+        #: per (node kind, id): the raw parameters of its last path node and their display values
+        self._shown_params: dict[tuple[int, int], tuple[list[Any], list[Any]]] = {}
         # Per option / basic behavior id: the conversion of each parameter, in declaration order.
         program = codec.program
         self._option_params = {
@@ -137,19 +141,24 @@ class FrameSampler:
         parameter values are turned into display values (rounded decimals, enum element indices).
         """
         nodes = self.reader.path()
-        option_params, behavior_params = self._option_params, self._behavior_params
+        shown = self._shown_params
         for node in nodes:
-            if node[KIND_INDEX] == OPTION_NODE:
-                if node[OPTION_PARAMS_INDEX]:
-                    node[OPTION_PARAMS_INDEX] = [
-                        convert(v)
-                        for convert, v in zip(option_params[node[ID_INDEX]], node[OPTION_PARAMS_INDEX], strict=True)
-                    ]
-            elif node[BEHAVIOR_PARAMS_INDEX]:
-                node[BEHAVIOR_PARAMS_INDEX] = [
-                    convert(v)
-                    for convert, v in zip(behavior_params[node[ID_INDEX]], node[BEHAVIOR_PARAMS_INDEX], strict=True)
-                ]
+            kind = node[KIND_INDEX]
+            at = OPTION_PARAMS_INDEX if kind == OPTION_NODE else BEHAVIOR_PARAMS_INDEX
+            raw = node[at]
+            if not raw:
+                continue
+            # Most ticks call an option or behavior with the parameters of the tick before: those
+            # are converted once (the lists are equal, compared in C), not on every tick.
+            key = (kind, node[ID_INDEX])
+            last = shown.get(key)
+            if last is not None and last[0] == raw:
+                node[at] = last[1]
+                continue
+            converters = self._option_params if kind == OPTION_NODE else self._behavior_params
+            values = [convert(v) for convert, v in zip(converters[node[ID_INDEX]], raw, strict=True)]
+            shown[key] = (raw, values)
+            node[at] = values
         return nodes
 
     def _converter(self, kind: Kind, enum: str | None) -> Callable[[Any], Value | None]:
@@ -163,12 +172,12 @@ class FrameSampler:
     def inputs(self) -> tuple[Value | None, ...]:
         """The display values of the plain input symbols (None: the host getter failed)."""
         values, unread = self.reader.inputs()
-        return _display(self._input_converters, values, unread)
+        return self._inputs.display(values, unread)
 
     def outputs(self) -> tuple[Value | None, ...]:
         """The display values of the output and internal symbols."""
         values, unread = self.reader.outputs()
-        return _display(self._output_converters, values, unread)
+        return self._outputs.display(values, unread)
 
     def reads(self) -> bytes:
         """What the robot's decisions read in the tick, exact, as JSON (docs/recordings.md ``reads``).
@@ -203,6 +212,56 @@ class FrameSampler:
         if not parts:
             return b""
         return b"," + orjson.dumps(parts, option=_OPT)[1:-1]
+
+
+#: Symbols compared as one slice before value by value (:class:`Displayed`).
+_BLOCK = 16
+
+
+class Displayed:
+    """The display values of one robot's symbols, converting only what changed since the last tick.
+
+    Most symbols keep their value from one tick to the next (of a team-sized set's hundreds of
+    inputs, a few change): the raw tuple is compared with the last one in C, and only the values
+    that differ are converted again. Equal raw values convert to equal display values, so this
+    gives exactly what converting everything gives (0.0 and -0.0 are equal: a zero keeps the
+    sign it was first shown with).
+    """
+
+    __slots__ = ("_converters", "_raw", "_shown")
+
+    def __init__(self, converters: tuple[Callable[[Any], Value | None], ...]) -> None:
+        self._converters = converters
+        self._raw: tuple[Value | None, ...] | None = None
+        self._shown: tuple[Value | None, ...] = ()
+
+    def display(self, values: tuple[Value | None, ...], unread: tuple[str, ...]) -> tuple[Value | None, ...]:
+        """``values`` as display values (None where a getter raised, ``unread`` names them)."""
+        raw = self._raw
+        if unread or raw is None or len(raw) != len(values):
+            shown = _display(self._converters, values, unread)
+            # After a failed read the next tick converts everything again (None is no raw value).
+            self._raw, self._shown = (None if unread else values), shown
+            return shown
+        if values == raw:
+            return self._shown
+        out = list(self._shown)
+        converters = self._converters
+        n = len(values)
+        # Blocks first: a tuple comparison skips identical objects (a value the host did not touch),
+        # so unchanged blocks cost a slice each and only changed ones are compared value by value.
+        for start in range(0, n, _BLOCK):
+            end = start + _BLOCK
+            if values[start:end] == raw[start:end]:
+                continue
+            for i in compress(range(start, min(end, n)), map(operator.ne, values[start:end], raw[start:end])):
+                try:
+                    out[i] = converters[i](values[i])
+                except Exception:  # NaN, infinities, a stray type: unknown
+                    out[i] = None
+        shown = tuple(out)
+        self._raw, self._shown = values, shown
+        return shown
 
 
 def _display(

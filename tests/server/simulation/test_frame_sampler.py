@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import math
+import random
+from collections.abc import Callable
 from types import SimpleNamespace
 
 from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.lang import Compilation
 from xabsl_studio.engine.record import AgentSampler
 from xabsl_studio.engine.runtime import Bindings, Engine
-from xabsl_studio.engine.types import Kind
-from xabsl_studio.server.simulation.sampling import FrameSampler, ProgramCodec
+from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.server.simulation.sampling import Displayed, FrameSampler, ProgramCodec, _display
 
 PROGRAM = read_ic(
     """
@@ -70,3 +74,86 @@ def test_a_host_getter_that_raises_is_none_in_frames_and_unread_in_recordings() 
     broken["c"] = False
     assert dict(zip(names, frames.inputs(), strict=True)) == {"a": 1.235, "b": 2.0, "c": 3.0}
     assert recorder.sample().unread == ()
+
+
+def test_display_values_converted_only_where_raw_values_changed_are_those_of_a_full_conversion() -> None:
+    rng = random.Random(7)
+    calls = [0]
+
+    def counted(value: float) -> float:
+        calls[0] += 1
+        return round(value * 1000) / 1000
+
+    converters = (counted,) * 40
+    shown = Displayed(converters)
+    values: list[float] = [rng.uniform(-1e4, 1e4) for _ in range(40)]
+    for tick in range(300):
+        changed = rng.sample(range(40), rng.choice((0, 1, 3, 40)))
+        for i in changed:
+            values[i] = rng.choice((rng.uniform(-1e4, 1e4), math.nan, math.inf, -0.0, 0.0005))
+        raw = tuple(values)
+        calls[0] = 0
+        got = shown.display(raw, ())
+        converted = calls[0]
+        assert _nan_free(got) == _nan_free(_display(converters, raw, ()))
+        if tick:  # after the first tick, only what differs from the tick before is converted again
+            assert converted <= len(changed) + sum(1 for v in raw if v != v)
+    # a getter that raised: None there, everything converted again on the next tick
+    assert shown.display((None, *values[1:]), ("s0",))[0] is None
+    values[0] = 1.23456
+    assert shown.display(tuple(values), ())[0] == 1.235
+
+
+def _nan_free(values: tuple[object, ...]) -> tuple[object, ...]:
+    return tuple("nan" if v != v else v for v in values)
+
+
+SYMBOLS = 'namespace s("S") { float input speed; bool input flag; float output o; float output p; }\n'
+OPTIONS = {
+    "agents.xabsl": 'include "s.xabsl";\ninclude "go.xabsl";\ninclude "main.xabsl";\nagent x("X", main);\n',
+    "s.xabsl": SYMBOLS,
+    "go.xabsl": "option go { float @speed; initial state s { action { o = @speed; p = 2; } } }\n",
+    "main.xabsl": "option main { initial state s { action { go(speed = speed); } } }\n",
+}
+
+
+def test_path_parameters_follow_every_change_of_the_raw_values(compile_sources: Callable[..., Compilation]) -> None:
+    program = compile_sources(OPTIONS, "agents.xabsl").program
+    assert program is not None
+    world = SimpleNamespace(speed=1.0, flag=True)
+    bindings = Bindings()
+    bindings.input_attribute("speed", Kind.DECIMAL, world, "speed")
+    bindings.input_attribute("flag", Kind.BOOLEAN, world, "flag")
+    for name in ("o", "p"):
+        bindings.output(name, Kind.DECIMAL)
+    engine = Engine(bindings, program)
+    frames = FrameSampler(0, engine, ProgramCodec.build("main", program, engine))
+    for t, speed in enumerate((1.0, 1.0, 2.00049, 2.00049, 1.0, -3.5)):
+        world.speed = speed
+        engine.execute(25 * t)
+        (go,) = [node for node in frames.path() if node[2] == program.options["go"].index]
+        assert go[-1] == [round(speed * 1000) / 1000]
+
+
+def test_a_sampler_of_one_mapping_returns_what_the_behavior_reads_overrides_included(
+    compile_sources: Callable[..., Compilation],
+) -> None:
+    program = compile_sources(OPTIONS, "agents.xabsl").program
+    assert program is not None
+    values: dict[str, Value] = {"speed": 1.0, "flag": True}
+    bindings = Bindings()
+    bindings.input_item("speed", Kind.DECIMAL, values, "speed")
+    bindings.input_item("flag", Kind.BOOLEAN, values, "flag")
+    for name in ("o", "p"):
+        bindings.output(name, Kind.DECIMAL)
+    engine = Engine(bindings, program)
+    sample = engine.input_sampler(("speed", "flag"))
+    engine.execute(0)
+    assert sample() == (1.0, True)
+    values["speed"] = 2.5
+    assert sample() == (2.5, True)
+    engine.root_actions.override_input("speed", 7.0)
+    assert sample() == (7.0, True)
+    engine.root_actions.release_input("speed")
+    assert sample() == (2.5, True)
+    assert engine.output_sampler(("p", "o"))() == (2.0, 1.0)  # stored outputs, in the order asked
