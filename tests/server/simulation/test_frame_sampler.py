@@ -5,14 +5,20 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Callable
+from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
+from tests.navset import write_set
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.lang import Compilation
 from xabsl_studio.engine.record import AgentSampler
 from xabsl_studio.engine.runtime import Bindings, Engine
 from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.engine.worlds.bench import BenchExample
+from xabsl_studio.server.session.live import Session
 from xabsl_studio.server.simulation.sampling import Displayed, FrameSampler, ProgramCodec, _display
+from xabsl_studio.server.simulation.worker import Simulation, WorkerConfig
 
 PROGRAM = read_ic(
     """
@@ -157,3 +163,31 @@ def test_a_sampler_of_one_mapping_returns_what_the_behavior_reads_overrides_incl
     engine.root_actions.release_input("speed")
     assert sample() == (2.5, True)
     assert engine.output_sampler(("p", "o"))() == (2.0, 1.0)  # stored outputs, in the order asked
+
+
+def test_a_team_sized_bench_set_samples_what_a_full_conversion_gives(tmp_path: Path) -> None:
+    # naoth-2018's shape: 195 inputs and 71 outputs per robot, a few of them set by hand
+    write_set(tmp_path, inputs=184, outputs=69)
+    example = BenchExample(tmp_path, robots=3)
+    session = Session(example)
+    programs: Any = {k: (s.running, s.running_json) for k, s in session.programs.items()}
+    sim = Simulation(WorkerConfig(example, seed=3, programs=programs))
+    sim.generation("connect")
+    sampler = sim.samplers[1]
+    assert sampler is not None
+    assert len(sampler.codec.inputs) == 195 and len(sampler.codec.outputs) == 71
+    hand = {5: ("sensor.approach.s0", 1.23456), 9: ("sensor.turn.s3", 2), 14: ("sensor.approach.s0", -0.0004)}
+    for tick in range(20):
+        if tick in hand:
+            symbol, value = hand[tick]
+            sim.world.command("set_input", {"robot": 1, "symbol": symbol, "value": value})  # type: ignore[attr-defined]
+        sim.tick()
+        raw, unread = sampler.reader.inputs()
+        shown = dict(zip((name for _, name, *_ in sampler.codec.inputs), sampler.inputs(), strict=True))
+        assert sampler.inputs() == _display(sampler._inputs._converters, raw, unread)
+        if tick >= 14:
+            assert shown["sensor.approach.s0"] == -0.0 and shown["sensor.turn.s3"] == 2  # enum: element index
+        elif tick >= 5:
+            assert shown["sensor.approach.s0"] == 1.235
+        raw_out, unread_out = sampler.reader.outputs()
+        assert sampler.outputs() == _display(sampler._outputs._converters, raw_out, unread_out)
