@@ -123,16 +123,26 @@ OPTIONS = {
 }
 
 
-def test_path_parameters_follow_every_change_of_the_raw_values(compile_sources: Callable[..., Compilation]) -> None:
+def _options_engine(compile_sources: Callable[..., Compilation], bind: Callable[[Bindings], None]) -> Engine:
+    """An engine of OPTIONS whose two inputs ``bind`` registers (the outputs are the engine's)."""
     program = compile_sources(OPTIONS, "agents.xabsl").program
     assert program is not None
-    world = SimpleNamespace(speed=1.0, flag=True)
     bindings = Bindings()
-    bindings.input_attribute("speed", Kind.DECIMAL, world, "speed")
-    bindings.input_attribute("flag", Kind.BOOLEAN, world, "flag")
+    bind(bindings)
     for name in ("o", "p"):
         bindings.output(name, Kind.DECIMAL)
-    engine = Engine(bindings, program)
+    return Engine(bindings, program)
+
+
+def test_path_parameters_follow_every_change_of_the_raw_values(compile_sources: Callable[..., Compilation]) -> None:
+    world = SimpleNamespace(speed=1.0, flag=True)
+
+    def bind(bindings: Bindings) -> None:
+        bindings.input_attribute("speed", Kind.DECIMAL, world, "speed")
+        bindings.input_attribute("flag", Kind.BOOLEAN, world, "flag")
+
+    engine = _options_engine(compile_sources, bind)
+    program = engine.program
     frames = FrameSampler(0, engine, ProgramCodec.build("main", program, engine))
     for t, speed in enumerate((1.0, 1.0, 2.00049, 2.00049, 1.0, -3.5)):
         world.speed = speed
@@ -144,15 +154,13 @@ def test_path_parameters_follow_every_change_of_the_raw_values(compile_sources: 
 def test_a_sampler_of_one_mapping_returns_what_the_behavior_reads_overrides_included(
     compile_sources: Callable[..., Compilation],
 ) -> None:
-    program = compile_sources(OPTIONS, "agents.xabsl").program
-    assert program is not None
     values: dict[str, Value] = {"speed": 1.0, "flag": True}
-    bindings = Bindings()
-    bindings.input_item("speed", Kind.DECIMAL, values, "speed")
-    bindings.input_item("flag", Kind.BOOLEAN, values, "flag")
-    for name in ("o", "p"):
-        bindings.output(name, Kind.DECIMAL)
-    engine = Engine(bindings, program)
+
+    def bind(bindings: Bindings) -> None:
+        bindings.input_item("speed", Kind.DECIMAL, values, "speed")
+        bindings.input_item("flag", Kind.BOOLEAN, values, "flag")
+
+    engine = _options_engine(compile_sources, bind)
     sample = engine.input_sampler(("speed", "flag"))
     engine.execute(0)
     assert sample() == (1.0, True)
