@@ -16,9 +16,9 @@ unknown and never matches. docs/queries.md is the user's description.
 from __future__ import annotations
 
 from xabsl_studio.engine.errors import QueryError
-from xabsl_studio.engine.query.columns import Selection
 from xabsl_studio.engine.query.index import QueryConditionError, QueryIndex, query_recording, query_ticks
 from xabsl_studio.engine.query.result import Interval, QueryResult
+from xabsl_studio.engine.record.columns import Selection
 
 __all__ = [
     "Interval",

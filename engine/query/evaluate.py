@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from xabsl_studio.engine import ir
-from xabsl_studio.engine.query.columns import CallTable, Codes, Floats, Mask, RobotColumns
 from xabsl_studio.engine.query.language import CompiledQuery, Predicate, state_element
+from xabsl_studio.engine.record.columns import CallTable, Codes, Floats, Mask, RobotColumns
 
 __all__ = ["evaluate"]
 

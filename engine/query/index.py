@@ -1,13 +1,13 @@
 """Queries over recorded ticks: the columns of a recording or of tick views, asked many questions.
 
-:class:`QueryIndex` holds the columns (:mod:`xabsl_studio.engine.query.columns`) of some robots'
+:class:`QueryIndex` holds the columns (:mod:`xabsl_studio.engine.record.columns`) of some robots'
 ticks and answers :meth:`QueryIndex.query`: check the condition against each program generation
 the robots ran (:func:`~xabsl_studio.engine.query.language.compile_query`), evaluate it over every
 tick at once (:mod:`xabsl_studio.engine.query.evaluate`) and cut the ticks where it is true into
 intervals of consecutive ticks.
 
 * :meth:`QueryIndex.from_recording` reads a recording's agents' tick messages, keeping what a
-  :class:`~xabsl_studio.engine.query.columns.Selection` names (default: everything); a later query
+  :class:`~xabsl_studio.engine.record.columns.Selection` names (default: everything); a later query
   that needs a name the columns lack reads the file again for it (and keeps what it had).
 * :meth:`QueryIndex.from_ticks` takes decoded tick views (the live history, an attached
   session's, a part of a recording) and keeps every input function's calls.
@@ -27,11 +27,11 @@ import numpy as np
 from xabsl_studio.engine.errors import QueryError
 from xabsl_studio.engine.lang.condition import CONDITION_FILE
 from xabsl_studio.engine.lang.diagnostics import Diagnostic
-from xabsl_studio.engine.query.columns import Codes, ColumnsBuilder, RobotColumns, Selection
 from xabsl_studio.engine.query.evaluate import evaluate
 from xabsl_studio.engine.query.language import CompiledQuery, compile_query
 from xabsl_studio.engine.query.result import Interval, QueryResult
 from xabsl_studio.engine.query.scan import read_columns, seed_codes
+from xabsl_studio.engine.record.columns import Codes, ColumnsBuilder, RobotColumns, Selection
 from xabsl_studio.engine.record.reader import ProgramView, Recording, TickView
 
 __all__ = ["QueryConditionError", "QueryIndex", "query_recording", "query_ticks"]

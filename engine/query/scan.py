@@ -7,7 +7,7 @@ a range needs nothing of the ticks before it), read by forked worker processes a
 parts are joined in order (:func:`join_columns`): the same columns a single pass gives, array for
 array (tests/query/test_scan.py).
 
-Enum elements are numbered by a :class:`~xabsl_studio.engine.query.columns.Codes` that every part
+Enum elements are numbered by a :class:`~xabsl_studio.engine.record.columns.Codes` that every part
 must share. The codes are seeded from the recording's programs before the workers fork, so each
 worker numbers every element the same way; a part that met an element outside the programs
 (a foreign or damaged recording) would number it on its own, so then the file is read again in
@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from xabsl_studio.engine.lang import no_cycle_collection
-from xabsl_studio.engine.query.columns import (
+from xabsl_studio.engine.record.columns import (
     CallTable,
     Codes,
     ColumnsBuilder,

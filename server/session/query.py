@@ -25,8 +25,8 @@ import orjson
 
 from xabsl_studio.engine.errors import QueryError
 from xabsl_studio.engine.query import QueryIndex, QueryResult, query_ticks
-from xabsl_studio.engine.query.columns import Selection
 from xabsl_studio.engine.record import AgentTick, Recording, RecordingError, TickView
+from xabsl_studio.engine.record.columns import Selection
 from xabsl_studio.engine.record.reader import ProgramView
 from xabsl_studio.server.protocol.commands import Query
 from xabsl_studio.server.session import frames

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from xabsl_studio.engine.query import query_recording, scan
-from xabsl_studio.engine.query.columns import Codes, RobotColumns, Selection
 from xabsl_studio.engine.record import Recording
+from xabsl_studio.engine.record.columns import Codes, RobotColumns, Selection
 
 
 def _same(a: RobotColumns, b: RobotColumns) -> None:
