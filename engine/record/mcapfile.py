@@ -10,8 +10,10 @@ open chunk, and its index entry two list appends, about 0.3 us in all. Files are
 
 Layout of a file: magic, Header; the data section of Chunk records (zstd; in each, the Schema and
 Channel records registered since the previous chunk, then the Message records), each Chunk
-followed by one MessageIndex record per channel it holds; DataEnd (with the data section's
-CRC32); the summary section (every Schema, every Channel, Statistics, one ChunkIndex per chunk);
+followed by one MessageIndex record per channel it holds, and Attachment records between chunks
+(:meth:`McapWriter.attach`); DataEnd (with the data section's
+CRC32); the summary section (every Schema, every Channel, Statistics, one ChunkIndex per chunk,
+one AttachmentIndex per attachment);
 the summary offset section (one SummaryOffset per group); Footer (with the summary CRC32);
 magic. Chunks carry the CRC32 of their uncompressed records.
 """
@@ -38,6 +40,8 @@ _MESSAGE = 0x05
 _CHUNK = 0x06
 _MESSAGE_INDEX = 0x07
 _CHUNK_INDEX = 0x08
+_ATTACHMENT = 0x09
+_ATTACHMENT_INDEX = 0x0A
 _STATISTICS = 0x0B
 _SUMMARY_OFFSET = 0x0E
 _DATA_END = 0x0F
@@ -81,6 +85,7 @@ class McapWriter:
         self._schemas: list[bytes] = []
         self._channels: list[bytes] = []
         self._chunk_indexes: list[bytes] = []
+        self._attachment_indexes: list[bytes] = []
         self._counts: dict[int, int] = {}
         self._chunks = 0
         self._first = -1
@@ -144,6 +149,27 @@ class McapWriter:
             self._chunk_end = log_time
         if len(chunk) >= self._chunk_size:
             self._close_chunk()
+
+    def attach(self, name: str, media_type: str, data: bytes, log_time: int = 0, create_time: int = 0) -> None:
+        """Write an Attachment record (a file embedded in the recording) and index it in the summary.
+
+        Attachments live in the data section outside chunks, so the open chunk is closed first:
+        the messages before the attachment stay before it in the file.
+        """
+        self._close_chunk()
+        body = struct.pack("<QQ", log_time, create_time) + _string(name) + _string(media_type)
+        body += struct.pack("<Q", len(data)) + data
+        record = _record(_ATTACHMENT, body + struct.pack("<I", zlib.crc32(body)))
+        offset = self._offset
+        self._write(record)
+        self._attachment_indexes.append(
+            _record(
+                _ATTACHMENT_INDEX,
+                struct.pack("<QQQQQ", offset, len(record), log_time, create_time, len(data))
+                + _string(name)
+                + _string(media_type),
+            )
+        )
 
     def _close_chunk(self) -> None:
         if not self._index:  # only schemas and channels: they wait for the next message
@@ -211,7 +237,7 @@ class McapWriter:
                 sum(self._counts.values()),
                 len(self._schemas),
                 len(self._channels),
-                0,
+                len(self._attachment_indexes),
                 0,
                 self._chunks,
                 max(self._first, 0),
@@ -224,6 +250,7 @@ class McapWriter:
         groups.append((_CHANNEL, b"".join(self._channels)))
         groups.append((_STATISTICS, statistics))
         groups.append((_CHUNK_INDEX, b"".join(self._chunk_indexes)))
+        groups.append((_ATTACHMENT_INDEX, b"".join(self._attachment_indexes)))
         summary = bytearray()
         offsets = bytearray()
         for opcode, data in groups:

@@ -13,8 +13,9 @@ a ``struct.error``, ``MemoryError`` or a read of gigabytes.
 * :func:`scan_chunks` reads the data section front to back and stops at the first record that is
   cut or damaged (a file whose writer died: ``xabsl_studio.engine.record.recover``).
 
-Only what recordings use is read: chunked files, ``zstd`` or uncompressed chunks. Other records
-(attachments, metadata, message indexes) are skipped by their length.
+Only what recordings use is read: chunked files, ``zstd`` or uncompressed chunks, and attachments
+found through their summary index (:meth:`McapFile.attachment`). Other records (metadata, message
+indexes) are skipped by their length.
 """
 
 from __future__ import annotations
@@ -33,8 +34,10 @@ from xabsl_studio.engine.errors import RecordError
 from xabsl_studio.engine.record.mcapfile import MAGIC
 
 __all__ = [
+    "MAX_ATTACHMENT_BYTES",
     "MAX_CHUNK_BYTES",
     "MAX_SUMMARY_BYTES",
+    "AttachmentIndex",
     "Channel",
     "ChunkIndex",
     "Malformed",
@@ -65,6 +68,10 @@ _CHUNK = 0x06
 _CHUNK_INDEX = 0x08
 _STATISTICS = 0x0B
 _DATA_END = 0x0F
+#: The largest attachment read (a 10-minute 10-robot match's stored columns take a few MB).
+MAX_ATTACHMENT_BYTES = 512 * 1024 * 1024
+_ATTACHMENT = 0x09
+_ATTACHMENT_INDEX = 0x0A
 #: Footer record: opcode, length 20, summary start, summary offset start, summary CRC; then the magic.
 _TAIL = 1 + 8 + 20 + len(MAGIC)
 
@@ -160,6 +167,24 @@ class ChunkIndex:
     compression: str
     compressed_size: int
     uncompressed_size: int
+
+
+@dataclass(frozen=True, slots=True)
+class AttachmentIndex:
+    """An AttachmentIndex record (where an attachment is, its name and size)."""
+
+    offset: int
+    length: int
+    log_time: int
+    create_time: int
+    data_size: int
+    name: str
+    media_type: str
+
+
+def _attachment_index(c: _Cursor) -> AttachmentIndex:
+    offset, length, log_time, create_time, size = c.u64(), c.u64(), c.u64(), c.u64(), c.u64()
+    return AttachmentIndex(offset, length, log_time, create_time, size, c.string(), c.string())
 
 
 def _schema(c: _Cursor) -> Schema:
@@ -302,6 +327,7 @@ class McapFile:
     channels: dict[int, Channel] = field(default_factory=dict)
     counts: dict[int, int] = field(default_factory=dict)
     chunks: list[ChunkIndex] = field(default_factory=list)
+    attachments: list[AttachmentIndex] = field(default_factory=list)
 
     @classmethod
     def open(cls, path: str, stream: BinaryIO) -> McapFile:
@@ -363,10 +389,52 @@ class McapFile:
                 if index.length > MAX_CHUNK_BYTES + 1024:
                     raise Malformed(f"a chunk of {index.length} bytes (at most {MAX_CHUNK_BYTES} are read)")
                 self.chunks.append(index)
+            elif opcode == _ATTACHMENT_INDEX:
+                attachment = _attachment_index(body)
+                if not len(MAGIC) <= attachment.offset <= attachment.offset + attachment.length <= summary_start:
+                    raise Malformed(
+                        f"an attachment index points at bytes {attachment.offset}+{attachment.length}, outside the data"
+                    )
+                self.attachments.append(attachment)
         for channel in self.channels.values():
             if channel.schema_id and channel.schema_id not in self.schemas:
                 raise Malformed(f"channel {channel.topic!r} names schema {channel.schema_id}, which is not in it")
         self.chunks.sort(key=lambda c: (c.start, c.offset))
+
+    def attachment(self, index: AttachmentIndex) -> bytes:
+        """The data of the attachment ``index`` points at, checked against the index and its CRC.
+
+        Raises:
+            RecordingError: the attachment is not where its index says, larger than
+                :data:`MAX_ATTACHMENT_BYTES`, or damaged.
+        """
+        try:
+            if index.data_size > MAX_ATTACHMENT_BYTES:
+                raise Malformed(f"{index.data_size} bytes (at most {MAX_ATTACHMENT_BYTES} are read)")
+            data = self._read_at(index.offset, index.length)
+            c = _Cursor(data)
+            opcode = c.buffer[c._take(1)]
+            length = c.u64()
+            if opcode != _ATTACHMENT or length != index.length - 9:
+                raise Malformed("no attachment record where its index points")
+            body = _Cursor(data, c.pos, c.pos + length)
+            log_time, create_time, name, media_type = body.u64(), body.u64(), body.string(), body.string()
+            size = body.u64()
+            if (log_time, create_time, name, media_type, size) != (
+                index.log_time,
+                index.create_time,
+                index.name,
+                index.media_type,
+                index.data_size,
+            ):
+                raise Malformed("the attachment record does not match its index")
+            content = body.raw(size)
+            crc = body.u32()
+            if crc and zlib.crc32(memoryview(data)[9 : body.pos - 4]) != crc:
+                raise Malformed("its CRC does not match its contents (the file is damaged)")
+            return content
+        except Malformed as error:
+            raise _error(self.path, f"damaged attachment {index.name!r} at byte {index.offset}: {error}") from None
 
     def chunk_records(self, index: ChunkIndex) -> bytes:
         """The uncompressed records of the chunk ``index`` points at.

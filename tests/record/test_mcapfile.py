@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import random
 
+import pytest
 import zstandard
 from mcap.reader import make_reader
 from mcap.records import Chunk, DataEnd, Footer, Message, MessageIndex, Statistics
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from xabsl_studio.engine.record.mcapfile import McapWriter
+from xabsl_studio.engine.record.mcapread import MAX_ATTACHMENT_BYTES, McapFile, RecordingError
 
 
 def _file(chunk_size: int, messages: int = 500, compress: bool = True) -> tuple[bytes, list[tuple[int, int, bytes]]]:
@@ -122,3 +125,56 @@ def test_chunk_and_file_time_ranges_hold_messages_out_of_order() -> None:
     assert (index.message_start_time, index.message_end_time) == (10, 70)
     assert (summary.statistics.message_start_time, summary.statistics.message_end_time) == (10, 70)
     assert sorted(m.log_time for _, _, m in reader.iter_messages()) == [10, 20, 50, 70]
+
+
+def _attached() -> tuple[bytes, list[tuple[str, bytes]]]:
+    stream = io.BytesIO()
+    writer = McapWriter(stream, chunk_size=4096)
+    writer.start(profile="xabsl", library="test")
+    schema = writer.register_schema("thing", "jsonschema", b'{"type": "object"}')
+    channel = writer.register_channel("/topic", "json", schema)
+    attached = [("first.bin", bytes(range(256)) * 3), ("second.bin", b"")]
+    for k in range(300):
+        writer.add_message(channel, k, b'{"k": %d}' % k, k, k)
+        if k == 120:  # mid-file: the open chunk closes before it
+            writer.attach(attached[0][0], "application/octet-stream", attached[0][1], log_time=k, create_time=7)
+    writer.attach(attached[1][0], "application/octet-stream", attached[1][1], log_time=300)
+    writer.finish()
+    return stream.getvalue(), attached
+
+
+def test_attachments_read_back_with_the_mcap_reader_and_ours() -> None:
+    data, attached = _attached()
+    reader = make_reader(io.BytesIO(data), validate_crcs=True)
+    assert [(a.name, a.data) for a in reader.iter_attachments()] == attached
+    assert [m.log_time for _, _, m in reader.iter_messages()] == list(range(300))
+    summary = reader.get_summary()
+    assert summary is not None and summary.statistics is not None
+    assert summary.statistics.attachment_count == 2
+    assert [(i.name, i.log_time, i.create_time, i.data_size) for i in summary.attachment_indexes] == [
+        ("first.bin", 120, 7, 768),
+        ("second.bin", 300, 0, 0),
+    ]
+    records = list(StreamReader(io.BytesIO(data), skip_magic=False).records)
+    assert sum(isinstance(r, Footer) for r in records) == 1
+
+    ours = McapFile.open("attached.mcap", io.BytesIO(data))
+    assert [(i.name, ours.attachment(i)) for i in ours.attachments] == attached
+
+
+def test_a_damaged_attachment_is_a_recording_error_naming_it() -> None:
+    data, _ = _attached()
+    ours = McapFile.open("attached.mcap", io.BytesIO(data))
+    index = ours.attachments[0]
+    start = data.index(bytes(range(256)))
+    damaged = bytearray(data)
+    damaged[start + 10] ^= 0xFF
+    broken = McapFile.open("attached.mcap", io.BytesIO(bytes(damaged)))
+    with pytest.raises(RecordingError, match=r"damaged attachment 'first\.bin'.*CRC"):
+        broken.attachment(broken.attachments[0])
+    moved = dataclasses.replace(index, offset=index.offset + 1)
+    with pytest.raises(RecordingError, match="no attachment record"):
+        ours.attachment(moved)
+    huge = dataclasses.replace(index, data_size=MAX_ATTACHMENT_BYTES + 1)
+    with pytest.raises(RecordingError, match="at most"):
+        ours.attachment(huge)
