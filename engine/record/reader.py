@@ -33,11 +33,11 @@ from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record import validate as V
-from xabsl_studio.engine.record.mcapread import McapFile, RecordingError, open_regular
+from xabsl_studio.engine.record.mcapread import AttachmentIndex, McapFile, RecordingError, open_regular
 from xabsl_studio.engine.runtime import AssignmentNode, BehaviorNode, OptionNode, Root
 from xabsl_studio.engine.types import Kind, Value
 
-__all__ = ["AgentTick", "ProgramView", "Recording", "RecordingError", "TickView"]
+__all__ = ["AgentTick", "ProgramBook", "ProgramView", "Recording", "RecordingError", "TickView"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -183,6 +183,57 @@ class _AgentState:
         self.gen = 0
 
 
+class ProgramBook:
+    """A recording's program generations as its messages bring them, for its reader and its writer.
+
+    The header names each agent's program key and its value tables; a ``/xabsl/program`` message
+    adds a generation (with its key's tables at that point); a reload event that carries tables
+    replaces the key's tables, and those of the generation it names. Messages must be checked
+    before (``validate``): the book only keeps them.
+    """
+
+    def __init__(self, header: dict[str, Any], path: str = "") -> None:
+        self.path = path
+        self.tables: dict[str, Any] = dict(header["tables"])
+        self.program_of: dict[str, Any] = {a["name"]: a["program"] for a in header["agents"]}
+        #: (key, gen) -> view, in the order the messages came
+        self.views: dict[tuple[str, int], ProgramView] = {}
+
+    def add_program(self, data: dict[str, Any]) -> ProgramView:
+        """A ``/xabsl/program`` message: its generation."""
+        view = ProgramView(
+            data["key"],
+            data["gen"],
+            data["seq"],
+            data["program"],
+            self.tables[data["key"]],
+            tuple(data.get("changed_files", ())),
+            data.get("sources"),
+            data.get("ic"),
+            self.path,
+        )
+        self.views[(view.key, view.gen)] = view
+        return view
+
+    def add_event(self, data: dict[str, Any]) -> None:
+        """An ``/xabsl/events`` message: a reload's tables replace its key's."""
+        if data["kind"] == "reload" and data.get("data", {}).get("tables"):
+            self.tables[data["data"]["key"]] = data["data"]["tables"]
+            key = (data["data"]["key"], data["data"]["gen"])
+            if key in self.views:
+                old = self.views[key]
+                self.views[key] = dataclasses.replace(old, tables=self.tables[old.key])
+
+    def program(self, agent: str, gen: int) -> ProgramView | None:
+        """The generation ``gen`` of ``agent``'s program (the latest at or before it; None: none)."""
+        key = self.program_of.get(agent)
+        best: ProgramView | None = None
+        for (k, g), view in self.views.items():
+            if k == key and g <= gen and (best is None or g > best.gen):
+                best = view
+        return best
+
+
 class Recording:
     """An opened recording (see the module docstring). Use as a context manager or ``close()``.
 
@@ -206,6 +257,9 @@ class Recording:
 
     def _open(self) -> None:
         self._file = McapFile.open(self.path, self._stream)
+        for attachment in self._file.attachments:
+            # checked now (a few MB, their CRCs), so that every reader refuses a damaged file alike
+            self._file.attachment(attachment)
         self._topics = {ch.id: ch.topic for ch in self._file.channels.values()}
         by_topic: dict[str, list[int]] = {}
         for channel, topic in self._topics.items():
@@ -226,36 +280,21 @@ class Recording:
         self.key_every = int(header["key_every"])
         self.agents: list[str] = [a["name"] for a in header["agents"] if a["program"] is not None]
         self._program_of = {a["name"]: a["program"] for a in header["agents"]}
-        self.programs: dict[tuple[str, int], ProgramView] = {}
         self.events: list[dict[str, Any]] = []
         self.static_scenes: list[dict[str, Any]] = []
-        tables = dict(header["tables"])
+        book = self._book = ProgramBook(header, self.path)
+        #: every program generation, (key, gen) -> view, in file order
+        self.programs: dict[tuple[str, int], ProgramView] = book.views
         for channel, _time, raw in self._messages([S.PROGRAM, S.EVENTS, S.WORLD_STATIC]):
             topic = self._topics[channel]
             data = self._json(raw, f"a message on {topic}")
             if topic == S.PROGRAM:
-                self._check(V.check_program, data, tables)
-                view = ProgramView(
-                    data["key"],
-                    data["gen"],
-                    data["seq"],
-                    data["program"],
-                    tables[data["key"]],
-                    tuple(data.get("changed_files", ())),
-                    data.get("sources"),
-                    data.get("ic"),
-                    self.path,
-                )
-                self.programs[(view.key, view.gen)] = view
+                self._check(V.check_program, data, book.tables)
+                book.add_program(data)
             elif topic == S.EVENTS:
                 self._check(V.check_event, data)
                 self.events.append(data)
-                if data["kind"] == "reload" and data.get("data", {}).get("tables"):
-                    tables[data["data"]["key"]] = data["data"]["tables"]
-                    key = (data["data"]["key"], data["data"]["gen"])
-                    if key in self.programs:
-                        old = self.programs[key]
-                        self.programs[key] = dataclasses.replace(old, tables=tables[old.key])
+                book.add_event(data)
             else:
                 self._check(V.check, data, {"seq": V.SEQ, "scene": dict}, "a static scene")
                 self.static_scenes.append(data)
@@ -336,6 +375,24 @@ class Recording:
             for ch in self._file.channels.values()
         }
 
+    def attachments(self, name: str, media_type: str) -> list[AttachmentIndex]:
+        """The file's attachments called ``name`` of ``media_type``, in file order."""
+        found = [a for a in self._file.attachments if a.name == name and a.media_type == media_type]
+        return sorted(found, key=lambda a: a.offset)
+
+    def attachment(self, index: AttachmentIndex) -> bytes:
+        """The data of one attachment (see :meth:`attachments`).
+
+        Raises:
+            RecordingError: the attachment is damaged or not where its index says.
+        """
+        return self._file.attachment(index)
+
+    def tick_messages(self, agent: str) -> int:
+        """How many tick messages of ``agent`` the file's statistics count (0: not a recorded agent)."""
+        counts = self._file.counts
+        return sum(counts.get(c, 0) for c in self._by_topic.get(S.agent_topic(agent), ()))
+
     def program_key(self, agent: str) -> str | None:
         """The key of the behavior set ``agent`` runs (None: no XABSL program)."""
         key = self._program_of.get(agent)
@@ -343,13 +400,9 @@ class Recording:
 
     def program(self, agent: str, gen: int) -> ProgramView:
         """The program generation ``gen`` of ``agent``'s program key (the latest one at or before ``gen``)."""
-        key = self._program_of[agent]
-        best: ProgramView | None = None
-        for (k, g), view in self.programs.items():
-            if k == key and g <= gen and (best is None or g > best.gen):
-                best = view
+        best = self._book.program(agent, gen)
         if best is None:
-            raise self._invalid(f"no program {key!r} of generation {gen} in it")
+            raise self._invalid(f"no program {self._program_of.get(agent)!r} of generation {gen} in it")
         return best
 
     # -- ticks ----------------------------------------------------------------------------------------
