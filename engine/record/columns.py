@@ -24,7 +24,7 @@ value is carried over a key frame or guessed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,7 +33,19 @@ import numpy.typing as npt
 
 from xabsl_studio.engine.record.reader import AgentTick, ProgramView
 
-__all__ = ["CallTable", "Codes", "ColumnsBuilder", "NodeTable", "RobotColumns", "Selection"]
+__all__ = [
+    "CallTable",
+    "Codes",
+    "ColumnsBuilder",
+    "NodeTable",
+    "ProgramCodes",
+    "RobotColumns",
+    "RobotEvents",
+    "Selection",
+    "raw_number",
+    "scalar",
+    "seed_codes",
+]
 
 Floats = npt.NDArray[np.float64]
 Ints = npt.NDArray[np.int64]
@@ -113,7 +125,72 @@ class RobotColumns:
         return len(self.seq)
 
 
-def _scalar(value: Any, codes: Codes) -> float | None:
+@dataclass
+class RobotEvents:
+    """One robot's ticks with each value as its changes: a tick row per change, the value, known.
+
+    What :class:`ColumnsBuilder` collects before the values are spread over every tick, and what a
+    recording stores of its ticks (``xabsl_studio.engine.record.stored``); :meth:`columns` spreads
+    them. ``functions`` are the input functions whose calls were collected.
+    """
+
+    robot: str
+    seq: Ints
+    t: Ints
+    gen: Ints
+    events: dict[str, tuple[Ints, Floats, Mask]]
+    nodes: NodeTable
+    calls: dict[str, CallTable]
+    functions: frozenset[str]
+    has_reads: bool
+
+    def __len__(self) -> int:
+        return len(self.seq)
+
+    def columns(self, programs: dict[int, ProgramView], selection: Selection) -> RobotColumns:
+        """The columns: each value in force at each tick (the last change at or before it)."""
+        n = len(self.seq)
+        positions = np.arange(n)
+        values: dict[str, tuple[Floats, Mask]] = {}
+        for name, (rows, event_values, known_event) in self.events.items():
+            index = np.searchsorted(rows, positions, side="right") - 1
+            has = index >= 0
+            index = np.where(has, index, 0)
+            values[name] = (event_values[index], has & known_event[index])
+        return RobotColumns(
+            self.robot,
+            self.seq,
+            self.t,
+            self.gen,
+            programs,
+            values,
+            self.nodes,
+            calls=self.calls,
+            functions=self.functions,
+            selection=selection,
+            has_reads=self.has_reads,
+        )
+
+
+def seed_codes(views: Iterable[ProgramView], codes: Codes) -> None:
+    """Number every enum element of the programs, in their order, as a recording's reader does.
+
+    A reader numbers the elements of the recording's programs before it reads any tick, so that
+    readers of parts of the file (``xabsl_studio.engine.query.scan``) and the recording's writer
+    (``xabsl_studio.engine.record.stored``) number them alike.
+    """
+    for view in views:
+        for enum in view.description.get("enums", ()):
+            for element in enum.get("elements", ()):
+                if isinstance(element, str):
+                    codes.code(element)
+        for table in view.tables.get("enums", {}).values():
+            for element in table.values():
+                if isinstance(element, str):
+                    codes.code(element)
+
+
+def scalar(value: Any, codes: Codes) -> float | None:
     """A recorded value as a number: bools 0/1, enum elements their code, None unknown."""
     if value is None:
         return None
@@ -136,8 +213,20 @@ def _flatten(tree: Mapping[str, Any], into: dict[str, Any], prefix: str = "") ->
             into[name] = value
 
 
-class _Program:
-    """What the builder needs of one program generation: enum tables, function ids."""
+def raw_number(value: Any, enum: str | None, tables: dict[str, dict[int, int]], codes: Codes) -> float | None:
+    """A raw (host) value as a number: an enum's host integer becomes its element's code (``tables``)."""
+    if value is None or isinstance(value, list | dict | str):
+        return None
+    if enum is not None:
+        if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+            return None
+        code = tables.get(enum, {}).get(int(value))
+        return None if code is None else float(code)
+    return scalar(value, codes)
+
+
+class ProgramCodes:
+    """What columns need of one program generation: enum tables as codes, parameter enums, function ids."""
 
     def __init__(self, view: ProgramView, functions: frozenset[str] | None, codes: Codes) -> None:
         description = view.description
@@ -245,7 +334,7 @@ class ColumnsBuilder:
             if self.selection.symbols is None
             else [(name, tuple(name.split("."))) for name in sorted(self.selection.symbols)]
         )
-        self._programs: dict[int, _Program] = {}
+        self._programs: dict[int, ProgramCodes] = {}
         self._node_ids: dict[int, tuple[frozenset[int] | None, frozenset[int] | None]] = {}
         self.seq: list[int] = []
         self.t: list[int] = []
@@ -259,10 +348,10 @@ class ColumnsBuilder:
         self._last_gen = -1
         self._last_ids: tuple[frozenset[int] | None, frozenset[int] | None] = (None, None)
 
-    def _program(self, gen: int) -> _Program:
+    def _program(self, gen: int) -> ProgramCodes:
         found = self._programs.get(gen)
         if found is None:
-            found = self._programs[gen] = _Program(self._program_of(self.robot, gen), self.functions, self.codes)
+            found = self._programs[gen] = ProgramCodes(self._program_of(self.robot, gen), self.functions, self.codes)
         return found
 
     def _ids(self, gen: int) -> tuple[frozenset[int] | None, frozenset[int] | None]:
@@ -377,7 +466,7 @@ class ColumnsBuilder:
         for name, value in values.items():
             self._set(row, name, value)
 
-    def _collect_calls(self, row: int, program: _Program, reads: list[Any]) -> None:
+    def _collect_calls(self, row: int, program: ProgramCodes, reads: list[Any]) -> None:
         functions = program.functions
         if not functions:
             return
@@ -399,46 +488,33 @@ class ColumnsBuilder:
             table[2].append(self._raw(entry[-1], result_enum, program.read_enums))
 
     def _raw(self, value: Any, enum: str | None, tables: dict[str, dict[int, int]]) -> float | None:
-        """A raw (host) value as a number: an enum's host integer becomes its element's code."""
-        if value is None or isinstance(value, list | dict | str):
-            return None
-        if enum is not None:
-            if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
-                return None
-            code = tables.get(enum, {}).get(int(value))
-            return None if code is None else float(code)
-        return _scalar(value, self.codes)
+        return raw_number(value, enum, tables, self.codes)
 
     def finish(self) -> RobotColumns:
         """The columns of every tick added so far."""
-        n = len(self.seq)
-        seq = np.asarray(self.seq, dtype=np.int64)
-        values: dict[str, tuple[Floats, Mask]] = {}
-        positions = np.arange(n)
-        enums = self._enum_tables()
-        for name, (rows, recorded) in self._events.items():
-            events = np.asarray(rows, dtype=np.int64)
-            raw = self._numbers(recorded, enums.get(name))
-            known_event = np.fromiter((v is not None for v in raw), dtype=np.bool_, count=len(raw))
-            event_values = np.fromiter((np.nan if v is None else v for v in raw), dtype=np.float64, count=len(raw))
-            # the event in force at each tick: the last one at or before it (one per row and name)
-            index = np.searchsorted(events, positions, side="right") - 1
-            has = index >= 0
-            index = np.where(has, index, 0)
-            values[name] = (event_values[index], has & known_event[index])
+        events = self.events()
+        return events.columns({gen: program.view for gen, program in self._programs.items()}, self.selection)
+
+    def events(self) -> RobotEvents:
+        """The ticks added so far with each value as its changes (what a recording stores of them)."""
         nodes = self._node_table()  # first: it reads the programs of every generation seen
-        return RobotColumns(
+        enums = self._enum_tables()
+        events: dict[str, tuple[Ints, Floats, Mask]] = {}
+        for name, (rows, recorded) in self._events.items():
+            raw = self._numbers(recorded, enums.get(name))
+            known = np.fromiter((v is not None for v in raw), dtype=np.bool_, count=len(raw))
+            values = np.fromiter((np.nan if v is None else v for v in raw), dtype=np.float64, count=len(raw))
+            events[name] = (np.asarray(rows, dtype=np.int64), values, known)
+        return RobotEvents(
             self.robot,
-            seq,
+            np.asarray(self.seq, dtype=np.int64),
             np.asarray(self.t, dtype=np.int64),
             np.asarray(self.gen, dtype=np.int64),
-            {gen: program.view for gen, program in self._programs.items()},
-            values,
+            events,
             nodes,
-            calls={name: self._call_table(*table) for name, table in self._calls.items()},
-            functions=self._collected(),
-            selection=self.selection,
-            has_reads=self._has_reads,
+            {name: self._call_table(*table) for name, table in self._calls.items()},
+            self._collected(),
+            self._has_reads,
         )
 
     def _enum_tables(self) -> dict[str, dict[int, str]]:
@@ -462,7 +538,7 @@ class ColumnsBuilder:
             return recorded
         codes = self.codes
         if enum is None:
-            return [_scalar(v, codes) for v in recorded]
+            return [scalar(v, codes) for v in recorded]
         out: list[float | None] = []
         for value in recorded:
             if isinstance(value, str):  # an element's name (headless recordings)
