@@ -135,7 +135,8 @@ def encoder_costs(seconds: float, seed: int, programs: tuple[object, object], fo
     """CPU seconds per tick of the encoding half, fed the operations a recorder captured (best of 3).
 
     ``encoder``: the whole :class:`RecordingEncoder` (symbols and paths to JSON, the Foxglove
-    scene, MCAP records and zstd); ``no foxglove``: the same without the Foxglove scene channels;
+    scene, the stored columns, MCAP records and zstd); ``no foxglove``: the same without the
+    Foxglove scene channels; ``no columns``: without the columns stored for queries;
     ``mcap``: only writing the recording's messages (already JSON) with the MCAP writer.
     """
     world = build_world(seed, *programs, players=5)  # type: ignore[arg-type]
@@ -170,8 +171,10 @@ def encoder_costs(seconds: float, seed: int, programs: tuple[object, object], fo
             messages.append((channel, log_time, data, publish_time, sequence))
             super().add_message(channel, log_time, data, publish_time, sequence)
 
-    def encode(foxglove_scene: bool) -> float:
-        encoder = RecordingEncoder(folder / "encoded.mcap", DEFAULT_BEHAVIOR_HZ, foxglove_scene=foxglove_scene)
+    def encode(foxglove_scene: bool, columns: bool = True) -> float:
+        encoder = RecordingEncoder(
+            folder / "encoded.mcap", DEFAULT_BEHAVIOR_HZ, foxglove_scene=foxglove_scene, columns=columns
+        )
         started = time.process_time()
         for op in ops:
             encoder.handle(op)
@@ -195,6 +198,7 @@ def encoder_costs(seconds: float, seed: int, programs: tuple[object, object], fo
     costs = {
         "encoder": min(encode(True) for _ in range(3)),
         "no foxglove": min(encode(False) for _ in range(3)),
+        "no columns": min(encode(True, columns=False) for _ in range(3)),
         "mcap": min(write() for _ in range(3)),
     }
     return {key: value / ticks for key, value in costs.items()}
@@ -281,10 +285,11 @@ def main() -> None:
     part("the world's dynamic_scene()", sampling["scene"])
     part("encoding (RecordingEncoder, cpu, best of 3)", encoding["encoder"])
     part("  of which the Foxglove scene", encoding["encoder"] - encoding["no foxglove"])
+    part("  of which the columns stored for queries", encoding["encoder"] - encoding["no columns"])
     part("  of which MCAP records, indexes and zstd", encoding["mcap"])
     part(
         "  the rest: paths and symbol changes to JSON",
-        encoding["no foxglove"] - encoding["mcap"],
+        encoding["no columns"] - (encoding["encoder"] - encoding["no foxglove"]) - encoding["mcap"],
     )
     per_tick = size / ticks
     print(

@@ -20,6 +20,7 @@ pass.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import multiprocessing
 import os
@@ -30,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from xabsl_studio.engine.lang import no_cycle_collection
+from xabsl_studio.engine.record import stored
 from xabsl_studio.engine.record.columns import (
     CallTable,
     Codes,
@@ -38,9 +40,12 @@ from xabsl_studio.engine.record.columns import (
     Mask,
     NodeTable,
     RobotColumns,
+    RobotEvents,
     Selection,
 )
-from xabsl_studio.engine.record.reader import ProgramView, Recording
+from xabsl_studio.engine.record.columns import seed_codes as seed_program_codes
+from xabsl_studio.engine.record.mcapread import Malformed
+from xabsl_studio.engine.record.reader import ProgramView, Recording, RecordingError
 
 __all__ = ["join_columns", "read_columns", "seed_codes"]
 
@@ -52,15 +57,7 @@ MAX_WORKERS = 8
 
 def seed_codes(recording: Recording, codes: Codes) -> None:
     """Number every enum element of the recording's programs, in file order (see the module docstring)."""
-    for view in recording.programs.values():
-        for enum in view.description.get("enums", ()):
-            for element in enum.get("elements", ()):
-                if isinstance(element, str):
-                    codes.code(element)
-        for table in view.tables.get("enums", {}).values():
-            for element in table.values():
-                if isinstance(element, str):
-                    codes.code(element)
+    seed_program_codes(recording.programs.values(), codes)
 
 
 def _one_pass(
@@ -116,6 +113,9 @@ def read_columns(
     ``workers``: how many processes (None: by the recording's size, the cores, the threads running).
     """
     global _TASK
+    found = stored_columns(recording, robots, codes, selection)
+    if found is not None:
+        return found
     start, end, every = recording.first, recording.end, max(1, recording.key_every)
     if workers is None:
         workers = _workers((end - start) * len(robots))
@@ -138,6 +138,64 @@ def read_columns(
     for name, columns in joined.items():
         columns.programs = {int(g): recording.program(name, int(g)) for g in np.unique(columns.gen).tolist()}
     return joined
+
+
+def stored_columns(
+    recording: Recording, robots: list[str], codes: Codes, selection: Selection | None
+) -> dict[str, RobotColumns] | None:
+    """The columns of ``robots`` from the recording's stored columns (None: it has none fit to use).
+
+    Used only when the parts cover every tick of the recording and every tick message the
+    statistics count of each robot, and number enum elements as ``codes`` does (see
+    ``xabsl_studio.engine.record.stored``), and for selections that call no input function (the
+    calls are not stored); Keeps every path node and, of the values, what ``selection`` names.
+
+    Raises:
+        RecordingError: a damaged attachment (its CRC, its layout or its arrays).
+    """
+    if selection is None or selection.functions is None or selection.functions:
+        return None  # the calls of input functions are not stored: their reads are in the messages
+    indexes = recording.attachments(stored.NAME, stored.MEDIA_TYPE)
+    if not indexes:
+        return None
+    parts = []
+    for index in indexes:
+        try:
+            parts.append(stored.decode_part(recording.attachment(index), selection.symbols))
+        except Malformed as error:
+            reason = f"damaged attachment {index.name!r} at byte {index.offset}: {error}"
+            raise RecordingError(f"{recording.path}: {reason}", path=recording.path, reason=reason) from None
+    parts.sort(key=lambda p: p.start)
+    bounds = [recording.first, *(b for p in parts for b in (p.start, p.stop)), recording.end]
+    if any(a != b for a, b in zip(bounds[::2], bounds[1::2], strict=True)):
+        return None  # a part missing (a recovered file), or ticks the parts do not hold
+    written = max((p.codes for p in parts), key=len)
+    mine = list(codes.by_name)
+    if any(p.codes != written[: len(p.codes)] for p in parts) or written[: len(mine)] != mine[: len(written)]:
+        return None  # elements numbered otherwise than the programs number them: scan
+    for robot in robots:
+        if sum(len(p.robots[robot]) for p in parts if robot in p.robots) != recording.tick_messages(robot):
+            return None
+    for element in written[len(mine) :]:
+        codes.code(element)
+    keep = Selection() if selection is None else Selection(symbols=selection.symbols, functions=selection.functions)
+    result: dict[str, RobotColumns] = {}
+    for robot in robots:
+        pieces = [_kept(p.robots[robot], keep.symbols).columns({}, keep) for p in parts if robot in p.robots]
+        if not pieces:
+            result[robot] = ColumnsBuilder(robot, recording.program, codes, keep).finish()
+            continue
+        joined = join_columns(pieces)
+        joined.programs = {int(g): recording.program(robot, int(g)) for g in np.unique(joined.gen).tolist()}
+        result[robot] = joined
+    return result
+
+
+def _kept(events: RobotEvents, symbols: frozenset[str] | None) -> RobotEvents:
+    """The stored ticks of a robot with the values of ``symbols`` only (None: all)."""
+    if symbols is None:
+        return events
+    return dataclasses.replace(events, events={n: e for n, e in events.events.items() if n in symbols})
 
 
 def _key_tick(seq: int, every: int) -> int:

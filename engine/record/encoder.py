@@ -20,7 +20,9 @@ Per agent and tick the encoder writes one ``xabsl.AgentTick`` (the path; roots a
 values on key frames and when they changed; all symbol values on key frames every ``key_every``
 ticks, the changed ones in between; what the tick's decisions read, exact, every tick), and an
 ``xabsl.Fault`` when the fault changes (repeated on key frames while faulted, so a seek from a
-key frame sees it).
+key frame sees it). Unless told not to (``columns=False``), it also keeps the ticks' raw values
+for the columns a query reads, stored as attachments about once a minute
+(:mod:`xabsl_studio.engine.record.stored`).
 """
 
 from __future__ import annotations
@@ -34,11 +36,12 @@ from typing import Any, BinaryIO
 
 import orjson
 
-from xabsl_studio.engine.record import foxglove
+from xabsl_studio.engine.record import foxglove, stored
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record.mcapfile import McapWriter
 from xabsl_studio.engine.record.recover import lock_part
 from xabsl_studio.engine.record.sampler import ProgramTables, reads_json
+from xabsl_studio.engine.record.stored import ColumnsWriter
 from xabsl_studio.engine.types import Value
 
 __all__ = ["CHUNK_SIZE", "DECIMALS", "FOXGLOVE_EVERY", "NO_CHANGE", "Nesting", "RecordingEncoder", "TickSample"]
@@ -174,7 +177,11 @@ class Nesting:
                 except (ValueError, OverflowError):
                     pass
             elif table is not None:
-                value = table.get(int(value), int(value))
+                try:
+                    number = int(value)
+                    value = table.get(number, number)
+                except (ValueError, OverflowError):  # NaN or an infinity: no element (JSON null)
+                    value = None
             if leaf is not None:  # the common case (``ball.x``), without the loop below
                 node = get(head)
                 if node is None:
@@ -211,8 +218,11 @@ class RecordingEncoder:
         chunk_size: int = CHUNK_SIZE,
         foxglove_scene: bool = True,
         foxglove_every: int = FOXGLOVE_EVERY,
+        columns: bool = True,
     ) -> None:
         self.path = Path(path)
+        #: builds the stored columns for queries (``xabsl_studio.engine.record.stored``), None: not stored
+        self._columns = ColumnsWriter() if columns else None
         self.behavior_hz = behavior_hz
         self.key_every = key_every
         self.decimals = decimals
@@ -247,6 +257,8 @@ class RecordingEncoder:
             self._tick(*op[1:])
         elif kind == "msg":
             _, topic, schema, seq, message = op
+            if self._columns is not None:
+                self._columns.observe(topic, message)
             self._add(self._channel(topic, schema), seq, orjson.dumps(message))
         elif kind == "agent":
             _, index, name, tables, gen = op
@@ -257,6 +269,8 @@ class RecordingEncoder:
                     self._channel(S.fault_topic(name), "xabsl.Fault"),
                 )
             agent.bind(tables, gen, self.decimals)
+            if self._columns is not None:
+                self._columns.agent(index, name, tables, self.decimals)
         elif kind == "static":
             _, seq, static, dynamic = op
             self._add(
@@ -294,6 +308,9 @@ class RecordingEncoder:
     ) -> None:
         every = self._key or seq % self.key_every == 0
         self._key = False
+        columns = self._columns
+        if every and columns is not None and columns.due(seq):
+            self._store_columns(columns.cut(seq), seq)
         dumps = orjson.dumps
         write = self._writer.add_message  # every message of the tick has the tick's time
         time_ns = S.tick_time_ns(seq, self.behavior_hz)
@@ -322,6 +339,8 @@ class RecordingEncoder:
             if reads is not None:
                 # Exact values every tick (a why at any tick reads one message); JSON bytes as they came.
                 message["reads"] = orjson.Fragment(reads if isinstance(reads, bytes) else reads_json(reads))
+            if columns is not None:
+                columns.tick(index, seq, now_ms, agent.gen, path, inputs, outputs, unread, reads is not None)
             agent.inputs, agent.outputs = inputs, outputs
             write(agent.channel, time_ns, dumps(message), time_ns, seq)
             written += 1
@@ -350,10 +369,17 @@ class RecordingEncoder:
         self.messages += written
         self.ticks = max(self.ticks, seq + 1)
 
+    def _store_columns(self, part: bytes | None, seq: int) -> None:
+        if part is not None:
+            time_ns = S.tick_time_ns(seq, self.behavior_hz)
+            self._writer.attach(stored.NAME, stored.MEDIA_TYPE, part, time_ns, time_ns)
+
     def close(self) -> tuple[str, int, int, int]:
         """Finish the file (summary, indexes), move it to its final name; ``(path, ticks, messages, bytes)``."""
         if not self._closed:
             self._closed = True
+            if self._columns is not None:
+                self._store_columns(self._columns.close(), self.ticks)
             self._writer.finish()
             self._stream.close()
             os.replace(self._part, self.path)

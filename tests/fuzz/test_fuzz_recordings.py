@@ -35,6 +35,7 @@ from websockets.sync.client import connect
 from tests.fuzz.recordings import write_all
 from tests.server.conftest import LiveServer, WsClient
 from xabsl_studio.engine.cli import main
+from xabsl_studio.engine.query import query_recording
 from xabsl_studio.engine.record import Recording, RecordingError
 from xabsl_studio.server.api.library import RecordingLibrary
 from xabsl_studio.server.session.replay import ReplaySession
@@ -146,6 +147,8 @@ def _read_to_the_end(path: Path) -> None:
             recording.tick(recording.end - 1)
         for view in recording.programs.values():
             view.program()
+    if recording.agents:  # a query reads the columns the file stores
+        query_recording(path, "ball.distance > 0 || ball.distance <= 0")
 
 
 def test_the_reader_refuses_each_hostile_file_with_one_line_naming_it(hostile: list[Path]) -> None:
