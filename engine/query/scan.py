@@ -147,21 +147,20 @@ def stored_columns(
 
     Used only when the parts cover every tick of the recording and every tick message the
     statistics count of each robot, and number enum elements as ``codes`` does (see
-    ``xabsl_studio.engine.record.stored``), and for selections that call no input function (the
-    calls are not stored); Keeps every path node and, of the values, what ``selection`` names.
+    ``xabsl_studio.engine.record.stored``). Keeps every path node and, of the values and the input
+    functions' calls, what ``selection`` names.
 
     Raises:
         RecordingError: a damaged attachment (its CRC, its layout or its arrays).
     """
-    if selection is None or selection.functions is None or selection.functions:
-        return None  # the calls of input functions are not stored: their reads are in the messages
     indexes = recording.attachments(stored.NAME, stored.MEDIA_TYPE)
     if not indexes:
         return None
+    keep = Selection() if selection is None else Selection(symbols=selection.symbols, functions=selection.functions)
     parts = []
     for index in indexes:
         try:
-            parts.append(stored.decode_part(recording.attachment(index), selection.symbols))
+            parts.append(stored.decode_part(recording.attachment(index), keep.symbols, keep.functions))
         except Malformed as error:
             reason = f"damaged attachment {index.name!r} at byte {index.offset}: {error}"
             raise RecordingError(f"{recording.path}: {reason}", path=recording.path, reason=reason) from None
@@ -181,7 +180,7 @@ def stored_columns(
     keep = Selection() if selection is None else Selection(symbols=selection.symbols, functions=selection.functions)
     result: dict[str, RobotColumns] = {}
     for robot in robots:
-        pieces = [_kept(p.robots[robot], keep.symbols).columns({}, keep) for p in parts if robot in p.robots]
+        pieces = [_kept(p.robots[robot], keep).columns({}, keep) for p in parts if robot in p.robots]
         if not pieces:
             result[robot] = ColumnsBuilder(robot, recording.program, codes, keep).finish()
             continue
@@ -191,11 +190,15 @@ def stored_columns(
     return result
 
 
-def _kept(events: RobotEvents, symbols: frozenset[str] | None) -> RobotEvents:
-    """The stored ticks of a robot with the values of ``symbols`` only (None: all)."""
-    if symbols is None:
-        return events
-    return dataclasses.replace(events, events={n: e for n, e in events.events.items() if n in symbols})
+def _kept(events: RobotEvents, keep: Selection) -> RobotEvents:
+    """What ``keep`` names of a robot's stored ticks: of the values and the calls (every path node)."""
+    symbols, functions = keep.symbols, keep.functions
+    return dataclasses.replace(
+        events,
+        events=events.events if symbols is None else {n: e for n, e in events.events.items() if n in symbols},
+        calls=events.calls if functions is None else {n: c for n, c in events.calls.items() if n in functions},
+        functions=events.functions if functions is None else functions,
+    )
 
 
 def _key_tick(seq: int, every: int) -> int:

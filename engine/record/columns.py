@@ -35,6 +35,7 @@ from xabsl_studio.engine.record.reader import AgentTick, ProgramView
 
 __all__ = [
     "CallTable",
+    "Calls",
     "Codes",
     "ColumnsBuilder",
     "NodeTable",
@@ -42,6 +43,8 @@ __all__ = [
     "RobotColumns",
     "RobotEvents",
     "Selection",
+    "call_table",
+    "collect_calls",
     "raw_number",
     "scalar",
     "seed_codes",
@@ -343,7 +346,7 @@ class ColumnsBuilder:
         self._present: set[str] = set()
         self._nodes: list[list[Any]] = []
         self._node_rows: list[int] = []
-        self._calls: dict[str, tuple[list[int], list[tuple[float | None, ...]], list[float | None]]] = {}
+        self._calls: Calls = {}
         self._has_reads = True
         self._last_gen = -1
         self._last_ids: tuple[frozenset[int] | None, frozenset[int] | None] = (None, None)
@@ -467,25 +470,7 @@ class ColumnsBuilder:
             self._set(row, name, value)
 
     def _collect_calls(self, row: int, program: ProgramCodes, reads: list[Any]) -> None:
-        functions = program.functions
-        if not functions:
-            return
-        for entry in reads:
-            if not isinstance(entry, list) or not entry or not isinstance(entry[0], int):
-                continue
-            wanted = functions.get(entry[0])
-            if wanted is None:
-                continue
-            name, param_enums, result_enum = wanted
-            if len(entry) != len(param_enums) + 2:
-                continue
-            args = tuple(self._raw(v, e, program.read_enums) for v, e in zip(entry[1:-1], param_enums, strict=True))
-            table = self._calls.get(name)
-            if table is None:
-                table = self._calls[name] = ([], [], [])
-            table[0].append(row)
-            table[1].append(args)
-            table[2].append(self._raw(entry[-1], result_enum, program.read_enums))
+        collect_calls(row, program, reads, self.codes, self._calls)
 
     def _raw(self, value: Any, enum: str | None, tables: dict[str, dict[int, int]]) -> float | None:
         return raw_number(value, enum, tables, self.codes)
@@ -599,6 +584,39 @@ class ColumnsBuilder:
 
     @staticmethod
     def _call_table(rows: list[int], args: list[tuple[float | None, ...]], result: list[float | None]) -> CallTable:
-        known = np.fromiter((v is not None for v in result), dtype=np.bool_, count=len(result))
-        values = np.fromiter((np.nan if v is None else v for v in result), dtype=np.float64, count=len(result))
-        return CallTable(np.asarray(rows, dtype=np.int64), args, values, known)
+        return call_table(rows, args, result)
+
+
+#: Per input function name: the tick rows, arguments and results of its calls, in order.
+Calls = dict[str, tuple[list[int], list[tuple[float | None, ...]], list[float | None]]]
+
+
+def collect_calls(row: int, program: ProgramCodes, reads: list[Any], codes: Codes, calls: Calls) -> None:
+    """Add the calls of ``program``'s input functions in one tick's ``reads`` (as JSON reads them) to ``calls``."""
+    functions = program.functions
+    if not functions:
+        return
+    tables = program.read_enums
+    for entry in reads:
+        if not isinstance(entry, list) or not entry or not isinstance(entry[0], int):
+            continue
+        wanted = functions.get(entry[0])
+        if wanted is None:
+            continue
+        name, param_enums, result_enum = wanted
+        if len(entry) != len(param_enums) + 2:
+            continue
+        args = tuple(raw_number(v, e, tables, codes) for v, e in zip(entry[1:-1], param_enums, strict=True))
+        table = calls.get(name)
+        if table is None:
+            table = calls[name] = ([], [], [])
+        table[0].append(row)
+        table[1].append(args)
+        table[2].append(raw_number(entry[-1], result_enum, tables, codes))
+
+
+def call_table(rows: list[int], args: list[tuple[float | None, ...]], result: list[float | None]) -> CallTable:
+    """The calls of one input function as a :class:`CallTable`."""
+    known = np.fromiter((v is not None for v in result), dtype=np.bool_, count=len(result))
+    values = np.fromiter((np.nan if v is None else v for v in result), dtype=np.float64, count=len(result))
+    return CallTable(np.asarray(rows, dtype=np.int64), args, values, known)

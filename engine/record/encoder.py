@@ -340,7 +340,7 @@ class RecordingEncoder:
                 # Exact values every tick (a why at any tick reads one message); JSON bytes as they came.
                 message["reads"] = orjson.Fragment(reads if isinstance(reads, bytes) else reads_json(reads))
             if columns is not None:
-                columns.tick(index, seq, now_ms, agent.gen, path, inputs, outputs, unread, reads is not None)
+                columns.tick(index, seq, now_ms, agent.gen, path, inputs, outputs, unread, reads)
             agent.inputs, agent.outputs = inputs, outputs
             write(agent.channel, time_ns, dumps(message), time_ns, seq)
             written += 1

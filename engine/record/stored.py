@@ -8,13 +8,15 @@ converted per tick), converts them in bulk with numpy at each cut and stores the
 MCAP attachments named :data:`NAME`: one *part* per about a minute of ticks (:data:`PART_TICKS`,
 cut on a key frame, so that each part starts on one), each holding every robot's ticks of its
 range as :class:`~xabsl_studio.engine.record.columns.RobotEvents`. A cold query then reads a few
-MB instead of every message. The input functions' calls are not stored (they are in the
-messages' reads, which would cost the writer a parse per tick): a query that calls one scans.
+MB instead of every message. The input functions' calls come from the ticks' reads: of the
+engine's reads only the arrays that can be calls are kept per tick, and the part's are turned
+into JSON and back at once at the cut, so they read as the file holds them.
 
 The attachments are a cache of the messages, never a second truth: the conversion is the one the
 encoder's JSON and a scan's :class:`~xabsl_studio.engine.record.columns.ColumnsBuilder` make
 together (rounding to the file's decimals, enum values as element codes, what JSON holds as
-null, NaN, infinities and getters that raised, unknown), checked against a scan tick for tick
+null, NaN, infinities and getters that raised, unknown; the calls by the scan's own
+:func:`~xabsl_studio.engine.record.columns.collect_calls`), checked against a scan tick for tick
 (tests/record/test_stored_columns.py), and a reader uses them only when they cover every tick of
 every robot the statistics count and number enum elements as the file's programs do; otherwise
 it scans the messages.
@@ -41,6 +43,7 @@ import zstandard
 
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record.columns import (
+    Calls,
     CallTable,
     Codes,
     Floats,
@@ -49,13 +52,15 @@ from xabsl_studio.engine.record.columns import (
     NodeTable,
     ProgramCodes,
     RobotEvents,
+    call_table,
+    collect_calls,
     raw_number,
     scalar,
     seed_codes,
 )
 from xabsl_studio.engine.record.mcapread import MAX_ATTACHMENT_BYTES, Malformed
 from xabsl_studio.engine.record.reader import ProgramBook
-from xabsl_studio.engine.record.sampler import ProgramTables
+from xabsl_studio.engine.record.sampler import ProgramTables, reads_json
 
 __all__ = ["MEDIA_TYPE", "NAME", "PART_TICKS", "ColumnsWriter", "StoredPart", "decode_part", "encode_part"]
 
@@ -129,14 +134,20 @@ def _arrays(robot: RobotEvents, since: tuple[Floats, Floats] | None) -> Iterator
         yield np.where(known, values, np.nan)  # what an unknown value was does not matter
         yield known
     for table in robot.calls.values():
-        counts = np.fromiter((len(a) for a in table.args), dtype=np.int64, count=len(table.args))
-        flat = [v for args in table.args for v in args]
+        counts = np.fromiter(map(len, table.args), dtype=np.int64, count=len(table.args))
+        flat = list(chain.from_iterable(table.args))
+        try:
+            values = np.fromiter(flat, dtype=np.float64, count=len(flat))
+            known = np.ones(len(flat), dtype=np.bool_)
+        except TypeError:  # an argument that is not known (None)
+            known = np.fromiter((v is not None for v in flat), dtype=np.bool_, count=len(flat))
+            values = np.fromiter((np.nan if v is None else v for v in flat), dtype=np.float64, count=len(flat))
         yield table.row
         yield table.result
         yield table.known
         yield counts
-        yield np.fromiter((np.nan if v is None else v for v in flat), dtype=np.float64, count=len(flat))
-        yield np.fromiter((v is not None for v in flat), dtype=np.bool_, count=len(flat))
+        yield values
+        yield known
 
 
 #: Scales tried for float arrays: whole numbers, then the recordings' decimals (thousandths).
@@ -264,10 +275,13 @@ def _strings(value: Any, what: str) -> list[str]:
     return value
 
 
-def decode_part(data: bytes, symbols: frozenset[str] | None = None) -> StoredPart:
-    """One attachment's part, every length and index checked; of the values, ``symbols`` (None: all).
+def decode_part(
+    data: bytes, symbols: frozenset[str] | None = None, functions: frozenset[str] | None = None
+) -> StoredPart:
+    """One attachment's part, every length and index checked; of the values ``symbols``, of the calls ``functions``.
 
-    The arrays of the values not asked for are not decoded (a query reads a few of hundreds).
+    None: all. The arrays of the values and calls not asked for are not decoded (a query reads a
+    few of hundreds).
 
     Raises:
         Malformed: the data is not a columns part, or its arrays do not fit together.
@@ -343,7 +357,7 @@ def decode_part(data: bytes, symbols: frozenset[str] | None = None) -> StoredPar
     for entry in listed:
         if not isinstance(entry, dict) or not isinstance(entry.get("name"), str) or entry["name"] in robots:
             raise Malformed("a robot without a name of its own")
-        robot = _robot(entry, take, start, stop, symbols)
+        robot = _robot(entry, take, start, stop, symbols, functions)
         robots[robot.robot] = robot
     if next(taken, None) is not None:
         raise Malformed("it has more arrays than its robots use")
@@ -356,12 +370,19 @@ def _expect(arrays: tuple[np.ndarray, ...], kind: str, robot: str) -> None:
         raise Malformed(f"robot {robot!r}: an array holds other values than its field's")
 
 
-def _robot(entry: dict[str, Any], take: Any, start: int, stop: int, symbols: frozenset[str] | None) -> RobotEvents:
+def _robot(
+    entry: dict[str, Any],
+    take: Any,
+    start: int,
+    stop: int,
+    symbols: frozenset[str] | None,
+    functions: frozenset[str] | None,
+) -> RobotEvents:
     """One robot of a part, checked: what queries index must lie inside what it holds."""
     name = entry["name"]
     events_names = _strings(entry.get("events"), "value names")
     call_names = _strings(entry.get("calls"), "call tables")
-    functions = _strings(entry.get("functions"), "functions")
+    collected = _strings(entry.get("functions"), "functions")
     if not isinstance(entry.get("has_reads"), bool) or len(set(events_names)) != len(events_names):
         raise Malformed(f"robot {name!r} is not described right")
     seq, t, gen = (slot.decode() for slot in take(3))
@@ -414,7 +435,10 @@ def _robot(entry: dict[str, Any], take: Any, start: int, stop: int, symbols: fro
         events[value_name] = (rows, values, known)
     calls: dict[str, CallTable] = {}
     for function in call_names:
-        row, result, known, counts, flat, flat_known = (slot.decode() for slot in take(6))
+        slots = take(6)
+        if functions is not None and function not in functions:
+            continue
+        row, result, known, counts, flat, flat_known = (slot.decode() for slot in slots)
         k = len(row)
         if len(result) != k or len(known) != k or len(counts) != k or len(flat) != len(flat_known):
             raise Malformed(f"robot {name!r}: the calls of {function!r} differ in length")
@@ -436,7 +460,7 @@ def _robot(entry: dict[str, Any], take: Any, start: int, stop: int, symbols: fro
         events,
         nodes,
         calls,
-        frozenset(functions),
+        frozenset(collected),
         entry["has_reads"],
     )
 
@@ -470,7 +494,9 @@ class _AgentColumns:
         self.bindings: list[tuple[int, _Binding]] = []
         #: (row, names) of the ticks where getters raised
         self.unread: list[tuple[int, tuple[str, ...]]] = []
-        self.has_reads = True
+        #: per tick what may hold input function calls: the arrays of ``Engine.reads()`` that are
+        #: three or more long, the reads as JSON (from a pipe), or None (not recorded)
+        self.reads: list[list[Any] | bytes | None] = []
 
 
 class ColumnsWriter:
@@ -482,8 +508,7 @@ class ColumnsWriter:
     converted). At a key frame tick :meth:`cut` turns the open part into columns with numpy, the
     conversions of the encoder's JSON and of the reader's columns in bulk (rounding, enum
     elements as codes, NaN and infinities unknown as JSON null reads back), and returns the part
-    when it is due; :meth:`close` returns the last one. The input functions' calls are not stored
-    (a query that calls one reads the messages).
+    when it is due; :meth:`close` returns the last one.
     """
 
     def __init__(self, part_ticks: int | None = None) -> None:
@@ -528,11 +553,13 @@ class ColumnsWriter:
         inputs: tuple[Any, ...],
         outputs: tuple[Any, ...],
         unread: tuple[str, ...],
-        has_reads: bool,
+        reads: tuple[object, ...] | bytes | None,
     ) -> None:
         """Agent ``index``'s tick as the encoder writes it (raw values in the binding's order).
 
-        ``unread``: the symbols whose getters raised (unknown, whatever their value says).
+        ``unread``: the symbols whose getters raised (unknown, whatever their value says);
+        ``reads``: what the tick's decisions read (``Engine.reads()`` or that as JSON; None: not
+        recorded).
         """
         agent = self._agents.get(index)
         if agent is None:
@@ -552,8 +579,10 @@ class ColumnsWriter:
         agent.values.append(inputs + outputs)
         if unread:
             agent.unread.append((len(agent.seq) - 1, unread))
-        if not has_reads:
-            agent.has_reads = False
+        if reads is None or isinstance(reads, bytes):
+            agent.reads.append(reads)
+        else:  # a call: an input id, one value per parameter and the result (three or more)
+            agent.reads.append([e for e in reads if type(e) is tuple and len(e) > 2 and type(e[0]) is int])
 
     def due(self, seq: int) -> bool:
         """Whether the part open at key frame tick ``seq`` is long enough to be cut there."""
@@ -591,7 +620,7 @@ class ColumnsWriter:
             raise LookupError(f"no program of generation {gen} for {robot!r}")
         found = self._programs.get((view.key, view.gen))
         if found is None:
-            found = self._programs[(view.key, view.gen)] = ProgramCodes(view, frozenset(), self.codes)
+            found = self._programs[(view.key, view.gen)] = ProgramCodes(view, None, self.codes)
         return found
 
     def _events(self, agent: _AgentColumns) -> RobotEvents:
@@ -628,17 +657,112 @@ class ColumnsWriter:
             for name, (r, v, k) in events.items()
         }
         gen = np.asarray(agent.gen, dtype=np.int64)
+        nodes = self._nodes(agent.name, agent.paths, gen)  # first: it reads the programs of every generation
+        calls, functions = self._calls(agent, gen)
         return RobotEvents(
             agent.name,
             np.asarray(agent.seq, dtype=np.int64),
             np.asarray(agent.t, dtype=np.int64),
             gen,
             joined,
-            self._nodes(agent.name, agent.paths, gen),
-            {},
-            frozenset(),
-            agent.has_reads,
+            nodes,
+            calls,
+            functions,
+            all(r is not None for r in agent.reads),
         )
+
+    def _calls(self, agent: _AgentColumns, gen: Ints) -> tuple[dict[str, CallTable], frozenset[str]]:
+        """The input functions' calls of the part's ticks, and the names of every input function.
+
+        The calls read as the scan reads them from the file: the engine's candidate arrays of the
+        part go through JSON at once (in C, as the encoder writes them), then each function's
+        calls are converted together; a call whose values are not all numbers, or a boolean for an
+        enum, takes the scan's own rule (:func:`~xabsl_studio.engine.record.columns.collect_calls`).
+        """
+        programs = {g: self._program(agent.name, g) for g in np.unique(gen).tolist()}
+        functions = frozenset(name for p in programs.values() for name, _e, _r in p.functions.values())
+        if not functions:
+            return {}, functions
+        rows: list[int] = []
+        entries: list[Any] = []  # in row order: JSON arrays (from a pipe) or the engine's tuples
+        for row, reads in enumerate(agent.reads):
+            if reads is None:
+                continue
+            found = reads if not isinstance(reads, bytes) else [e for e in orjson.loads(reads) if type(e) is list]
+            entries.extend(found)
+            rows.extend([row] * len(found))
+        tuples = [e for e in entries if type(e) is tuple]
+        if tuples:  # exactly what the file holds: NaN, infinities and other types null
+            converted = iter(orjson.loads(reads_json(tuple(tuples))))
+            entries = [next(converted) if type(e) is tuple else e for e in entries]
+        row_of = np.asarray(rows, dtype=np.int64)
+        ids = np.fromiter((e[0] if type(e[0]) is int else -1 for e in entries), dtype=np.int64, count=len(entries))
+        lengths = np.fromiter(map(len, entries), dtype=np.int64, count=len(entries))
+        entry_gen = gen[row_of] if len(row_of) else row_of
+        found_calls: dict[str, list[tuple[Ints, CallTable]]] = {}
+        for g, program in programs.items():
+            for ident, (name, param_enums, result_enum) in program.functions.items():
+                at = np.flatnonzero((ids == ident) & (entry_gen == g) & (lengths == len(param_enums) + 2))
+                if len(at):
+                    table = self._function_calls(
+                        [entries[i] for i in at.tolist()], row_of[at], program, param_enums, result_enum
+                    )
+                    found_calls.setdefault(name, []).append((at, table))
+        calls: dict[str, CallTable] = {}
+        for name, pieces in found_calls.items():
+            order = np.argsort(np.concatenate([at for at, _ in pieces]), kind="stable")
+            args = [a for _, t in pieces for a in t.args]
+            calls[name] = CallTable(
+                np.concatenate([t.row for _, t in pieces])[order],
+                [args[i] for i in order.tolist()],
+                np.concatenate([t.result for _, t in pieces])[order],
+                np.concatenate([t.known for _, t in pieces])[order],
+            )
+        return calls, functions
+
+    def _function_calls(
+        self,
+        entries: list[list[Any]],
+        rows: Ints,
+        program: ProgramCodes,
+        param_enums: list[str | None],
+        result_enum: str | None,
+    ) -> CallTable:
+        """One function's calls (``[id, argument..., result]`` as JSON reads them) as the scan converts them."""
+        width = len(param_enums) + 2
+        flat = list(chain.from_iterable(entries))
+        enums = [*param_enums, result_enum]
+        try:
+            if any(e is not None for e in enums) and any(type(v) is bool for v in flat):
+                raise TypeError("a boolean for an enum")  # no element: the exact rule below
+            matrix = np.fromiter(flat, dtype=np.float64, count=len(flat)).reshape(len(entries), width)[:, 1:]
+        except (TypeError, ValueError):  # the scan's rule, call by call
+            calls: Calls = {}
+            for row, entry in zip(rows.tolist(), entries, strict=True):
+                collect_calls(row, program, [entry], self.codes, calls)
+            (found,) = calls.values()
+            return call_table(*found)
+        known = np.ones(matrix.shape, dtype=np.bool_)
+        for column, enum in enumerate(enums):
+            if enum is None:
+                continue
+            values = matrix[:, column]
+            whole = values == np.floor(values)
+            codes = np.full(len(values), np.nan)
+            for number, code in program.read_enums.get(enum, {}).items():
+                codes[whole & (values == number)] = code
+            matrix[:, column] = codes
+            known[:, column] = ~np.isnan(codes)
+        arguments = matrix[:, :-1]
+        if known[:, :-1].all():
+            args = list(map(tuple, arguments.tolist()))
+        else:
+            args = [
+                tuple(v if k else None for v, k in zip(values, flags, strict=True))
+                for values, flags in zip(arguments.tolist(), known[:, :-1].tolist(), strict=True)
+            ]
+        result = matrix[:, -1]
+        return CallTable(rows.astype(np.int64), args, np.where(known[:, -1], result, np.nan), known[:, -1].copy())
 
     def _column(self, raw: tuple[Any, ...], binding: _Binding, i: int) -> tuple[Floats, Mask]:
         """One symbol's values as the reader's columns hold them after the file's JSON."""

@@ -36,8 +36,8 @@ from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_w
 
 SOCCER = Path(__file__).resolve().parents[2] / "examples" / "soccer"
 TICKS = 400
-#: what queries without input functions read
-SELECTION = Selection(functions=frozenset())
+#: everything: every value and every input function's calls
+SELECTION = Selection()
 
 
 @pytest.fixture(scope="module")
@@ -138,6 +138,12 @@ def assert_same(a: RobotColumns, b: RobotColumns) -> None:
         assert np.array_equal(va[ka], vb[kb]), (name, np.flatnonzero(va[ka] != vb[kb])[:5])
     assert a.has_reads == b.has_reads
     assert set(a.programs) == set(b.programs)
+    assert a.functions == b.functions and set(a.calls) == set(b.calls)
+    for name, calls in a.calls.items():
+        other = b.calls[name]
+        assert np.array_equal(calls.row, other.row) and calls.args == other.args, name
+        assert np.array_equal(calls.known, other.known), name
+        assert np.array_equal(calls.result[calls.known], other.result[other.known]), name
 
 
 @pytest.mark.parametrize("decimals", [3, None], ids=["thousandths", "exact"])
@@ -159,6 +165,7 @@ def test_stored_columns_equal_the_scan_of_the_messages(
     assert set(np.unique(blue.gen).tolist()) == {0, 1}
     _values, known = blue.values["robot.x"]
     assert not known.all() and known.any()  # the raised getter and the rare values are unknown
+    assert len(blue.calls["distance_to"].row) > 100  # the calls the decisions made
 
 
 def test_the_independent_reader_sees_the_parts_and_the_messages_alike(
@@ -217,6 +224,7 @@ def _rewritten(path: Path, out: Path, keep: int | None) -> Path:
         "game.state == ready && ball.distance > 2000",
         "team.role == striker || robot.x < -2000",
         "robot.rotation > 10 && ball.seen",
+        "abs(value = ball.angle) < 30 || team.rank(time = team.time_to_ball) == 0",
     ],
 )
 def test_a_query_answers_the_same_with_the_stored_columns_without_them_and_with_a_part_missing(
