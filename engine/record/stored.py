@@ -489,7 +489,8 @@ class _AgentColumns:
         self.t: list[int] = []
         self.gen: list[int] = []
         self.paths: list[list[Any]] = []
-        self.values: list[tuple[Any, ...]] = []
+        self.inputs: list[tuple[Any, ...]] = []
+        self.outputs: list[tuple[Any, ...]] = []
         #: (first row, binding) of each run of ticks under one binding
         self.bindings: list[tuple[int, _Binding]] = []
         #: (row, names) of the ticks where getters raised
@@ -576,7 +577,8 @@ class ColumnsWriter:
         agent.t.append(t)
         agent.gen.append(gen)
         agent.paths.append(path)
-        agent.values.append(inputs + outputs)
+        agent.inputs.append(inputs)
+        agent.outputs.append(outputs)
         if unread:
             agent.unread.append((len(agent.seq) - 1, unread))
         if reads is None or isinstance(reads, bytes):
@@ -640,7 +642,11 @@ class ColumnsWriter:
                     found[0].append(np.array([first]))
                     found[1].append(np.array([np.nan]))
                     found[2].append(np.array([False]))
-            columns = list(zip(*agent.values[first:end], strict=True)) if end > first else []
+            # one tuple per symbol (inputs, then outputs, as the binding names them)
+            columns = [
+                *zip(*agent.inputs[first:end], strict=True),
+                *zip(*agent.outputs[first:end], strict=True),
+            ]
             for i, name in enumerate(binding.names):
                 values, known = self._column(columns[i], binding, i)
                 raised = unread.get(name)
