@@ -32,6 +32,7 @@ from xabsl_studio.engine.query import query_recording, scan
 from xabsl_studio.engine.record import Recorder, Recording, RecordingEncoder, RecordingError, stored
 from xabsl_studio.engine.record.columns import Codes, RobotColumns, Selection
 from xabsl_studio.engine.record.mcapread import Malformed
+from xabsl_studio.engine.record.sampler import reads_json
 from xabsl_studio.examples.soccer.run import DEFAULT_AWAY, DEFAULT_HOME, build_world, load_team
 
 SOCCER = Path(__file__).resolve().parents[2] / "examples" / "soccer"
@@ -68,7 +69,7 @@ def operations() -> list[tuple[Any, ...]]:
         for tick in range(TICKS):
             if tick == 150:
                 for agent, engine in zip(world.agents, engines, strict=True):
-                    if agent.team_index == 0:  # type: ignore[attr-defined]
+                    if agent.team_index == 0:
                         engine.reload(reloaded)
                 recorder.reload("behavior", reloaded, engines, loop.now_ms)
             now = loop.now_ms
@@ -146,11 +147,25 @@ def assert_same(a: RobotColumns, b: RobotColumns) -> None:
         assert np.array_equal(calls.result[calls.known], other.result[other.known]), name
 
 
-@pytest.mark.parametrize("decimals", [3, None], ids=["thousandths", "exact"])
+def _piped(ops: list[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
+    """The operations with each tick's reads as JSON bytes, as they come through the studio's pipe."""
+    out = []
+    for op in ops:
+        if op[0] == "tick":
+            samples = [None if s is None else (*s[:8], reads_json(s[8]) if s[8] is not None else None) for s in op[3]]
+            op = (*op[:3], samples, *op[4:])
+        out.append(op)
+    return out
+
+
+@pytest.mark.parametrize(
+    ("decimals", "piped"), [(3, False), (None, False), (None, True)], ids=["thousandths", "exact", "piped"]
+)
 def test_stored_columns_equal_the_scan_of_the_messages(
-    operations: list[tuple[Any, ...]], tmp_path: Path, decimals: int | None
+    operations: list[tuple[Any, ...]], tmp_path: Path, decimals: int | None, piped: bool
 ) -> None:
-    path = _encode(_odd(operations), tmp_path / "odd.mcap", decimals, part_ticks=90)
+    odd = _odd(operations)
+    path = _encode(_piped(odd) if piped else odd, tmp_path / "odd.mcap", decimals, part_ticks=90)
     with Recording(path) as recording:
         parts = [
             stored.decode_part(recording.attachment(a)) for a in recording.attachments(stored.NAME, stored.MEDIA_TYPE)
@@ -214,7 +229,7 @@ def _rewritten(path: Path, out: Path, keep: int | None) -> Path:
                         attachment.media_type,
                         attachment.data,
                     )
-            writer.finish()
+            writer.finish()  # type: ignore[no-untyped-call]
     return out
 
 
