@@ -36,6 +36,27 @@ export class OptionView {
   private explanation: Explanation | null = null;
   private explaining = false;
   private lastWhy = "";
+  /// The why pane in three parts, each replaced only when what it shows changes. A team's root
+  /// can change its decision several times a second, each change followed by the answer with
+  /// its values; rebuilding the whole pane for each cost style, layout and paint that the
+  /// draw's script time (stats.renderMs) does not show, and frames were missed.
+  /// The decision and its conditions (the values go into the rows when the answer comes):
+  private readonly whyDecision = h("div.why-decision");
+  private whyRows: HTMLElement[] = [];
+  private decisionShown: { option: Option; key: string } | null = null;
+  /// The answer whose values the rows show (undefined: rows just built, none yet).
+  private valuesShown: Explanation | null | undefined = undefined;
+  /// "Why not": one picker for the pane's life, never moved. A `<select>` created anew (or moved)
+  /// is a form control added to the page, which Chromium then processes in its browser process
+  /// too: with a new picker per decision that was more CPU than the page's own script.
+  private readonly whyNotPicker: HTMLSelectElement;
+  private readonly whyNotResult = h("div.why-not-result");
+  private readonly whyNotBox: HTMLElement;
+  private pickerFor: { option: Option; state: number } | null = null;
+  private whyNotShown: { option: Option; key: string } | null = null;
+  /// The decision tree, the last transition and where the values come from (with each answer).
+  private readonly whyMore = h("div.why-more");
+  private moreShown: { option: Option; ex: Explanation | null; known: string } | null = null;
   /// "Why not": the state asked about, and the answer with the decision it is for.
   private whyNotState: number | null = null;
   private whyNot: { key: string; answer: WhyNotAnswer } | null = null;
@@ -68,7 +89,10 @@ export class OptionView {
     });
     this.doc = h("div.option-doc.muted");
     this.info = h("div.option-info");
-    this.why = h("div.why", { "aria-live": "polite" });
+    this.whyNotPicker = h("select.why-not-picker", { "aria-label": "Why not this state", title: "Why did the decision not go to this state?" });
+    this.whyNotPicker.addEventListener("change", () => this.askWhyNot(this.whyNotPicker.value === "" ? null : Number(this.whyNotPicker.value)));
+    this.whyNotBox = h("div.why-not", { hidden: true }, this.whyNotPicker, this.whyNotResult);
+    this.why = h("div.why", { "aria-live": "polite" }, this.whyDecision, this.whyNotBox, this.whyMore);
     this.transitions = h("div.transitions");
     const toolbar = h(
       "div.toolbar",
@@ -310,9 +334,15 @@ export class OptionView {
   private renderWhy(option: Option, index: DescriptionIndex | null): void {
     const node = this.node(option);
     if (!node || node.leaf < 0) {
-      if (this.lastWhy !== "none") {
-        this.lastWhy = "none";
-        this.why.replaceChildren(h("div.muted", {}, node ? "This option has not decided yet." : ""));
+      const text = node ? "This option has not decided yet." : "";
+      if (this.lastWhy !== `none|${text}`) {
+        this.lastWhy = `none|${text}`;
+        this.whyDecision.replaceChildren(h("div.muted", {}, text));
+        this.whyRows = [];
+        this.decisionShown = null;
+        this.whyNotBox.hidden = true;
+        this.whyMore.replaceChildren();
+        this.moreShown = null;
       }
       return;
     }
@@ -330,41 +360,59 @@ export class OptionView {
     // Another tick or decision in view: ask again about the same state, once per decision.
     const asked = this.whyNotState;
     if (asked !== null && !whyNot && this.whyNotAsking !== `${decisionKey}|${asked}`) queueMicrotask(() => this.askWhyNot(asked));
-    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}|${known ? `${known.from}>${known.to}@${known.t}` : ""}|${this.whyNotState}|${whyNot ? "answer" : this.whyNotError}`;
+    const knownKey = known ? `${known.from}>${known.to}@${known.t}` : "";
+    const key = `${option.id}|${node.decidedIn}|${node.leaf}|${node.state}|${seq}|${ex ? JSON.stringify([ex.conditions, ex.last_transition?.seq]) : ""}|${knownKey}|${this.whyNotState}|${whyNot ? "answer" : this.whyNotError}`;
     if (key === this.lastWhy) return;
     this.lastWhy = key;
-    const path = decided ? leafPath(decided.decision, node.leaf) : null;
-    const rows = (path ?? []).map(({ node: ifNode, taken }, i) => this.conditionRow(ifNode.if, taken, ex?.conditions[i], ifNode.doc));
-    const stays = node.decidedIn === node.state;
     const name = (id: number): string => option.states[id]?.name ?? String(id);
-    const last = ex?.last_transition ?? null;
-    const parts: Array<Node | null> = [
-      h("div.why-head", {}, h("strong", {}, "Decision of this tick: "), `${decided?.name ?? node.decidedIn} `, h("span.arrow", {}, stays ? "stays" : `→ ${target?.name ?? node.state}`), h("span.muted", {}, ` (leaf ${node.leaf})`)),
-      rows.length ? h("ol.conditions", {}, ...rows) : h("div.muted", {}, "No condition: the decision always takes this leaf."),
-      this.whyNotView(option, node, whyNot),
-      ex?.tree && "if" in ex.tree ? h("details.why-tree", { open: true }, h("summary", {}, "Decision tree, path taken"), this.treeView(ex.tree as WhyTree, name)) : null,
-      last
-        ? h(
-            "div.last-transition",
-            {},
-            h("strong", {}, "Last transition: "),
-            `${last.decided_in_name} → ${last.target_name} at ${formatClock(last.t)} (leaf ${last.leaf})`,
-            h("ol.conditions", {}, ...last.conditions.map((c) => this.conditionRow(c.text || c.source, c.branch, c, null))),
-          )
-        : known
+    // The decision and its conditions: once per decision (the answer only brings values).
+    const decision = `${node.decidedIn}|${node.leaf}|${node.state}`;
+    if (this.decisionShown?.option !== option || this.decisionShown.key !== decision) {
+      this.decisionShown = { option, key: decision };
+      const path = decided ? leafPath(decided.decision, node.leaf) : null;
+      this.whyRows = (path ?? []).map(({ node: ifNode, taken }) => this.conditionRow(ifNode.if, taken, undefined, ifNode.doc));
+      this.valuesShown = undefined;
+      const stays = node.decidedIn === node.state;
+      this.whyDecision.replaceChildren(
+        h("div.why-head", {}, h("strong", {}, "Decision of this tick: "), `${decided?.name ?? node.decidedIn} `, h("span.arrow", {}, stays ? "stays" : `→ ${target?.name ?? node.state}`), h("span.muted", {}, ` (leaf ${node.leaf})`)),
+        this.whyRows.length ? h("ol.conditions", {}, ...this.whyRows) : h("div.muted", {}, "No condition: the decision always takes this leaf."),
+      );
+    }
+    if (this.valuesShown !== ex) {
+      this.valuesShown = ex;
+      this.whyRows.forEach((row, i) => this.showValues(row, ex?.conditions[i]));
+    }
+    this.whyNotBox.hidden = false;
+    this.renderWhyNot(option, node, whyNot);
+    // The tree, the last transition and where the values come from: once per answer.
+    if (this.moreShown?.option !== option || this.moreShown.ex !== ex || this.moreShown.known !== knownKey) {
+      this.moreShown = { option, ex, known: knownKey };
+      const last = ex?.last_transition ?? null;
+      const parts: Array<Node | null> = [
+        ex?.tree && "if" in ex.tree ? h("details.why-tree", { open: true }, h("summary", {}, "Decision tree, path taken"), this.treeView(ex.tree as WhyTree, name)) : null,
+        last
           ? h(
               "div.last-transition",
               {},
               h("strong", {}, "Last transition: "),
-              `${name(known.from)} → ${name(known.to)} at ${formatClock(known.t)} (leaf ${known.leaf})`,
-              h("div.muted.small", {}, "Its condition values are not available here."),
+              `${last.decided_in_name} → ${last.target_name} at ${formatClock(last.t)} (leaf ${last.leaf})`,
+              h("ol.conditions", {}, ...last.conditions.map((c) => this.conditionRow(c.text || c.source, c.branch, c, null))),
             )
-          : ex
-            ? h("div.muted.small", {}, "No transition of this option in the buffered history up to this tick.")
-            : null,
-      h("div.muted.small", {}, ex ? (ex.recorded ? `Values recorded at t = ${formatClock(ex.t ?? 0)}: what the decision read then.` : "Values the decision read in the last tick.") : "Asking the server for values…"),
-    ];
-    this.why.replaceChildren(...parts.filter((p): p is Node => p !== null));
+          : known
+            ? h(
+                "div.last-transition",
+                {},
+                h("strong", {}, "Last transition: "),
+                `${name(known.from)} → ${name(known.to)} at ${formatClock(known.t)} (leaf ${known.leaf})`,
+                h("div.muted.small", {}, "Its condition values are not available here."),
+              )
+            : ex
+              ? h("div.muted.small", {}, "No transition of this option in the buffered history up to this tick.")
+              : null,
+        h("div.muted.small", {}, ex ? (ex.recorded ? `Values recorded at t = ${formatClock(ex.t ?? 0)}: what the decision read then.` : "Values the decision read in the last tick.") : "Asking the server for values…"),
+      ];
+      this.whyMore.replaceChildren(...parts.filter((p): p is Node => p !== null));
+    }
     void index;
   }
 
@@ -372,19 +420,22 @@ export class OptionView {
     return `${this.session.selectedRobot}|${option.id}|${node.decidedIn}|${node.leaf}|${seq}`;
   }
 
-  /// "Why not STATE": a picker of the states the decision did not go to, and for the one picked
-  /// each route there (the conditions it needs, their values, the one that blocked it: ✗).
-  private whyNotView(option: Option, node: OptionNode, answer: WhyNotAnswer | null): HTMLElement {
-    const picker = h(
-      "select.why-not-picker",
-      { "aria-label": "Why not this state", title: "Why did the decision not go to this state?" },
-      h("option", { value: "" }, "Why not…"),
-      ...option.states.filter((st) => st.id !== node.state).map((st) => h("option", { value: st.id }, st.name)),
-    );
-    picker.value = this.whyNotState !== null && this.whyNotState !== node.state ? String(this.whyNotState) : "";
-    picker.addEventListener("change", () => (picker.value === "" ? this.askWhyNot(null) : this.askWhyNot(Number(picker.value))));
+  /// "Why not STATE": the picker offers the states the decision did not go to (its options change
+  /// with the option and the state only), and for the one picked each route there (the
+  /// conditions it needs, their values, the one that blocked it: ✗).
+  private renderWhyNot(option: Option, node: OptionNode, answer: WhyNotAnswer | null): void {
+    const picker = this.whyNotPicker;
+    if (this.pickerFor?.option !== option || this.pickerFor.state !== node.state) {
+      this.pickerFor = { option, state: node.state };
+      picker.replaceChildren(h("option", { value: "" }, "Why not…"), ...option.states.filter((st) => st.id !== node.state).map((st) => h("option", { value: st.id }, st.name)));
+    }
+    const chosen = this.whyNotState !== null && this.whyNotState !== node.state ? String(this.whyNotState) : "";
+    if (picker.value !== chosen) picker.value = chosen;
+    const key = `${node.decidedIn}|${this.whyNotState}|${this.whyNotError}|${answer ? JSON.stringify(answer) : ""}`;
+    if (this.whyNotShown?.option === option && this.whyNotShown.key === key) return;
+    this.whyNotShown = { option, key };
     const asked = this.whyNotState !== null ? option.states[this.whyNotState] : undefined;
-    const parts: Array<Node | null> = [picker];
+    const parts: Node[] = [];
     if (asked && this.whyNotError) parts.push(h("div.muted.small", {}, `Why not ${asked.name}: ${this.whyNotError}`));
     else if (asked && !answer) parts.push(h("div.muted.small", {}, `Asking why not ${asked.name}…`));
     else if (asked && answer) {
@@ -417,7 +468,7 @@ export class OptionView {
         ),
       );
     }
-    return h("div.why-not", {}, ...parts.filter((p): p is Node => p !== null));
+    this.whyNotResult.replaceChildren(...parts);
   }
 
   /// Ask why the decision in view did not go to state `state` (null: forget the question).
@@ -454,16 +505,27 @@ export class OptionView {
   }
 
   private conditionRow(text: string, taken: boolean, values: WhyCondition | undefined, doc: string | null): HTMLElement {
-    const value = values ? (values.value === null ? "?" : formatValue(typeof values.value === "string" ? null : values.value)) : "";
-    const comparisons = values?.comparisons ?? [];
-    return h(
+    const row = h(
       "li",
       { class: taken ? "cond taken" : "cond not-taken", title: doc ?? "" },
       h("span.branch", {}, taken ? "if" : "else of"),
       h("code", {}, text),
-      values ? h("span.value", { class: `value ${String(values.value)}` }, value) : null,
-      comparisons.length ? h("ul.comparisons", {}, ...comparisons.map((k) => h("li", { class: `comparison ${String(k.value)}` }, h("code", {}, k.shown), h("span.muted", {}, ` = ${k.value === null ? "?" : String(k.value)}`)))) : null,
       doc ? h("div.cond-doc.muted", {}, doc) : null,
+    );
+    if (values) this.showValues(row, values);
+    return row;
+  }
+
+  /// Put a condition's values into its row, after its text (replacing the values shown before;
+  /// none: take them out).
+  private showValues(row: HTMLElement, values: WhyCondition | undefined): void {
+    for (const child of [...row.children]) if (child.classList.contains("value") || child.classList.contains("comparisons")) child.remove();
+    if (!values) return;
+    const value = values.value === null ? "?" : formatValue(typeof values.value === "string" ? null : values.value);
+    const comparisons = values.comparisons ?? [];
+    row.children[1]?.after(
+      h("span.value", { class: `value ${String(values.value)}` }, value),
+      ...(comparisons.length ? [h("ul.comparisons", {}, ...comparisons.map((k) => h("li", { class: `comparison ${String(k.value)}` }, h("code", {}, k.shown), h("span.muted", {}, ` = ${k.value === null ? "?" : String(k.value)}`))))] : []),
     );
   }
 
