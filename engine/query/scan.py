@@ -177,7 +177,6 @@ def stored_columns(
             return None
     for element in written[len(mine) :]:
         codes.code(element)
-    keep = Selection() if selection is None else Selection(symbols=selection.symbols, functions=selection.functions)
     result: dict[str, RobotColumns] = {}
     for robot in robots:
         pieces = [_kept(p.robots[robot], keep).columns({}, keep) for p in parts if robot in p.robots]
@@ -191,14 +190,8 @@ def stored_columns(
 
 
 def _kept(events: RobotEvents, keep: Selection) -> RobotEvents:
-    """What ``keep`` names of a robot's stored ticks: of the values and the calls (every path node)."""
-    symbols, functions = keep.symbols, keep.functions
-    return dataclasses.replace(
-        events,
-        events=events.events if symbols is None else {n: e for n, e in events.events.items() if n in symbols},
-        calls=events.calls if functions is None else {n: c for n, c in events.calls.items() if n in functions},
-        functions=events.functions if functions is None else functions,
-    )
+    """A robot's stored ticks as decoded for ``keep`` (its values and calls only): the functions it names."""
+    return events if keep.functions is None else dataclasses.replace(events, functions=keep.functions)
 
 
 def _key_tick(seq: int, every: int) -> int:

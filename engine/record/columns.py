@@ -399,7 +399,7 @@ class ColumnsBuilder:
         if reads is None:
             self._has_reads = False
         elif self.functions is None or self.functions:
-            self._collect_calls(row, self._program(gen), reads)
+            collect_calls(row, self._program(gen), reads, self.codes, self._calls)
         return row
 
     def _values(self, data: dict[str, Any]) -> dict[str, Any]:
@@ -469,9 +469,6 @@ class ColumnsBuilder:
         for name, value in values.items():
             self._set(row, name, value)
 
-    def _collect_calls(self, row: int, program: ProgramCodes, reads: list[Any]) -> None:
-        collect_calls(row, program, reads, self.codes, self._calls)
-
     def _raw(self, value: Any, enum: str | None, tables: dict[str, dict[int, int]]) -> float | None:
         return raw_number(value, enum, tables, self.codes)
 
@@ -497,7 +494,7 @@ class ColumnsBuilder:
             np.asarray(self.gen, dtype=np.int64),
             events,
             nodes,
-            {name: self._call_table(*table) for name, table in self._calls.items()},
+            {name: call_table(*table) for name, table in self._calls.items()},
             self._collected(),
             self._has_reads,
         )
@@ -581,10 +578,6 @@ class ColumnsBuilder:
         return NodeTable(
             rows, kind, ident, state, decided, leaf, option_time, state_time, start, count, params, params_known
         )
-
-    @staticmethod
-    def _call_table(rows: list[int], args: list[tuple[float | None, ...]], result: list[float | None]) -> CallTable:
-        return call_table(rows, args, result)
 
 
 #: Per input function name: the tick rows, arguments and results of its calls, in order.
