@@ -7,7 +7,8 @@
 /// generation is marked on the axis by its reason (reload, reset, fork, ...); clicking a mark
 /// shows what changed (panels/changes.ts). The matches of a search (panels/search.ts) are green
 /// bands on the axis and on their robot's team row.
-import { buildRobotTimeline, buildTeamTimeline, segmentHue, type TimelineRow } from "../timeline";
+import type { DescriptionIndex } from "../description";
+import { segmentHue, TimelineBuilder, type TimelineRow } from "../timeline";
 import type { Session, SessionEvent } from "../session";
 import { formatClock, formatMs, h } from "../ui";
 import { ChangesDialog, type Mark } from "./changes";
@@ -31,12 +32,24 @@ export class TimelinePanel {
   private readonly scroller: HTMLElement;
   private readonly liveButton: HTMLButtonElement;
   private readonly info: HTMLElement;
+  /// The rows, kept up to date with the buffer tick by tick (a full build only on structural changes).
+  private readonly model = new TimelineBuilder();
+  /// Description indexes per generation and robot, until the next structural change.
+  private readonly indexes = new Map<number, DescriptionIndex | null>();
+  private readonly indexIn = (id: number, gen: number): DescriptionIndex | null => {
+    const key = gen * 65536 + id;
+    let index = this.indexes.get(key);
+    if (index === undefined) this.indexes.set(key, (index = this.session.indexIn(gen, id)));
+    return index;
+  };
   private team: TimelineRow[] = [];
   private rows: TimelineRow[] = [];
   private builtAt = 0;
   private t0 = 0;
   private t1 = 1;
   private width = 300;
+  /// The scroller's client width as the ResizeObserver last saw it (0: not yet, or hidden then).
+  private scrollerWidth = 0;
   private dirty = true;
   /// Breakpoint hits, marked on the axis (red) at their time.
   private hits: ReadonlyArray<{ t: number; seq?: number; robot: number; description: string }> = [];
@@ -66,6 +79,9 @@ export class TimelinePanel {
     this.canvas.addEventListener("pointerdown", (ev) => this.pointer(ev));
     this.canvas.addEventListener("keydown", (ev) => this.key(ev));
     new ResizeObserver(() => {
+      // Layout is fresh here: reading the width now spares each draw a forced layout (the
+      // draw comes in the next frame, as it did; drawing here could resize the scroller again).
+      this.scrollerWidth = this.scroller.clientWidth;
       this.dirty = true;
     }).observe(this.scroller);
   }
@@ -172,17 +188,20 @@ export class TimelinePanel {
     this.liveButton.textContent = session.isLive ? "● Live" : "▶ Back to live";
     const now = performance.now();
     const structural = changes.has("hello") || changes.has("history") || changes.has("select");
+    if (structural) {
+      // Descriptions, generations or the robot changed: the model and the cached indexes go.
+      this.model.invalidate();
+      this.indexes.clear();
+    }
     if (structural || (changes.has("tick") && session.isLive && now - this.builtAt > 250)) {
       this.builtAt = now;
-      const ticks = session.buffer.all;
-      const indexes = new Map<number, ReturnType<Session["indexIn"]>>(); // per generation and robot, once per build
-      const indexIn = (gen: number, id: number): ReturnType<Session["indexIn"]> => {
-        const key = gen * 65536 + id;
-        if (!indexes.has(key)) indexes.set(key, session.indexIn(gen, id));
-        return indexes.get(key) ?? null;
-      };
-      this.team = buildTeamTimeline(ticks, session.robots.filter((a) => a.program !== null), (id, gen) => indexIn(gen, id));
-      this.rows = buildRobotTimeline(ticks, session.selectedRobot, (gen) => indexIn(gen, session.selectedRobot));
+      this.model.update(session.buffer.all, {
+        robotId: session.selectedRobot,
+        agents: session.robots.filter((a) => a.program !== null),
+        indexOf: this.indexIn,
+      });
+      this.team = this.model.team;
+      this.rows = this.model.rows;
       this.t0 = session.buffer.oldest?.x ?? 0;
       this.t1 = Math.max(this.t0 + 1, session.buffer.newest?.x ?? 1);
       this.marks = session.buffer.starts().map((tick) => ({ gen: tick.gen, reason: session.generations.get(tick.gen)?.reason ?? "reload", t: tick.t, x: tick.x }));
@@ -198,7 +217,7 @@ export class TimelinePanel {
   private draw(): void {
     const session = this.session;
     const dpr = window.devicePixelRatio || 1;
-    const width = Math.max(200, this.scroller.clientWidth);
+    const width = Math.max(200, this.scrollerWidth || this.scroller.clientWidth);
     const height = AXIS_H + GAP + this.team.length * TEAM_ROW + GAP + Math.max(1, this.rows.length) * OPTION_ROW + 6;
     this.width = width;
     if (this.canvas.width !== Math.round(width * dpr) || this.canvas.height !== Math.round(height * dpr)) {
