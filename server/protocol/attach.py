@@ -47,7 +47,8 @@ from xabsl_studio.server.protocol.host import (
 from xabsl_studio.server.protocol.types import HelloReason, ProtocolError, WireValue
 
 #: The attach protocol's version, named in ``attach`` and ``welcome``; both ends refuse another.
-PROTOCOL = 1
+#: 2: hosts send raw symbol values (``raw_values`` in ``generation``), the studio converts them.
+PROTOCOL = 2
 #: The port a host listens on unless told otherwise.
 DEFAULT_PORT = 7410
 #: Largest message a studio may send (a hot reload's intermediate code is the big one).
@@ -212,9 +213,17 @@ def encode_sample(sample: Sample) -> bytes:
                 "robots": robots,
                 "scene": fragment(sample.scene),
                 "status": fragment(sample.status),
-            }
+            },
+            # raw symbol values as the host's getters gave them: numpy scalars as numbers, a value
+            # JSON cannot hold (NaN, infinities, another type) as null, unknown
+            default=_null,
+            option=orjson.OPT_SERIALIZE_NUMPY,
         )
     )
+
+
+def _null(value: Any) -> None:
+    return None
 
 
 def encode_generation(message: HostGeneration) -> bytes:
@@ -234,6 +243,7 @@ def encode_generation(message: HostGeneration) -> bytes:
                 "errors": gen.errors,
                 "ics": message.ics,
                 "enums": gen.enums,
+                "raw_values": gen.raw_values,
                 "sources": message.sources,
             },
             option=orjson.OPT_NON_STR_KEYS,  # enum host values are integers
@@ -548,6 +558,7 @@ def _generation(message: dict[str, Any]) -> HostGeneration:
         _int(message, "seed"),
         errors,
         enums=_enums(message.get("enums", {})),
+        raw_values=_bool(message, "raw_values", False),
     )
     return HostGeneration(generation, ics, _sources(message.get("sources", {})))
 

@@ -75,6 +75,10 @@ class NewGeneration:
     fork: tuple[int, int, int] | None = None
     #: per behavior set: enum name -> host value -> element (what the raw enum values of ``reads`` mean)
     enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
+    #: the samples' input and output values are raw (exact decimals, enums as host values): the
+    #: server converts them for display (``xabsl_studio.server.protocol.display.SampleDisplay``);
+    #: False: they are display values already (a NaoTH robot, a replay)
+    raw_values: bool = False
 
 
 @dataclass(frozen=True, slots=True)

@@ -541,6 +541,8 @@ class AttachedSession(Session):
             0,
             errors,
             enums=enums,
+            # hosts send raw values (attach protocol 2); a gone host's robots are None, unknown
+            raw_values=True,
         )
         if self.live_recorder is not None:
             self.live_recorder.sources.update(sources)

@@ -32,6 +32,7 @@ from typing import Any
 import orjson
 
 from xabsl_studio.engine.types import Value
+from xabsl_studio.server.protocol.display import SampleDisplay
 from xabsl_studio.server.protocol.host import NewGeneration, Sample
 from xabsl_studio.server.protocol.limits import FULL_EVERY
 from xabsl_studio.server.protocol.packing import compress_structure, pack_structure
@@ -72,6 +73,8 @@ class Generation:
     changed: dict[str, list[str]] = field(default_factory=dict)
     #: per behavior key: enum name -> host value -> element (the raw enum values of an entry's ``reads``)
     enums: dict[str, dict[str, dict[int, str]]] = field(default_factory=dict)
+    #: turns this generation's samples into display values when they come raw (None: they do not)
+    display: SampleDisplay | None = field(default=None, repr=False)
     #: the structure as browsers get it (spans packed), made on first use
     _wire: tuple[dict[str, Any], bytes, bytes | None] | None = field(default=None, repr=False)
 
@@ -85,6 +88,14 @@ class Generation:
             encoded = orjson.dumps(packed)
             self._wire = (packed, encoded, compress_structure(encoded))
         return self._wire
+
+    def shown(self, sample: Sample) -> Sample:
+        """``sample`` of this generation with display values (as it came when it came with them).
+
+        Every sample of the generation passes here once, in order: the conversion keeps each
+        robot's last values and converts only what changed.
+        """
+        return self.display.convert(sample) if self.display is not None else sample
 
     @classmethod
     def from_message(cls, message: NewGeneration) -> Generation:
@@ -100,6 +111,11 @@ class Generation:
             output_ids=message.output_ids,
             engines=tuple(r["program"] is not None for r in structure["robots"]),
             enums=message.enums,
+            display=(
+                SampleDisplay(structure, message.enums, message.input_ids, message.output_ids)
+                if message.raw_values
+                else None
+            ),
         )
 
 

@@ -350,6 +350,7 @@ class Session:
             if isinstance(message, Sample):
                 if self.generation is None or message.gen != self.generation.number:
                     continue  # never expected: a sample always follows its generation
+                message = self.generation.shown(message)
                 latest = self.recorder.record(self.generation, message)
                 self.paused, self.speed = message.paused, message.speed
                 if self.live_recorder is not None:

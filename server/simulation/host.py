@@ -173,6 +173,7 @@ class HostEngines(EngineSet):
             0,
             dict(self.errors),
             enums={key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
+            raw_values=True,
         )
         return HostGeneration(
             message,

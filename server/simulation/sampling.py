@@ -3,18 +3,19 @@
 The engine is read through the project's one sampler (``xabsl_studio.engine.record.sampler.AgentSampler``,
 the recorder's too): the compact ``path`` of docs/protocol.md (integer ids), the input and
 output symbols, and what the tick's decisions read (exact, as JSON: the server's ring keeps it
-so that "why" at any past tick uses the values the decision saw). This module turns the symbols
-into the values frames carry (decimals rounded, enums as element indices) and builds the id
-tables of a program (:class:`ProgramCodec`); the tick's sample goes to the server process
-(``xabsl_studio.server.session.frames`` keeps and encodes it).
+so that "why" at any past tick uses the values the decision saw). This module turns the
+parameters of the path into the values frames carry (decimals rounded, enums as element indices)
+and builds the id tables of a program (:class:`ProgramCodec`); the symbols go to the server
+process raw, exactly as the sampler read them: the server turns them into display values
+(``xabsl_studio.server.protocol.display.SampleDisplay``), so that converting them costs the
+simulation process (or an attached robot's program) nothing, and keeps and encodes the sample
+(``xabsl_studio.server.session.frames``).
 """
 
 from __future__ import annotations
 
-import operator
 from collections.abc import Callable
 from dataclasses import dataclass
-from itertools import compress
 from typing import Any
 
 import orjson
@@ -24,10 +25,8 @@ from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables, read
 from xabsl_studio.engine.runtime import Engine
 from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.engine.types import Kind, Value
+from xabsl_studio.server.protocol.display import converter, round_decimal
 from xabsl_studio.server.protocol.types import BEHAVIOR_PARAMS_INDEX, ID_INDEX, KIND_INDEX, OPTION_PARAMS_INDEX
-
-#: Decimal values are rounded to this many fractional digits in frames (display precision).
-DECIMALS = 3
 
 _OPT = orjson.OPT_NON_STR_KEYS
 
@@ -77,7 +76,7 @@ class ProgramCodec:
         """A value as frames carry it (see docs/protocol.md "Values")."""
         if kind is Kind.DECIMAL:
             try:
-                return round(float(value), DECIMALS)
+                return round_decimal(float(value))
             except (TypeError, ValueError, OverflowError):
                 return None
         if kind is Kind.BOOLEAN:
@@ -95,18 +94,17 @@ class ProgramCodec:
 
 
 class FrameSampler:
-    """One robot's part of a frame after a tick: display path, input and output values, extras.
+    """One robot's part of a sample after a tick: display path, raw input and output values, extras.
 
     The engine is read by the one sampler of the project, :class:`xabsl_studio.engine.record.sampler.AgentSampler`
-    (the recorder's too); this class only turns its raw values into the display values of frames
-    (docs/protocol.md "Values": decimals rounded, booleans, enum element indices).
+    (the recorder's too); this class turns the path's parameters into the display values of frames
+    (docs/protocol.md "Values": decimals rounded, booleans, enum element indices) and leaves the
+    symbols raw for the server (see the module docstring).
     """
 
     __slots__ = (
         "_behavior_params",
-        "_inputs",
         "_option_params",
-        "_outputs",
         "_shown_params",
         "codec",
         "engine",
@@ -120,9 +118,6 @@ class FrameSampler:
         self.codec = codec
         #: the shared sampler (assignment values are not part of frames)
         self.reader = AgentSampler(engine, codec.tables, assignments=False)
-        # Per symbol (in the sampler's order, which is the codec's): the conversion to a display value.
-        self._inputs = Displayed(tuple(self._converter(kind, enum) for _, _, kind, enum in codec.inputs))
-        self._outputs = Displayed(tuple(self._converter(kind, enum) for _, _, kind, enum in codec.outputs))
         #: per (node kind, id): the raw parameters of its last path node and their display values
         self._shown_params: dict[tuple[int, int], tuple[list[Any], list[Any]]] = {}
         # Per option / basic behavior id: the conversion of each parameter, in declaration order.
@@ -162,22 +157,15 @@ class FrameSampler:
         return nodes
 
     def _converter(self, kind: Kind, enum: str | None) -> Callable[[Any], Value | None]:
-        if kind is Kind.DECIMAL:
-            return _round
-        if kind is Kind.BOOLEAN:
-            return bool
-        table = self.codec.enum_index.get(enum or "", {})
-        return lambda value: table.get(int(value), -1)
+        return converter(kind, self.codec.enum_index.get(enum or "", {}))
 
     def inputs(self) -> tuple[Value | None, ...]:
-        """The display values of the plain input symbols (None: the host getter failed)."""
-        values, unread = self.reader.inputs()
-        return self._inputs.display(values, unread)
+        """The raw values of the plain input symbols, in the codec's order (None: the host getter failed)."""
+        return self.reader.inputs()[0]
 
     def outputs(self) -> tuple[Value | None, ...]:
-        """The display values of the output and internal symbols."""
-        values, unread = self.reader.outputs()
-        return self._outputs.display(values, unread)
+        """The raw values of the output and internal symbols, in the codec's order (None: unread)."""
+        return self.reader.outputs()[0]
 
     def reads(self) -> bytes:
         """What the robot's decisions read in the tick, exact, as JSON (docs/recordings.md ``reads``).
@@ -212,85 +200,3 @@ class FrameSampler:
         if not parts:
             return b""
         return b"," + orjson.dumps(parts, option=_OPT)[1:-1]
-
-
-#: Symbols compared as one slice before value by value (:class:`Displayed`).
-_BLOCK = 16
-
-
-class Displayed:
-    """The display values of one robot's symbols, converting only what changed since the last tick.
-
-    Most symbols keep their value from one tick to the next (of a team-sized set's hundreds of
-    inputs, a few change): the raw tuple is compared with the last one in C, and only the values
-    that differ are converted again. Equal raw values convert to equal display values, so this
-    gives exactly what converting everything gives (0.0 and -0.0 are equal: a zero keeps the
-    sign it was first shown with).
-    """
-
-    __slots__ = ("_converters", "_raw", "_shown")
-
-    def __init__(self, converters: tuple[Callable[[Any], Value | None], ...]) -> None:
-        self._converters = converters
-        self._raw: tuple[Value | None, ...] | None = None
-        self._shown: tuple[Value | None, ...] = ()
-
-    def display(self, values: tuple[Value | None, ...], unread: tuple[str, ...]) -> tuple[Value | None, ...]:
-        """``values`` as display values (None where a getter raised, ``unread`` names them)."""
-        raw = self._raw
-        if unread or raw is None or len(raw) != len(values):
-            shown = _display(self._converters, values, unread)
-            # After a failed read the next tick converts everything again (None is no raw value).
-            self._raw, self._shown = (None if unread else values), shown
-            return shown
-        if values == raw:
-            return self._shown
-        out = list(self._shown)
-        converters = self._converters
-        n = len(values)
-        # Blocks first: a tuple comparison skips identical objects (a value the host did not touch),
-        # so unchanged blocks cost a slice each and only changed ones are compared value by value.
-        for start in range(0, n, _BLOCK):
-            end = start + _BLOCK
-            if values[start:end] == raw[start:end]:
-                continue
-            for i in compress(range(start, min(end, n)), map(operator.ne, values[start:end], raw[start:end])):
-                try:
-                    out[i] = converters[i](values[i])
-                except Exception:  # NaN, infinities, a stray type: unknown
-                    out[i] = None
-        shown = tuple(out)
-        self._raw, self._shown = values, shown
-        return shown
-
-
-def _display(
-    converters: tuple[Callable[[Any], Value | None], ...], values: tuple[Value | None, ...], unread: tuple[str, ...]
-) -> tuple[Value | None, ...]:
-    """``values`` converted for display, in C when every value was read and converts."""
-    if not unread:
-        try:
-            return tuple(map(operator.call, converters, values))
-        except Exception:  # a value that does not convert (NaN, a stray type): one by one below
-            pass
-    out: list[Value | None] = []
-    for convert, value in zip(converters, values, strict=True):
-        try:
-            out.append(None if value is None else convert(value))
-        except Exception:
-            out.append(None)
-    return tuple(out)
-
-
-_SCALE = 10.0**DECIMALS
-
-
-def _round(value: float) -> float:
-    """``value`` to DECIMALS fractional digits for display.
-
-    ``round(v * 1000) / 1000`` rather than ``round(v, 3)``: the two-argument round does exact
-    decimal rounding through a string conversion and costs 3-4x as much, and every decimal input
-    and output of every robot passes here on every tick. NaN and infinities raise (the sampler
-    then records None for the value).
-    """
-    return round(value * _SCALE) / _SCALE

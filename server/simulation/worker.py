@@ -262,6 +262,7 @@ class Simulation(EngineSet):
             dict(self.errors),
             fork,
             {key: codec.tables.enums for key, codec in self.codecs[self.generation_number].items()},
+            raw_values=True,
         )
 
     def sample_droppable(self) -> bool:

@@ -246,13 +246,15 @@ def test_samples_carry_what_each_decision_read_as_plain_json(robot: int) -> None
     import struct
 
     sock = socket.create_connection(("127.0.0.1", robot), timeout=10)
-    body = json.dumps({"type": "attach", "protocol": 1, "token": None, "studio": "raw", "control": False}).encode()
+    body = json.dumps({"type": "attach", "protocol": 2, "token": None, "studio": "raw", "control": False}).encode()
     sock.sendall(struct.pack(">I", len(body)) + body)
     buffer = b""
     messages: list[dict[str, object]] = []
     try:
         while sum(m["type"] == "sample" for m in messages) < 50:
-            buffer += sock.recv(1 << 16)
+            received = sock.recv(1 << 16)
+            assert received, f"the host closed the connection: {messages[-1:]}"
+            buffer += received
             while len(buffer) >= 4 and len(buffer) >= 4 + struct.unpack(">I", buffer[:4])[0]:
                 size = struct.unpack(">I", buffer[:4])[0]
                 messages.append(json.loads(buffer[4 : 4 + size]))
@@ -262,6 +264,7 @@ def test_samples_carry_what_each_decision_read_as_plain_json(robot: int) -> None
     generation = next(m for m in messages if m["type"] == "generation")
     structure: dict[str, Any] = generation["structure"]  # type: ignore[assignment]
     enums: dict[str, Any] = generation["enums"]  # type: ignore[assignment]
+    assert generation["raw_values"] is True  # the symbols come as the host read them
     # game.state's host values (the robot's own numbering) name its elements
     assert set(enums["behavior"]["game.state"].values()) >= {"game.state.playing", "game.state.ready"}
     options = {o["id"]: o["name"] for o in structure["programs"]["behavior"]["options"]}
@@ -278,3 +281,8 @@ def test_samples_carry_what_each_decision_read_as_plain_json(robot: int) -> None
         read_inputs = {inputs[r[0]] for r in reads if isinstance(r, list) and r[0] in inputs and len(r) == 2}
         assert "game.state" in read_inputs  # play's common decision reads it every tick
         assert all(options[r] for r in reads if isinstance(r, int))
+        # the symbols are raw: each plain input a decision read has exactly the value it read
+        ids: list[int] = generation["input_ids"][0]  # type: ignore[index]
+        values = dict(zip(ids, sample["robots"][0][2], strict=True))  # type: ignore[index]
+        read_values = {r[0]: r[1] for r in reads if isinstance(r, list) and r[0] in inputs and len(r) == 2}
+        assert read_values and all(values[i] == v for i, v in read_values.items())

@@ -58,7 +58,7 @@ class Joined:
             self.generations.append(message)
             self.generation = Generation.from_message(message)
         elif isinstance(message, Sample):
-            self.recorder.record(self.generation, message)
+            self.recorder.record(self.generation, self.generation.shown(message))
             self.samples[message.seq] = message
         return True
 

@@ -32,7 +32,7 @@ class _Recorded:
         if isinstance(message, NewGeneration):
             self.generation = Generation.from_message(message)
         elif isinstance(message, Sample):
-            self.latest = self.recorder.record(self.generation, message)
+            self.latest = self.recorder.record(self.generation, self.generation.shown(message))
         return True
 
     def _tick(self) -> Entry:

@@ -1,4 +1,9 @@
-"""The studio's frames read the engines through the recorder's sampler: one mechanism, display values on top."""
+"""The studio's samples read the engines through the recorder's sampler: one mechanism, raw symbols.
+
+The simulation process sends the symbols raw; the server turns them into display values
+(``SampleDisplay``, from what the generation announced), so these tests check that conversion
+against one made from the simulation's own program tables.
+"""
 
 from __future__ import annotations
 
@@ -9,15 +14,21 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+import orjson
+
 from tests.navset import write_set
+from xabsl_studio.engine.emit.json import program_to_json
 from xabsl_studio.engine.ir.ic_reader import read_ic
 from xabsl_studio.engine.lang import Compilation
 from xabsl_studio.engine.record import AgentSampler
 from xabsl_studio.engine.runtime import Bindings, Engine
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.engine.worlds.bench import BenchExample
+from xabsl_studio.server.protocol.display import Displayed, display_values
+from xabsl_studio.server.protocol.host import NewGeneration, Sample
+from xabsl_studio.server.session.frames import Generation
 from xabsl_studio.server.session.live import Session
-from xabsl_studio.server.simulation.sampling import Displayed, FrameSampler, ProgramCodec, _display
+from xabsl_studio.server.simulation.sampling import FrameSampler, ProgramCodec
 from xabsl_studio.server.simulation.worker import Simulation, WorkerConfig
 
 PROGRAM = read_ic(
@@ -51,7 +62,7 @@ def make_engine() -> tuple[Engine, SimpleNamespace, dict[str, bool]]:
     return Engine(bindings, PROGRAM), world, broken
 
 
-def test_frames_are_the_shared_samplers_values_for_display() -> None:
+def test_samples_carry_the_shared_samplers_raw_values() -> None:
     engine, world, _ = make_engine()
     frames = FrameSampler(0, engine, ProgramCodec.build("main", PROGRAM, engine))
     assert isinstance(frames.reader, AgentSampler)
@@ -60,13 +71,12 @@ def test_frames_are_the_shared_samplers_values_for_display() -> None:
         world.a += 0.1
         engine.execute(t)
         raw = recorder.sample()
-        assert frames.inputs() == tuple(round(v * 1000) / 1000 for v in raw.inputs)  # type: ignore[operator]
-        assert frames.outputs() == tuple(round(v * 1000) / 1000 for v in raw.outputs)  # type: ignore[operator]
+        assert frames.inputs() == raw.inputs and frames.outputs() == raw.outputs  # exact, as read
         assert frames.path() == raw.path  # no parameters: the engine's own path
         assert raw.unread == () and frames.reader.sample().assignments == ()  # the studio skips them
 
 
-def test_a_host_getter_that_raises_is_none_in_frames_and_unread_in_recordings() -> None:
+def test_a_host_getter_that_raises_is_none_in_samples_and_unread_in_recordings() -> None:
     engine, _world, broken = make_engine()
     frames = FrameSampler(0, engine, ProgramCodec.build("main", PROGRAM, engine))
     recorder = AgentSampler(engine)
@@ -76,9 +86,10 @@ def test_a_host_getter_that_raises_is_none_in_frames_and_unread_in_recordings() 
     sample = recorder.sample()
     assert sample.unread == ("c",)
     assert dict(zip(names, sample.inputs, strict=True)) == {"a": 1.23456, "b": 2.0, "c": None}
-    assert dict(zip(names, frames.inputs(), strict=True)) == {"a": 1.235, "b": 2.0, "c": None}
+    shown = Displayed(tuple(frames._converter(Kind.DECIMAL, None) for _ in names))
+    assert dict(zip(names, shown.display(frames.inputs()), strict=True)) == {"a": 1.235, "b": 2.0, "c": None}
     broken["c"] = False
-    assert dict(zip(names, frames.inputs(), strict=True)) == {"a": 1.235, "b": 2.0, "c": 3.0}
+    assert dict(zip(names, shown.display(frames.inputs()), strict=True)) == {"a": 1.235, "b": 2.0, "c": 3.0}
     assert recorder.sample().unread == ()
 
 
@@ -92,22 +103,23 @@ def test_display_values_converted_only_where_raw_values_changed_are_those_of_a_f
 
     converters = (counted,) * 40
     shown = Displayed(converters)
-    values: list[float] = [rng.uniform(-1e4, 1e4) for _ in range(40)]
+    values: list[float | None] = [rng.uniform(-1e4, 1e4) for _ in range(40)]
     for tick in range(300):
         changed = rng.sample(range(40), rng.choice((0, 1, 3, 40)))
         for i in changed:
-            values[i] = rng.choice((rng.uniform(-1e4, 1e4), math.nan, math.inf, -0.0, 0.0005))
+            values[i] = rng.choice((rng.uniform(-1e4, 1e4), math.nan, math.inf, -0.0, 0.0005, None))
         raw = tuple(values)
         calls[0] = 0
-        got = shown.display(raw, ())
+        got = shown.display(raw)
         converted = calls[0]
-        assert _nan_free(got) == _nan_free(_display(converters, raw, ()))
+        assert _nan_free(got) == _nan_free(display_values(converters, raw))
+        assert all(g is None for g, v in zip(got, raw, strict=True) if v is None)  # unknown stays unknown
         if tick:  # after the first tick, only what differs from the tick before is converted again
             assert converted <= len(changed) + sum(1 for v in raw if v != v)
-    # a getter that raised: None there, everything converted again on the next tick
-    assert shown.display((None, *values[1:]), ("s0",))[0] is None
+    # a getter that raised: None there; its next value is converted
+    assert shown.display((None, *values[1:]))[0] is None
     values[0] = 1.23456
-    assert shown.display(tuple(values), ())[0] == 1.235
+    assert shown.display(tuple(values))[0] == 1.235
 
 
 def _nan_free(values: tuple[object, ...]) -> tuple[object, ...]:
@@ -173,29 +185,86 @@ def test_a_sampler_of_one_mapping_returns_what_the_behavior_reads_overrides_incl
     assert engine.output_sampler(("p", "o"))() == (2.0, 1.0)  # stored outputs, in the order asked
 
 
-def test_a_team_sized_bench_set_samples_what_a_full_conversion_gives(tmp_path: Path) -> None:
+def _codec_display(codec: ProgramCodec, kinds: tuple[tuple[int, str, Kind, str | None], ...]) -> tuple[Any, ...]:
+    """The conversion of a symbol tuple as the simulation's own tables give it (the server's must agree)."""
+    return tuple((lambda v, k=kind, e=enum: codec.display(k, e, v)) for _, _, kind, enum in kinds)
+
+
+def test_a_team_sized_bench_set_shows_what_a_full_conversion_gives(tmp_path: Path) -> None:
     # naoth-2018's shape: 195 inputs and 71 outputs per robot, a few of them set by hand
     write_set(tmp_path, inputs=184, outputs=69)
     example = BenchExample(tmp_path, robots=3)
     session = Session(example)
     programs: Any = {k: (s.running, s.running_json) for k, s in session.programs.items()}
     sim = Simulation(WorkerConfig(example, seed=3, programs=programs))
-    sim.generation("connect")
+    message = sim.generation("connect")
+    assert isinstance(message, NewGeneration) and message.raw_values
+    gen = Generation.from_message(message)
     sampler = sim.samplers[1]
     assert sampler is not None
     assert len(sampler.codec.inputs) == 195 and len(sampler.codec.outputs) == 71
+    full_in = _codec_display(sampler.codec, sampler.codec.inputs)
+    full_out = _codec_display(sampler.codec, sampler.codec.outputs)
     hand = {5: ("sensor.approach.s0", 1.23456), 9: ("sensor.turn.s3", 2), 14: ("sensor.approach.s0", -0.0004)}
     for tick in range(20):
         if tick in hand:
             symbol, value = hand[tick]
             sim.world.command("set_input", {"robot": 1, "symbol": symbol, "value": value})  # type: ignore[attr-defined]
-        sim.tick()
-        raw, unread = sampler.reader.inputs()
-        shown = dict(zip((name for _, name, *_ in sampler.codec.inputs), sampler.inputs(), strict=True))
-        assert sampler.inputs() == _display(sampler._inputs._converters, raw, unread)
+        raw = sim.tick()
+        sample = gen.shown(raw)
+        raw_in, raw_out = sampler.reader.inputs()[0], sampler.reader.outputs()[0]
+        assert raw.inputs[1] == raw_in and raw.outputs[1] == raw_out  # sent as read
+        assert sample.inputs[1] == display_values(full_in, raw_in)
+        assert sample.outputs[1] == display_values(full_out, raw_out)
+        shown = dict(zip((name for _, name, *_ in sampler.codec.inputs), sample.inputs[1], strict=True))
         if tick >= 14:
             assert shown["sensor.approach.s0"] == -0.0 and shown["sensor.turn.s3"] == 2  # enum: element index
         elif tick >= 5:
             assert shown["sensor.approach.s0"] == 1.235
-        raw_out, unread_out = sampler.reader.outputs()
-        assert sampler.outputs() == _display(sampler._outputs._converters, raw_out, unread_out)
+
+
+ENUM_OPTIONS = {
+    "agents.xabsl": 'include "s.xabsl";\ninclude "main.xabsl";\nagent x("X", main);\n',
+    "s.xabsl": 'namespace s("S") {\n  enum mode { slow, fast, off };\n  enum mode input mode;\n'
+    "  float input speed;\n  enum mode output shown;\n}\n",
+    "main.xabsl": "option main { initial state s { action { shown = mode; } } }\n",
+}
+
+
+def test_the_server_names_enum_values_the_host_numbers_its_own_way(compile_sources: Callable[..., Compilation]) -> None:
+    # Host values 30, 10, 20 for slow, fast, off: a display value is the element's index (0, 1, 2),
+    # whatever number the host gives it, and a number the enumeration does not name is -1.
+    program = compile_sources(ENUM_OPTIONS, "agents.xabsl").program
+    assert program is not None
+    world = SimpleNamespace(mode=30, speed=1.23456)
+    bindings = Bindings()
+    bindings.enum("mode", {"slow": 30, "fast": 10, "off": 20})
+    bindings.input_attribute("mode", Kind.ENUM, world, "mode", enum="mode")
+    bindings.input_attribute("speed", Kind.DECIMAL, world, "speed")
+    bindings.output("shown", Kind.ENUM, enum="mode")
+    engine = Engine(bindings, program)
+    codec = ProgramCodec.build("main", program, engine)
+    frames = FrameSampler(0, engine, codec)
+    message = NewGeneration(
+        1,
+        "start",
+        orjson.dumps({"programs": {"main": program_to_json(program)}, "robots": [{"name": "x", "program": "main"}]}),
+        b"{}",
+        (tuple(i for i, *_ in codec.inputs),),
+        (tuple(i for i, *_ in codec.outputs),),
+        0,
+        {},
+        enums={"main": codec.tables.enums},
+        raw_values=True,
+    )
+    gen = Generation.from_message(message)
+    names = [name for _, name, *_ in codec.inputs]
+    for t, (mode, element) in enumerate(((30, 0), (10, 1), (20, 2), (99, -1), (30, 0))):
+        world.mode = mode
+        engine.execute(25 * t)
+        ins, outs = (frames.inputs(),), (frames.outputs(),)
+        sample = Sample(t, 1, 25 * t, 0.0, False, 1.0, (b"[]",), (b"",), ins, outs, b"{}", b"{}")
+        shown = gen.shown(sample)
+        assert dict(zip(names, shown.inputs[0], strict=True)) == {"mode": element, "speed": 1.235}
+        assert shown.outputs[0] == ((element,) if element >= 0 else (-1,))
+        assert sample.inputs[0] == tuple(world.mode if n == "mode" else world.speed for n in names)  # raw as read
