@@ -192,13 +192,14 @@ def run_attach(args: argparse.Namespace) -> int:
 
     from xabsl_studio.engine.cli import UsageError
     from xabsl_studio.engine.host import BehaviorSource, ExampleError, behavior_source, common_root
+    from xabsl_studio.engine.record.folder import cache_folder, default_folder
     from xabsl_studio.server.api.app import WEB_DIST, create_app
     from xabsl_studio.server.api.library import RecordingLibrary
     from xabsl_studio.server.api.listen import uvicorn_config
     from xabsl_studio.server.api.security import SecurityPolicy, TokenError
     from xabsl_studio.server.protocol.naoth import parse_naoth_address
     from xabsl_studio.server.session.attached import AttachedExample, AttachedSession, parse_address
-    from xabsl_studio.server.session.recording import LiveRecorder, cache_folder, default_folder
+    from xabsl_studio.server.session.recording import LiveRecorder
 
     naoth = [a.startswith("naoth://") for a in args.addresses]
     if any(naoth) and not all(naoth):
@@ -326,7 +327,8 @@ def run(args: argparse.Namespace) -> int:
             )
             session.paused = args.paused
             if not args.no_record:
-                from xabsl_studio.server.session.recording import LiveRecorder, default_folder
+                from xabsl_studio.engine.record.folder import default_folder
+                from xabsl_studio.server.session.recording import LiveRecorder
 
                 agents = [source.agents_file for source in example.sources]
                 folder = Path(args.record_dir) if args.record_dir else default_folder(agents)
@@ -353,8 +355,8 @@ def run(args: argparse.Namespace) -> int:
             for diagnostic in comp.errors[:10]:
                 print("  " + diagnostic.format(), file=sys.stderr)
     web_dist = Path(args.web_dist) if args.web_dist else WEB_DIST
+    from xabsl_studio.engine.record.folder import cache_folder, default_folder
     from xabsl_studio.server.api.library import RecordingLibrary
-    from xabsl_studio.server.session.recording import cache_folder, default_folder
 
     # The recordings the studio lists and opens: its record folder (a behavior set's own, see
     # default_folder; a replay's the folder its file is in when that is one of the cache's),

@@ -30,13 +30,11 @@ events through :meth:`LiveRecorder.event`.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import logging
 import os
-import re
 import threading
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -47,13 +45,14 @@ from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.record import RecordingEncoder
 from xabsl_studio.engine.record import schema as S
 from xabsl_studio.engine.record.encoder import NO_CHANGE
+from xabsl_studio.engine.record.folder import DEFAULT_CAP_BYTES, new_recording, prune
 from xabsl_studio.engine.record.recover import RecoveryFailed, recover, recover_folder
 from xabsl_studio.engine.record.sampler import ProgramTables
 from xabsl_studio.engine.types import Kind
 from xabsl_studio.server.protocol.host import Sample
 from xabsl_studio.server.session.frames import Generation
 
-__all__ = ["DEFAULT_CAP_BYTES", "DEFAULT_ROLL_TICKS", "LiveRecorder", "command_event", "default_folder", "tables_of"]
+__all__ = ["DEFAULT_ROLL_TICKS", "LiveRecorder", "command_event", "tables_of"]
 
 log = logging.getLogger("xabsl.server")
 
@@ -94,8 +93,6 @@ def command_event(command: Any, gen: Generation | None) -> tuple[str, str | None
     return kind, agent, data
 
 
-#: The folder's size cap by default.
-DEFAULT_CAP_BYTES = 2_000_000_000
 #: Ticks per file by default (10 minutes at 40 Hz).
 DEFAULT_ROLL_TICKS = 24_000
 
@@ -107,28 +104,6 @@ def _recover_quietly(part: Path) -> None:
         log.warning("the cut recording stays as it is: %s", error)
     else:
         log.warning("recovered the cut recording %s: %d ticks in %s", part.name, done.ticks, done.path.name)
-
-
-def cache_folder() -> Path:
-    """``$XDG_CACHE_HOME/xabsl-studio/recordings`` (``~/.cache`` without XDG_CACHE_HOME)."""
-    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(cache) / "xabsl-studio" / "recordings"
-
-
-def default_folder(agents_files: Iterable[Path] = ()) -> Path:
-    """The record folder of the behavior sets of ``agents_files``: their own sub-folder of the cache.
-
-    One folder shared by every behavior set made each studio list every other set's recordings.
-    The sub-folder is keyed by the resolved paths of the agents files (a hash: stable, whatever
-    the names hold), with the first one's folder name in front for people looking at the cache:
-    ``~/.cache/xabsl-studio/recordings/behavior-3f2a9c01b7d4``. Without agents files: the cache.
-    """
-    paths = sorted(str(Path(p).expanduser().resolve()) for p in agents_files)
-    if not paths:
-        return cache_folder()
-    digest = hashlib.sha256("\n".join(paths).encode("utf-8", "surrogateescape")).hexdigest()[:12]
-    label = re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(paths[0]).parent.name).strip("._")[:40] or "set"
-    return cache_folder() / f"{label}-{digest}"
 
 
 def tables_of(program: Program) -> ProgramTables:
@@ -324,15 +299,9 @@ class LiveRecorder:
     def _open(self) -> None:
         gen = self._gen
         assert gen is not None
-        stamp = time.strftime("%Y%m%d-%H%M%S")
-        name = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.example).strip("._") or "session"
         # Counted on from this recorder's earlier files: a name is never used twice, even when the
         # folder's cap removed the file that had it (rolls within one second reused -001).
-        n = len(self.files) + 1
-        path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"  # names sort in time order
-        while path.exists() or path.with_name(path.name + ".part").exists():
-            n += 1
-            path = self.folder / f"{name}-{stamp}-{n:03d}.mcap"
+        path = new_recording(self.folder, self.example, len(self.files) + 1)
         # Display values are rounded already (decimals=None: written as they come).
         self._encoder = RecordingEncoder(path, self.behavior_hz, self.key_every, decimals=None)
         self._seq = 0
@@ -394,17 +363,8 @@ class LiveRecorder:
         self._prune()
 
     def _prune(self) -> None:
-        """Delete the oldest recordings while the folder holds more than the cap; never the newest.
-
-        Oldest by name (they sort in time order; modification times of files closed within one
-        second do not), and the file just finished stays even when it alone is over the cap.
-        """
-        files = sorted(self.folder.glob("*.mcap"), key=lambda p: p.name)
-        total = sum(p.stat().st_size for p in files)
-        while len(files) > 1 and total > self.cap_bytes:
-            oldest = files.pop(0)
-            total -= oldest.stat().st_size
-            oldest.unlink(missing_ok=True)
+        """Delete the oldest recordings while the folder holds more than the cap; never the newest."""
+        prune(self.folder, self.cap_bytes)
 
     def _fail(self) -> None:
         log.exception("recording the session failed; the studio goes on without recording")

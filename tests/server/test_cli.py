@@ -12,7 +12,7 @@ import orjson
 import pytest
 
 from tests.server.conftest import REPO, free_port
-from xabsl_studio.server.session.recording import cache_folder, default_folder
+from xabsl_studio.engine.record.folder import cache_folder, default_folder
 
 
 def test_serve_is_registered() -> None:
