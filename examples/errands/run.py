@@ -20,7 +20,7 @@ import json
 import sys
 from typing import Any
 
-from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError, recording
 from xabsl_studio.engine.files import write_atomically
 from xabsl_studio.examples.errands.world import AGENTS_PATH, ErrandsWorld, build_world, physics_rate, run_world, summary
 
@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--dt", type=float, default=0.02, help="behavior tick in seconds (default 0.02)")
     parser.add_argument("--noise", type=float, default=1.0, help="multiplies the DD noise (0 = none)")
-    parser.add_argument("--record", metavar="FILE.mcap", help="record every tick to an MCAP file")
+    recording.add_arguments(parser, "run")
     parser.add_argument(
         "--perturb",
         choices=PERTURBATIONS,
@@ -110,12 +110,13 @@ def main(args: argparse.Namespace) -> int:
         except OSError as error:
             raise UsageError(f"cannot write {args.render}: {error.strerror or error}") from None
     recorder = None
-    if args.record:
+    target = recording.target(args, [AGENTS_PATH], "errands")
+    if target.path is not None:
         from xabsl_studio.engine.record import Recorder
 
         hz = physics_rate(world.dt)
         recorder = Recorder.for_world(
-            args.record,
+            target.path,
             world,
             lambda _: AGENTS_PATH.parent.name,
             example="errands",
@@ -125,12 +126,16 @@ def main(args: argparse.Namespace) -> int:
     stats = run_world(world, duration, on_tick=recorder.on_tick if recorder is not None else None)
     if recorder is not None:
         recorder.close()
+    target.finish()
     out = summary(world)
     out["real_time_factor"] = round(stats.real_time_factor, 1)
     if args.json:
-        print(json.dumps(out, ensure_ascii=False))
+        kept = str(target.path) if target.path is not None else None
+        print(json.dumps({**out, "recording": kept}, ensure_ascii=False))
     else:
         print(_report(world, out))
+        if target.path is not None:
+            print(f"recorded to {target.path}")
     if world.engine.fault is not None:
         print(f"behavior fault: {world.engine.fault}", file=sys.stderr)
         return 1

@@ -30,7 +30,7 @@ from typing import Any
 
 import orjson
 
-from xabsl_studio.engine.cli import UsageError
+from xabsl_studio.engine.cli import UsageError, recording
 from xabsl_studio.engine.emit.dot import option_graph
 from xabsl_studio.engine.errors import HostError
 from xabsl_studio.engine.files import write_atomically
@@ -377,7 +377,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--json", action="store_true", help="print one JSON object: score, per-team statistics, option activations"
     )
-    parser.add_argument("--record", metavar="FILE.mcap", help="record every tick of the match to an MCAP file")
+    recording.add_arguments(parser, "match")
     parser.add_argument(
         "--fork",
         metavar="REC.mcap",
@@ -416,9 +416,10 @@ def main(args: argparse.Namespace) -> int:
     duration = args.duration if args.duration is not None else 1200.0
     half = duration / 2.0
     record: dict[str, Any] = {}
-    if args.record:
+    target = recording.target(args, [Path(args.home) / AGENTS_FILE, Path(args.away) / AGENTS_FILE], "soccer")
+    if target.path is not None:
         record = {
-            "record": args.record,
+            "record": target.path,
             "record_keys": _record_keys(args.home, args.away),
             "record_sources": (_sources(args.home, home), _sources(args.away, away)),
         }
@@ -426,8 +427,11 @@ def main(args: argparse.Namespace) -> int:
         report = _play_with_progress(args.seed, home, away, args.players, half, **record)
     else:
         report = play_match(args.seed, home, away, players=args.players, half_duration_s=half, **record)
+    target.finish()
     if args.json:
-        sys.stdout.buffer.write(orjson.dumps(report.as_dict()) + b"\n")
+        result = report.as_dict()
+        result["recording"] = str(target.path) if target.path is not None else None
+        sys.stdout.buffer.write(orjson.dumps(result) + b"\n")
         return 0
     result = report.as_dict()
     h, a = report.score
@@ -442,6 +446,8 @@ def main(args: argparse.Namespace) -> int:
         )
     for fault in report.faults:
         print(f"  fault: {fault}")
+    if target.path is not None:
+        print(f"  recorded to {target.path}")
     return 0
 
 
