@@ -448,15 +448,36 @@ class Engine:
         or reload.
         """
         loaded = self._require()
-        stored = all(loaded.layout.outputs[name].stored for name in names)
-        if stored:
-            indices = [loaded.layout.outputs[name].index for name in names]
-            storage = loaded.outputs
+        slots = [loaded.layout.outputs[name] for name in names]
+        storage = loaded.outputs
+        indices = [slot.index for slot in slots if slot.stored]
+        if len(indices) == len(slots):
             if len(indices) > 1:  # one C call picks them all (itemgetter of several -> tuple)
                 pick_all = itemgetter(*indices)
                 return lambda: pick_all(storage)
             pick = storage.__getitem__
             return lambda: tuple(map(pick, indices))
-        output = self.output
-        names = tuple(names)
-        return lambda: tuple([output(name) for name in names])
+        # Host symbols through their own getters (not Engine.output, which looks each name up
+        # again), stored ones picked from storage, then put back in the order asked.
+        getters: list[Callable[[], Value]] = []
+        for slot in slots:
+            if not slot.stored:
+                binding = loaded.linked.outputs[slot.index]
+                assert binding is not None and binding.getter is not None
+                getters.append(binding.getter)
+        picked = itemgetter(*indices) if len(indices) > 1 else None
+        order = [p for p, slot in enumerate(slots) if slot.stored]
+        order += [p for p, slot in enumerate(slots) if not slot.stored]
+        where = [0] * len(slots)  # requested position -> position in the read order
+        for at, position in enumerate(order):
+            where[position] = at
+
+        def sample() -> tuple[Value, ...]:
+            if picked is not None:
+                values = list(picked(storage))
+            else:
+                values = [storage[i] for i in indices]
+            values.extend([read() for read in getters])
+            return tuple(map(values.__getitem__, where))
+
+        return sample

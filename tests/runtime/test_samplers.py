@@ -77,3 +77,24 @@ def test_input_sampler_reads_mapping_items_with_one_call() -> None:
     assert sample() == (3.0, 42.0, 10.0)
     engine.execute(0)
     assert engine.output("out.b") == 42.0 and engine.output("out.a") == 10.0
+
+
+def test_output_sampler_reads_host_symbols_through_their_getters_in_the_order_asked() -> None:
+    world = SimpleNamespace(a=1.0, b=2.0)
+    host: dict[str, float] = {}
+    bindings = Bindings()
+    bindings.input_attribute("a", Kind.DECIMAL, world, "a")
+    bindings.input_attribute("b", Kind.DECIMAL, world, "b")
+    bindings.input("c", Kind.DECIMAL, lambda: 3.0)
+    bindings.output("out.a", Kind.DECIMAL)
+    bindings.output("out.b", Kind.DECIMAL, setter=lambda v: host.__setitem__("b", v), getter=lambda: host["b"])
+    bindings.output("out.c", Kind.DECIMAL)
+    engine = Engine(bindings, PROGRAM)
+    engine.execute(0)
+    for names in (["out.b", "out.c", "out.a"], ["out.c", "out.b"], ["out.b"], ["out.a", "out.b", "out.c"]):
+        sample = engine.output_sampler(names)
+        assert sample() == tuple(engine.output(n) for n in names)
+    sample = engine.output_sampler(["out.c", "out.b", "out.a"])
+    world.b = 7.0
+    engine.execute(25)
+    assert sample() == (3.0, 7.0, 1.0) and host["b"] == 7.0
