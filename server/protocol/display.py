@@ -4,12 +4,12 @@ Decimals to :data:`DECIMALS` fractional digits, booleans as booleans, enum value
 their element in the enumeration (a host value the enumeration does not name: -1); a value that
 does not convert (NaN, infinities, a stray type) is None, unknown.
 
-Two sides convert: the simulation process (and an attach host) converts the parameters in paths
-and the overrides it reports, and the server converts the robots' symbol tuples of every sample
-(:class:`SampleDisplay`), so that a host's tick path only reads raw values. A
-:class:`SampleDisplay` is built from what a generation announces (the programs' descriptions, the
-enum host values, the symbol ids per robot) and converts, per robot, only the values that changed
-since the robot's last sample (:class:`Displayed`).
+The server converts every sample of a host that sends raw values (the simulation process, an
+attach host): the robots' symbol tuples and the parameters in their paths
+(:class:`SampleDisplay`), so that a host's tick path only reads raw values; the host converts
+only the overrides it reports. A :class:`SampleDisplay` is built from what a generation announces
+(the programs' descriptions, the enum host values, the symbol ids per robot) and converts, per
+robot, only the symbol values that changed since the robot's last sample (:class:`Displayed`).
 """
 
 from __future__ import annotations
@@ -20,10 +20,24 @@ from collections.abc import Callable, Mapping, Sequence
 from itertools import compress
 from typing import Any
 
+import orjson
+
+from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.server.protocol.host import Sample
+from xabsl_studio.server.protocol.types import BEHAVIOR_PARAMS_INDEX, ID_INDEX, KIND_INDEX, OPTION_PARAMS_INDEX
 
-__all__ = ["DECIMALS", "Displayed", "SampleDisplay", "converter", "display_values", "round_decimal"]
+__all__ = [
+    "DECIMALS",
+    "Displayed",
+    "ProgramDisplay",
+    "SampleDisplay",
+    "converter",
+    "display_path",
+    "display_values",
+    "program_display",
+    "round_decimal",
+]
 
 #: Decimal values are rounded to this many fractional digits in frames (display precision).
 DECIMALS = 3
@@ -124,24 +138,74 @@ def display_values(converters: tuple[Converter, ...], values: tuple[Value | None
     return tuple(out)
 
 
-def _symbol_converters(
-    description: Mapping[str, Any], enums: Mapping[str, Mapping[int, str]]
-) -> tuple[dict[int, Converter], dict[int, Converter]]:
-    """Per symbol id of one program's description: the conversion of its inputs and of its outputs."""
+#: Per (node kind, option or basic behavior id): the conversion of each parameter, in path order.
+ParamConverters = dict[tuple[int, int], tuple[Converter, ...]]
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class ProgramDisplay:
+    """One program's conversions: inputs and outputs by symbol id, parameters by node (:func:`program_display`)."""
+
+    inputs: dict[int, Converter]
+    outputs: dict[int, Converter]
+    params: ParamConverters
+
+
+def program_display(description: Mapping[str, Any], enums: Mapping[str, Mapping[int, str]]) -> ProgramDisplay:
+    """The conversions of one program's description (``enums``: enum name -> host value -> element)."""
     index_of: dict[str, dict[int, int]] = {}
     for enum in description.get("enums", ()):
         position = {element: i for i, element in enumerate(enum.get("elements", ()))}
         hosts = enums.get(enum["name"], {})
         index_of[enum["name"]] = {int(v): position.get(e, -1) for v, e in hosts.items()}
 
-    def table(symbols: Sequence[Mapping[str, Any]]) -> dict[int, Converter]:
-        return {
-            int(s["id"]): converter(Kind(s["type"]), index_of.get(s.get("enum") or "", {}))
-            for s in symbols
-            if not s.get("params")
-        }
+    def convert(declared: Mapping[str, Any]) -> Converter:
+        return converter(Kind(declared["type"]), index_of.get(declared.get("enum") or "", {}))
 
-    return table(description.get("inputs", ())), table(description.get("outputs", ()))
+    def table(symbols: Sequence[Mapping[str, Any]]) -> dict[int, Converter]:
+        return {int(s["id"]): convert(s) for s in symbols if not s.get("params")}
+
+    # Parameters in a path are in declaration order, as the description lists them.
+    params: ParamConverters = {}
+    kinds = ((OPTION_NODE, description.get("options", ())), (BEHAVIOR_NODE, description.get("behaviors", ())))
+    for kind, nodes in kinds:
+        for node in nodes:
+            if node.get("params"):
+                params[(kind, int(node["id"]))] = tuple(convert(p) for p in node["params"])
+    return ProgramDisplay(table(description.get("inputs", ())), table(description.get("outputs", ())), params)
+
+
+def display_path(params: ParamConverters, path: bytes) -> bytes:
+    """A path (JSON, parameters raw) with its parameters as display values (one that does not convert: null).
+
+    A path that is not a list of nodes, or a node of an id ``params`` does not know, keeps its
+    values as they came: nothing is guessed, and nothing but parameters is touched.
+    """
+    try:
+        nodes = orjson.loads(path)
+    except orjson.JSONDecodeError:
+        return path
+    if not isinstance(nodes, list):
+        return path
+    changed = False
+    for node in nodes:
+        if not isinstance(node, list) or len(node) <= BEHAVIOR_PARAMS_INDEX:
+            continue
+        kind = node[KIND_INDEX]
+        at = OPTION_PARAMS_INDEX if kind == OPTION_NODE else BEHAVIOR_PARAMS_INDEX
+        values = node[at] if len(node) > at else None
+        converters = params.get((kind, node[ID_INDEX])) if values else None
+        if converters is None or not isinstance(values, list) or len(values) != len(converters):
+            continue
+        shown: list[Value | None] = []
+        for convert, value in zip(converters, values, strict=True):
+            try:
+                shown.append(None if value is None else convert(value))
+            except Exception:  # a value that does not convert: unknown
+                shown.append(None)
+        node[at] = shown
+        changed = True
+    return orjson.dumps(nodes) if changed else path
 
 
 class SampleDisplay:
@@ -154,7 +218,7 @@ class SampleDisplay:
     that generation's samples in order.
     """
 
-    __slots__ = ("_inputs", "_outputs")
+    __slots__ = ("_inputs", "_outputs", "_params")
 
     def __init__(
         self,
@@ -163,25 +227,34 @@ class SampleDisplay:
         input_ids: tuple[tuple[int, ...], ...],
         output_ids: tuple[tuple[int, ...], ...],
     ) -> None:
-        tables: dict[str, tuple[dict[int, Converter], dict[int, Converter]]] = {}
-        for key, description in structure.get("programs", {}).items():
-            tables[key] = _symbol_converters(description, enums.get(key, {}))
+        tables = {key: program_display(d, enums.get(key, {})) for key, d in structure.get("programs", {}).items()}
+        nothing = ProgramDisplay({}, {}, {})
         robots = structure.get("robots", ())
         self._inputs: list[Displayed] = []
         self._outputs: list[Displayed] = []
+        #: per robot: its program's parameter conversions (None: no parameters to convert)
+        self._params: list[ParamConverters | None] = []
         for i, (ins, outs) in enumerate(zip(input_ids, output_ids, strict=True)):
             key = robots[i].get("program") if i < len(robots) else None
-            by_input, by_output = tables.get(key, ({}, {})) if key is not None else ({}, {})
-            self._inputs.append(Displayed(tuple(by_input.get(s, _unknown) for s in ins)))
-            self._outputs.append(Displayed(tuple(by_output.get(s, _unknown) for s in outs)))
+            program = tables.get(key, nothing) if key is not None else nothing
+            self._inputs.append(Displayed(tuple(program.inputs.get(s, _unknown) for s in ins)))
+            self._outputs.append(Displayed(tuple(program.outputs.get(s, _unknown) for s in outs)))
+            self._params.append(program.params or None)
 
     def convert(self, sample: Sample) -> Sample:
         """``sample`` with its robots' input and output values as display values."""
         inputs = tuple(map(Displayed.display, self._inputs, sample.inputs))
         outputs = tuple(map(Displayed.display, self._outputs, sample.outputs))
+        paths = tuple(
+            path if params is None else display_path(params, path)
+            for params, path in zip(self._params, sample.paths, strict=False)
+        )
         # A sample with more robots than the generation (never sent) keeps the rest as they came.
         return dataclasses.replace(
-            sample, inputs=inputs + sample.inputs[len(inputs) :], outputs=outputs + sample.outputs[len(outputs) :]
+            sample,
+            paths=paths + sample.paths[len(paths) :],
+            inputs=inputs + sample.inputs[len(inputs) :],
+            outputs=outputs + sample.outputs[len(outputs) :],
         )
 
 

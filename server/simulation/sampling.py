@@ -1,20 +1,19 @@
-"""Sampling after a tick (simulation process): one robot's activation path and symbols as display values.
+"""Sampling after a tick (simulation process): one robot's activation path and symbols, raw.
 
 The engine is read through the project's one sampler (``xabsl_studio.engine.record.sampler.AgentSampler``,
 the recorder's too): the compact ``path`` of docs/protocol.md (integer ids), the input and
 output symbols, and what the tick's decisions read (exact, as JSON: the server's ring keeps it
-so that "why" at any past tick uses the values the decision saw). This module turns the
-parameters of the path into the values frames carry (decimals rounded, enums as element indices)
-and builds the id tables of a program (:class:`ProgramCodec`); the symbols go to the server
-process raw, exactly as the sampler read them: the server turns them into display values
-(``xabsl_studio.server.protocol.display.SampleDisplay``), so that converting them costs the
-simulation process (or an attached robot's program) nothing, and keeps and encodes the sample
+so that "why" at any past tick uses the values the decision saw). This module builds the id
+tables of a program (:class:`ProgramCodec`) and a robot's part of a sample; the path's
+parameters and the symbols go to the server process raw, exactly as the sampler read them: the
+server turns them into the values frames carry (``xabsl_studio.server.protocol.display.SampleDisplay``:
+decimals rounded, enums as element indices), so that converting them costs the simulation
+process (or an attached robot's program) nothing, and keeps and encodes the sample
 (``xabsl_studio.server.session.frames``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,8 +24,7 @@ from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables, read
 from xabsl_studio.engine.runtime import Engine
 from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.engine.types import Kind, Value
-from xabsl_studio.server.protocol.display import converter, round_decimal
-from xabsl_studio.server.protocol.types import BEHAVIOR_PARAMS_INDEX, ID_INDEX, KIND_INDEX, OPTION_PARAMS_INDEX
+from xabsl_studio.server.protocol.display import round_decimal
 
 _OPT = orjson.OPT_NON_STR_KEYS
 
@@ -94,23 +92,14 @@ class ProgramCodec:
 
 
 class FrameSampler:
-    """One robot's part of a sample after a tick: display path, raw input and output values, extras.
+    """One robot's part of a sample after a tick: its path, input and output values (raw), extras.
 
     The engine is read by the one sampler of the project, :class:`xabsl_studio.engine.record.sampler.AgentSampler`
-    (the recorder's too); this class turns the path's parameters into the display values of frames
-    (docs/protocol.md "Values": decimals rounded, booleans, enum element indices) and leaves the
-    symbols raw for the server (see the module docstring).
+    (the recorder's too); the values go to the server raw (see the module docstring), the
+    overrides in the extras as display values (docs/protocol.md "Values").
     """
 
-    __slots__ = (
-        "_behavior_params",
-        "_option_params",
-        "_shown_params",
-        "codec",
-        "engine",
-        "index",
-        "reader",
-    )
+    __slots__ = ("codec", "engine", "index", "reader")
 
     def __init__(self, index: int, engine: Engine, codec: ProgramCodec) -> None:
         self.index = index
@@ -118,46 +107,14 @@ class FrameSampler:
         self.codec = codec
         #: the shared sampler (assignment values are not part of frames)
         self.reader = AgentSampler(engine, codec.tables, assignments=False)
-        #: per (node kind, id): the raw parameters of its last path node and their display values
-        self._shown_params: dict[tuple[int, int], tuple[list[Any], list[Any]]] = {}
-        # Per option / basic behavior id: the conversion of each parameter, in declaration order.
-        program = codec.program
-        self._option_params = {
-            o.index: tuple(self._converter(p.kind, p.enum) for p in o.params) for o in program.options.values()
-        }
-        self._behavior_params = {
-            b.index: tuple(self._converter(p.kind, p.enum) for p in b.params) for b in program.behaviors.values()
-        }
 
     def path(self) -> list[list[Any]]:
-        """The robot's activation path in the frame format (docs/protocol.md "path").
+        """The robot's activation path in the frame format (docs/protocol.md "path"), parameters raw.
 
-        The engine's compact path already has the frame's node layout and the JSON ids; only the
-        parameter values are turned into display values (rounded decimals, enum element indices).
+        The engine's compact path already has the frame's node layout and the JSON ids; the
+        server turns the parameter values into display values (``SampleDisplay``).
         """
-        nodes = self.reader.path()
-        shown = self._shown_params
-        for node in nodes:
-            kind = node[KIND_INDEX]
-            at = OPTION_PARAMS_INDEX if kind == OPTION_NODE else BEHAVIOR_PARAMS_INDEX
-            raw = node[at]
-            if not raw:
-                continue
-            # Most ticks call an option or behavior with the parameters of the tick before: those
-            # are converted once (the lists are equal, compared in C), not on every tick.
-            key = (kind, node[ID_INDEX])
-            last = shown.get(key)
-            if last is not None and last[0] == raw:
-                node[at] = last[1]
-                continue
-            converters = self._option_params if kind == OPTION_NODE else self._behavior_params
-            values = [convert(v) for convert, v in zip(converters[node[ID_INDEX]], raw, strict=True)]
-            shown[key] = (raw, values)
-            node[at] = values
-        return nodes
-
-    def _converter(self, kind: Kind, enum: str | None) -> Callable[[Any], Value | None]:
-        return converter(kind, self.codec.enum_index.get(enum or "", {}))
+        return self.reader.path()
 
     def inputs(self) -> tuple[Value | None, ...]:
         """The raw values of the plain input symbols, in the codec's order (None: the host getter failed)."""

@@ -67,6 +67,7 @@ from xabsl_studio.server.protocol.commands import (
     Step,
     WorldCommand,
 )
+from xabsl_studio.server.protocol.display import display_path, program_display
 from xabsl_studio.server.protocol.host import (
     Apply,
     Crash,
@@ -563,12 +564,22 @@ class Simulation(EngineSet):
         while loop.ticks < ticks:
             loop.tick()
 
+    def _shown_path(self, index: int) -> bytes:
+        """Robot ``index``'s path now as the history shows it: parameters as the server shows them."""
+        sampler = self.samplers[index]
+        key = self.keys[index]
+        assert sampler is not None and key is not None
+        running = self.programs.get(key)
+        description = running[1] if running is not None else self.descriptions.get(key, {})
+        params = program_display(description, sampler.codec.tables.enums).params
+        return display_path(params, orjson.dumps(sampler.path()))
+
     def _verify(self, seq: int, recorded: tuple[tuple[Any, ...], Any]) -> None:
         """The state now must be what sample ``seq`` recorded: every robot's path, the world's scene."""
         paths, scene = recorded
         for index, sampler in enumerate(self.samplers):
             try:
-                path = orjson.loads(orjson.dumps(sampler.path())) if sampler is not None else []
+                path = orjson.loads(self._shown_path(index)) if sampler is not None else []
             except Exception:  # as ``sample``: a broken tree reads as an empty path
                 path = []
             if index >= len(paths) or path != paths[index]:

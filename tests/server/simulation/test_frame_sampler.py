@@ -19,12 +19,13 @@ import orjson
 from tests.navset import write_set
 from xabsl_studio.engine.emit.json import program_to_json
 from xabsl_studio.engine.ir.ic_reader import read_ic
+from xabsl_studio.engine.ir.model import Program
 from xabsl_studio.engine.lang import Compilation
 from xabsl_studio.engine.record import AgentSampler
 from xabsl_studio.engine.runtime import Bindings, Engine
 from xabsl_studio.engine.types import Kind, Value
 from xabsl_studio.engine.worlds.bench import BenchExample
-from xabsl_studio.server.protocol.display import Displayed, display_values
+from xabsl_studio.server.protocol.display import Displayed, converter, display_values
 from xabsl_studio.server.protocol.host import NewGeneration, Sample
 from xabsl_studio.server.session.frames import Generation
 from xabsl_studio.server.session.live import Session
@@ -86,7 +87,7 @@ def test_a_host_getter_that_raises_is_none_in_samples_and_unread_in_recordings()
     sample = recorder.sample()
     assert sample.unread == ("c",)
     assert dict(zip(names, sample.inputs, strict=True)) == {"a": 1.23456, "b": 2.0, "c": None}
-    shown = Displayed(tuple(frames._converter(Kind.DECIMAL, None) for _ in names))
+    shown = Displayed(tuple(converter(Kind.DECIMAL) for _ in names))
     assert dict(zip(names, shown.display(frames.inputs()), strict=True)) == {"a": 1.235, "b": 2.0, "c": None}
     broken["c"] = False
     assert dict(zip(names, shown.display(frames.inputs()), strict=True)) == {"a": 1.235, "b": 2.0, "c": 3.0}
@@ -146,6 +147,30 @@ def _options_engine(compile_sources: Callable[..., Compilation], bind: Callable[
     return Engine(bindings, program)
 
 
+def _generation(program: Program, codec: ProgramCodec) -> Generation:
+    """The server's generation of one robot running ``program``, as a host with raw values announces it."""
+    structure = {"programs": {"main": program_to_json(program)}, "robots": [{"name": "x", "program": "main"}]}
+    message = NewGeneration(
+        1,
+        "start",
+        orjson.dumps(structure),
+        b"{}",
+        (tuple(i for i, *_ in codec.inputs),),
+        (tuple(i for i, *_ in codec.outputs),),
+        0,
+        {},
+        enums={"main": codec.tables.enums},
+        raw_values=True,
+    )
+    return Generation.from_message(message)
+
+
+def _shown(gen: Generation, frames: FrameSampler, seq: int) -> Sample:
+    """One tick of ``frames``'s robot as the simulation sends it, then as the server shows it."""
+    path, ins, outs = orjson.dumps(frames.path()), (frames.inputs(),), (frames.outputs(),)
+    return gen.shown(Sample(seq, 1, 25 * seq, 0.0, False, 1.0, (path,), (b"",), ins, outs, b"{}", b"{}"))
+
+
 def test_path_parameters_follow_every_change_of_the_raw_values(compile_sources: Callable[..., Compilation]) -> None:
     world = SimpleNamespace(speed=1.0, flag=True)
 
@@ -155,12 +180,17 @@ def test_path_parameters_follow_every_change_of_the_raw_values(compile_sources: 
 
     engine = _options_engine(compile_sources, bind)
     program = engine.program
-    frames = FrameSampler(0, engine, ProgramCodec.build("main", program, engine))
-    for t, speed in enumerate((1.0, 1.0, 2.00049, 2.00049, 1.0, -3.5)):
+    codec = ProgramCodec.build("main", program, engine)
+    frames = FrameSampler(0, engine, codec)
+    gen = _generation(program, codec)
+    for t, speed in enumerate((1.0, 1.0, 2.00049, 2.00049, 1.0, -3.5, math.nan, 4.25)):
         world.speed = speed
         engine.execute(25 * t)
-        (go,) = [node for node in frames.path() if node[2] == program.options["go"].index]
-        assert go[-1] == [round(speed * 1000) / 1000]
+        (raw,) = [node for node in frames.path() if node[2] == program.options["go"].index]
+        assert raw[-1] == [speed] or speed != speed  # the simulation sends it as the engine holds it
+        (go,) = [node for node in orjson.loads(_shown(gen, frames, t).paths[0]) if node[2] == raw[2]]
+        # shown to 3 digits; NaN, which has no display value, is unknown and the path stays whole
+        assert go[-1] == ([round(speed * 1000) / 1000] if speed == speed else [None])
 
 
 def test_a_sampler_of_one_mapping_returns_what_the_behavior_reads_overrides_included(
@@ -224,10 +254,11 @@ def test_a_team_sized_bench_set_shows_what_a_full_conversion_gives(tmp_path: Pat
 
 
 ENUM_OPTIONS = {
-    "agents.xabsl": 'include "s.xabsl";\ninclude "main.xabsl";\nagent x("X", main);\n',
+    "agents.xabsl": 'include "s.xabsl";\ninclude "show.xabsl";\ninclude "main.xabsl";\nagent x("X", main);\n',
     "s.xabsl": 'namespace s("S") {\n  enum mode { slow, fast, off };\n  enum mode input mode;\n'
     "  float input speed;\n  enum mode output shown;\n}\n",
-    "main.xabsl": "option main { initial state s { action { shown = mode; } } }\n",
+    "show.xabsl": "option show { enum mode @m; initial state s { action { shown = @m; } } }\n",
+    "main.xabsl": "option main { initial state s { action { show(m = mode); } } }\n",
 }
 
 
@@ -245,26 +276,14 @@ def test_the_server_names_enum_values_the_host_numbers_its_own_way(compile_sourc
     engine = Engine(bindings, program)
     codec = ProgramCodec.build("main", program, engine)
     frames = FrameSampler(0, engine, codec)
-    message = NewGeneration(
-        1,
-        "start",
-        orjson.dumps({"programs": {"main": program_to_json(program)}, "robots": [{"name": "x", "program": "main"}]}),
-        b"{}",
-        (tuple(i for i, *_ in codec.inputs),),
-        (tuple(i for i, *_ in codec.outputs),),
-        0,
-        {},
-        enums={"main": codec.tables.enums},
-        raw_values=True,
-    )
-    gen = Generation.from_message(message)
+    gen = _generation(program, codec)
     names = [name for _, name, *_ in codec.inputs]
     for t, (mode, element) in enumerate(((30, 0), (10, 1), (20, 2), (99, -1), (30, 0))):
         world.mode = mode
         engine.execute(25 * t)
-        ins, outs = (frames.inputs(),), (frames.outputs(),)
-        sample = Sample(t, 1, 25 * t, 0.0, False, 1.0, (b"[]",), (b"",), ins, outs, b"{}", b"{}")
-        shown = gen.shown(sample)
+        assert frames.inputs() == tuple(world.mode if n == "mode" else world.speed for n in names)  # raw as read
+        shown = _shown(gen, frames, t)
         assert dict(zip(names, shown.inputs[0], strict=True)) == {"mode": element, "speed": 1.235}
-        assert shown.outputs[0] == ((element,) if element >= 0 else (-1,))
-        assert sample.inputs[0] == tuple(world.mode if n == "mode" else world.speed for n in names)  # raw as read
+        assert shown.outputs[0] == (element,)
+        (show,) = [n for n in orjson.loads(shown.paths[0]) if n[2] == program.options["show"].index]
+        assert show[-1] == [element]  # an enum parameter the same way
