@@ -135,18 +135,21 @@ class FrameSampler:
     def extras(self) -> bytes:
         """``,"fault":...,"forced":...,"overrides":...`` for the robot's object, or b''."""
         engine = self.engine
-        parts: dict[str, Any] = {}
         fault = engine.fault
+        actions = engine.root_actions
+        if fault is None and not actions.forced and not actions.overrides:
+            return b""  # the common case, every tick of every robot: nothing to build
+        parts: dict[str, Any] = {}
         if fault is not None:
             parts["fault"] = {"message": fault.message, "option": fault.option, "state": fault.state}
-        forced = engine.root_actions.forced
+        forced = actions.forced
         if forced:
             root = forced[0]
             if root.kind == "option":
                 parts["forced"] = [OPTION_NODE, self.codec.option_ids.get(root.name, -1)]
             else:
                 parts["forced"] = [BEHAVIOR_NODE, self.codec.behavior_ids.get(root.name, -1)]
-        overrides = engine.root_actions.overrides
+        overrides = actions.overrides
         if overrides:
             program = self.codec.program
             parts["overrides"] = {

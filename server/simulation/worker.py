@@ -132,6 +132,8 @@ class _Timing:
     busy: float = 0.0
     cpu: float = 0.0
     sample: float = 0.0
+    #: CPU seconds of this thread spent sampling the ticks (wall time also counts other processes)
+    sample_cpu: float = 0.0
     ticks: int = 0
 
     def add(self, wall: float, sim: float) -> None:
@@ -314,13 +316,16 @@ class Simulation(EngineSet):
         cpu = time.thread_time()
         self.loop.tick()
         found = self.check_breakpoints() if self.breakpoints.armed else None
+        sampling = time.thread_time()
         sample = self.sample()
         if found:
             self.record_hits(found, sample.seq, sample.t)
         done = time.perf_counter()
         timing = self.timing
         timing.busy += done - started
-        timing.cpu += time.thread_time() - cpu
+        end = time.thread_time()
+        timing.cpu += end - cpu
+        timing.sample_cpu += end - sampling
         timing.ticks += 1
         timing.add(done, self.loop.sim_seconds)
         return sample
@@ -660,6 +665,7 @@ class Simulation(EngineSet):
                 "cpu_seconds": timing.cpu,
                 "sim_seconds": self.loop.sim_seconds,
                 "frame_seconds": timing.sample,
+                "frame_cpu_seconds": timing.sample_cpu,
             },
             "errors": dict(self.errors),
             "pipe": {
