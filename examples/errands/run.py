@@ -135,7 +135,7 @@ def main(args: argparse.Namespace) -> int:
     else:
         print(_report(world, out))
         if target.path is not None:
-            print(f"recorded to {target.path}")
+            print(f"recorded to {target.path}" + ("" if args.record else " (--no-record: not recorded)"))
     if world.engine.fault is not None:
         print(f"behavior fault: {world.engine.fault}", file=sys.stderr)
         return 1

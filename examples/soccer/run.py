@@ -447,7 +447,9 @@ def main(args: argparse.Namespace) -> int:
     for fault in report.faults:
         print(f"  fault: {fault}")
     if target.path is not None:
-        print(f"  recorded to {target.path}")
+        # recording is not free yet (docs/recordings.md, "Cost"): say how to run without it
+        hint = "" if args.record else " (--no-record: not recorded, about 4x faster)"
+        print(f"  recorded to {target.path}{hint}")
     return 0
 
 
