@@ -7,6 +7,16 @@ import type { Frame, Hello, RobotFrame, WirePathNode } from "../src/protocol";
 
 export const description = demo as unknown as BehaviorDescription;
 
+/// The demo description after a reload that renamed option `play` and reversed the ids of its states.
+export function editedDescription(): BehaviorDescription {
+  const d = structuredClone(description) as BehaviorDescription & { options: Array<{ id: number; name: string; states: Array<{ id: number; name: string }> }> };
+  const play = d.options.find((o) => o.id === 1);
+  if (!play) throw new Error("the demo has no option 1");
+  play.name = "play_edited";
+  play.states = play.states.map((s, i, all) => ({ ...s, id: all.length - 1 - i })).reverse();
+  return d as BehaviorDescription;
+}
+
 export function hello(generation = 1, t = 0): Hello {
   return {
     type: "hello",

@@ -1,22 +1,12 @@
 import { describe, expect, it } from "vitest";
-import { type BehaviorDescription, type DescriptionIndex, indexDescription } from "../src/description";
+import { type DescriptionIndex, indexDescription } from "../src/description";
 import { TickBuffer } from "../src/history";
 import type { PathNode, RobotState, Tick } from "../src/protocol";
 import { buildRobotTimeline, buildTeamTimeline, type TimelineContext, TimelineBuilder, type TimelineRow, type TimelineUpdate } from "../src/timeline";
-import { description } from "./fake";
-
-/// The demo description with option `play` renamed and the ids of its states reversed (a reload).
-function edited(): BehaviorDescription {
-  const d = structuredClone(description) as BehaviorDescription & { options: Array<{ id: number; name: string; states: Array<{ id: number; name: string }> }> };
-  const play = d.options.find((o) => o.id === 1);
-  if (!play) throw new Error("the demo has no option 1");
-  play.name = "play_edited";
-  play.states = play.states.map((s, i, all) => ({ ...s, id: all.length - 1 - i })).reverse();
-  return d as BehaviorDescription;
-}
+import { description, editedDescription } from "./fake";
 
 const DEMO = indexDescription(description);
-const EDITED = indexDescription(edited());
+const EDITED = indexDescription(editedDescription());
 const ROBOTS = [0, 1, 2];
 
 /// Descriptions by generation: 1 the demo, 2 the edited demo (robot 2 still reads the demo), 3 unknown.

@@ -1,11 +1,11 @@
 import { describe, expect, it } from "vitest";
-import { type BehaviorDescription, indexDescription } from "../src/description";
+import { indexDescription } from "../src/description";
 import { TickBuffer } from "../src/history";
 import { FrameDecoder, type Hello, type Tick } from "../src/protocol";
 import type { GenerationInfo } from "../src/messages.gen";
 import { Session } from "../src/session";
 import { buildRobotTimeline, buildTeamTimeline } from "../src/timeline";
-import { description, frame, hello, playPath } from "./fake";
+import { description, editedDescription, frame, hello, playPath } from "./fake";
 
 const index = indexDescription(description);
 
@@ -105,17 +105,7 @@ describe("Session", () => {
 });
 
 describe("history across generations", () => {
-  /// The demo description with option `play` renamed and the ids of play's states reversed.
-  function edited(): BehaviorDescription {
-    const d = structuredClone(description) as BehaviorDescription & { options: Array<{ id: number; name: string; states: Array<{ id: number; name: string }> }> };
-    const play = d.options.find((o) => o.id === 1);
-    if (!play) throw new Error("the demo has no option 1");
-    play.name = "play_edited";
-    play.states = play.states.map((s, i, all) => ({ ...s, id: all.length - 1 - i })).reverse();
-    return d as BehaviorDescription;
-  }
-
-  function next(generation: number, reason: "reload" | "reset", offset = 0, programs = { behavior: edited() }): Hello {
+  function next(generation: number, reason: "reload" | "reset", offset = 0, programs = { behavior: editedDescription() }): Hello {
     const h = hello(generation);
     return { ...h, reason, session: { ...h.session, offset }, structure: { ...h.structure, programs } };
   }
