@@ -21,6 +21,8 @@ export class FakeElement {
   parentNode: FakeElement | null = null;
   childNodes: FakeNode[] = [];
   readonly style: Record<string, string> = {};
+  /// `data-*` attributes as the browser's `dataset` (kept apart from `attributes`).
+  readonly dataset: Record<string, string> = {};
   readonly attributes = new Map<string, string>();
   private readonly classes = new Set<string>();
   private readonly listeners = new Map<string, Listener[]>();

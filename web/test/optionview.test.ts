@@ -4,6 +4,7 @@
 import { afterEach, beforeEach, describe, expect, it, vi } from "vitest";
 import type { Connection } from "../src/connection";
 import { OptionView } from "../src/panels/optionview";
+import type { Comparison } from "../src/messages.gen";
 import type { Explanation } from "../src/protocol";
 import { Session, type SessionEvent } from "../src/session";
 import { created, fakeDomGlobals, type FakeElement } from "./dom";
@@ -26,6 +27,11 @@ function answer(decidedIn: number, leaf: number, target: number, values: boolean
     recorded: false,
     last_transition: null,
   };
+}
+
+/// The comparison `ball.time_since_seen > 1000` with the operand's value `seen`.
+function seenFor(seen: number, value: boolean): Comparison {
+  return { text: "ball.time_since_seen > 1000", op: ">", left: "ball.time_since_seen", left_value: String(seen), right: "1000", right_value: "1000", value, shown: `ball.time_since_seen (${seen}) > 1000` };
 }
 
 const flush = (): Promise<void> => new Promise((resolve) => setTimeout(resolve, 0));
@@ -98,5 +104,43 @@ describe("option view: the why pane", () => {
     expect(next.map((r) => r.classList.contains("taken"))).toEqual([false, true]);
     expect(next.some((r) => rows.includes(r))).toBe(false);
     expect(pane().querySelectorAll(".value")).toHaveLength(0);
+  });
+
+  it("updates the values of a decision asked again in the same elements", async () => {
+    show(playPath(1, 0, 1, 2), ["hello", "tick"]); // chase stays: two conditions, both else
+    const first = answer(1, 2, 1, [false, false]);
+    (first.conditions[1] as Explanation["conditions"][number]).comparisons = [seenFor(400, false)];
+    explain.shift()?.(first);
+    await flush();
+    const values = pane().querySelectorAll(".value");
+    const comparisons = pane().querySelectorAll("li.comparison");
+    expect(values.map((v) => v.textContent)).toEqual(["false", "false"]);
+    expect(comparisons).toHaveLength(1);
+
+    // Live, the same decision is asked again (every second, or Why?): the values it read then.
+    const why = (view.element as unknown as FakeElement).querySelectorAll("button").find((b) => b.textContent === "Why?") as FakeElement;
+    why.click();
+    const again = answer(1, 2, 1, [false, true]);
+    (again.conditions[1] as Explanation["conditions"][number]).comparisons = [seenFor(400, true)];
+    explain.shift()?.(again);
+    await flush();
+    // A row's values taken out and put back were layout work for the pane and all below it.
+    const valuesAfter = pane().querySelectorAll(".value");
+    valuesAfter.forEach((v, i) => expect(v).toBe(values[i]));
+    expect(valuesAfter.map((v) => [v.textContent, v.className])).toEqual([["false", "value false"], ["true", "value true"]]);
+    const comparisonsAfter = pane().querySelectorAll("li.comparison");
+    expect(comparisonsAfter[0]).toBe(comparisons[0]);
+    expect(comparisonsAfter.map((c) => [c.textContent, c.className])).toEqual([["ball.time_since_seen (400) > 1000 = true", "comparison true"]]);
+
+    // Other operands (another comparison read): that row's values are drawn anew.
+    why.click();
+    const other = answer(1, 2, 1, [false, true]);
+    (other.conditions[1] as Explanation["conditions"][number]).comparisons = [seenFor(1200, true)];
+    explain.shift()?.(other);
+    await flush();
+    const rebuilt = pane().querySelectorAll("li.comparison");
+    expect(rebuilt.map((c) => c.textContent)).toEqual(["ball.time_since_seen (1200) > 1000 = true"]);
+    expect(rebuilt[0]).not.toBe(comparisons[0]);
+    expect(pane().querySelectorAll(".value")[0]).toBe(values[0]);
   });
 });

@@ -20,6 +20,17 @@ type Why = Explanation;
 type WhyCondition = Explanation["conditions"][number];
 type WhyTree = Record<string, unknown>;
 type WhyNotAnswer = NonNullable<Explanation["why_not"]>;
+type Comparison = NonNullable<WhyCondition["comparisons"]>[number];
+
+/// A comparison's value as its row shows it, after the operands.
+function comparisonValue(k: Comparison): string {
+  return ` = ${k.value === null ? "?" : String(k.value)}`;
+}
+
+/// Set an element's whole class attribute, only when it differs (a write is style work).
+function setClass(el: Element, name: string): void {
+  if (el.className !== name) el.className = name;
+}
 
 export class OptionView {
   readonly element: HTMLElement;
@@ -516,17 +527,44 @@ export class OptionView {
     return row;
   }
 
-  /// Put a condition's values into its row, after its text (replacing the values shown before;
-  /// none: take them out).
+  /// Put a condition's values into its row, after its text (none: take them out). A row that
+  /// shows values already keeps its elements and only gets the texts and classes that differ:
+  /// a live decision is asked again every second, and rows taken out and put back each time
+  /// were layout work for the whole pane (and everything below it) even when nothing changed.
   private showValues(row: HTMLElement, values: WhyCondition | undefined): void {
-    for (const child of [...row.children]) if (child.classList.contains("value") || child.classList.contains("comparisons")) child.remove();
-    if (!values) return;
+    const shown = [...row.children].filter((child) => child.classList.contains("value") || child.classList.contains("comparisons"));
+    if (!values) {
+      for (const child of shown) child.remove();
+      return;
+    }
     const value = values.value === null ? "?" : formatValue(typeof values.value === "string" ? null : values.value);
     const comparisons = values.comparisons ?? [];
+    const [badge, list] = shown;
+    if (badge?.classList.contains("value") && shown.length === (comparisons.length ? 2 : 1) && this.updateComparisons(list, comparisons)) {
+      setClass(badge, `value ${String(values.value)}`);
+      setText(badge, value);
+      return;
+    }
+    for (const child of shown) child.remove();
     row.children[1]?.after(
       h("span.value", { class: `value ${String(values.value)}` }, value),
-      ...(comparisons.length ? [h("ul.comparisons", {}, ...comparisons.map((k) => h("li", { class: `comparison ${String(k.value)}` }, h("code", {}, k.shown), h("span.muted", {}, ` = ${k.value === null ? "?" : String(k.value)}`))))] : []),
+      ...(comparisons.length ? [h("ul.comparisons", {}, ...comparisons.map((k) => h("li", { class: `comparison ${String(k.value)}` }, h("code", {}, k.shown), h("span.muted", {}, comparisonValue(k)))))] : []),
     );
+  }
+
+  /// Update the comparisons list `list` of a row in place to `comparisons` when it lists the same
+  /// operands (only values differ); false: it does not, the row's values are drawn anew.
+  private updateComparisons(list: Element | undefined, comparisons: Comparison[]): boolean {
+    if (!comparisons.length) return list === undefined;
+    const items = list?.classList.contains("comparisons") ? [...list.children] : [];
+    if (items.length !== comparisons.length || items.some((item, i) => item.children[0]?.textContent !== comparisons[i]?.shown)) return false;
+    items.forEach((item, i) => {
+      const k = comparisons[i] as Comparison;
+      setClass(item, `comparison ${String(k.value)}`);
+      const muted = item.children[1];
+      if (muted) setText(muted, comparisonValue(k));
+    });
+    return true;
   }
 
   /// The decision tree as nested boxes: conditions with their values, the taken path marked.
