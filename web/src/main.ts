@@ -300,7 +300,7 @@ function main(): void {
       stats.renderMs = stats.renderMs * 0.9 + (performance.now() - started) * 0.1;
       frameCount++;
     } else {
-      topbar.renderLink();
+      topbar.renderLink(false); // no frame drawn: the link's state and countdowns only
     }
     const now = performance.now();
     if (now - frameWindowStart >= 1000) {

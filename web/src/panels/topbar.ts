@@ -29,6 +29,8 @@ export class TopBar {
   private asking = false;
   private askedAt = 0;
   private askedFrameAt = 0;
+  /// The latency shown, with the wall time of the frame it is for (see `renderLink`).
+  private latency: { wall: number; ms: number } | null = null;
 
   constructor(
     private readonly session: Session,
@@ -218,7 +220,11 @@ export class TopBar {
   }
 
   /// The link indicator: live with frame rate and latency, stale, or reconnecting in N s.
-  renderLink(): void {
+  /// `drawn`: a frame was drawn just now. Between frames (the render loop calls this on every
+  /// display refresh, twice as often as frames come) the latency of the frame shown stays as it
+  /// was when drawn: a number growing until the next frame would change the bar's text, and with
+  /// it layout and paint, on every refresh for nothing one could read.
+  renderLink(drawn = true): void {
     const c = this.connection;
     let text: string;
     let state: string = this.linkState;
@@ -235,14 +241,21 @@ export class TopBar {
         state = "stale";
       } else {
         const wall = this.session.live?.wall;
-        const latency = wall ? Math.max(0, Date.now() - wall) : null;
+        const latency = wall ? this.latencyOf(wall, drawn) : null;
         text = `live · ${c.framesPerSecond} fps${latency !== null && latency < 60000 ? ` · ${Math.round(latency)} ms` : ""}`;
       }
     } else if (this.linkState === "waiting") {
       const s = Math.max(0, (this.retryAt - performance.now()) / 1000);
       text = `offline · retry in ${s.toFixed(1)} s`;
     } else text = "connecting…";
-    this.link.dataset.state = state;
+    if (this.link.dataset.state !== state) this.link.dataset.state = state;
     setText(this.linkText, text);
+  }
+
+  /// How late the frame of wall time `wall` is shown (ms): measured when it is drawn, kept until
+  /// the next one.
+  private latencyOf(wall: number, drawn: boolean): number {
+    if (drawn || this.latency?.wall !== wall) this.latency = { wall, ms: Math.max(0, Date.now() - wall) };
+    return this.latency.ms;
   }
 }
