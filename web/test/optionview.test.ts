@@ -119,11 +119,15 @@ describe("option view: the why pane", () => {
 
     // Live, the same decision is asked again (every second, or Why?): the values it read then.
     const why = (view.element as unknown as FakeElement).querySelectorAll("button").find((b) => b.textContent === "Why?") as FakeElement;
-    why.click();
-    const again = answer(1, 2, 1, [false, true]);
-    (again.conditions[1] as Explanation["conditions"][number]).comparisons = [seenFor(400, true)];
-    explain.shift()?.(again);
-    await flush();
+    /// Why? again, answered with the second condition true after reading `seen` ms.
+    const askAgain = async (seen: number): Promise<void> => {
+      why.click();
+      const again = answer(1, 2, 1, [false, true]);
+      (again.conditions[1] as Explanation["conditions"][number]).comparisons = [seenFor(seen, true)];
+      explain.shift()?.(again);
+      await flush();
+    };
+    await askAgain(400);
     // A row's values taken out and put back were layout work for the pane and all below it.
     const valuesAfter = pane().querySelectorAll(".value");
     valuesAfter.forEach((v, i) => expect(v).toBe(values[i]));
@@ -133,11 +137,7 @@ describe("option view: the why pane", () => {
     expect(comparisonsAfter.map((c) => [c.textContent, c.className])).toEqual([["ball.time_since_seen (400) > 1000 = true", "comparison true"]]);
 
     // Other operands (another comparison read): that row's values are drawn anew.
-    why.click();
-    const other = answer(1, 2, 1, [false, true]);
-    (other.conditions[1] as Explanation["conditions"][number]).comparisons = [seenFor(1200, true)];
-    explain.shift()?.(other);
-    await flush();
+    await askAgain(1200);
     const rebuilt = pane().querySelectorAll("li.comparison");
     expect(rebuilt.map((c) => c.textContent)).toEqual(["ball.time_since_seen (1200) > 1000 = true"]);
     expect(rebuilt[0]).not.toBe(comparisons[0]);
