@@ -59,6 +59,7 @@ from xabsl_studio.server.protocol.attach import (
     encode_from_studio,
 )
 from xabsl_studio.server.protocol.commands import AttachHost, Explain, Pause, Reset, Resume, RobotCommand, Status, Step
+from xabsl_studio.server.protocol.display import SampleDisplay
 from xabsl_studio.server.protocol.host import (
     ExplainRecorded,
     Hit,
@@ -228,7 +229,10 @@ class HostConnection:
     label: str
     welcome: Welcome | None = None
     generation: HostGeneration | None = None
+    #: the host's last sample, with display values
     last: Sample | None = None
+    #: turns the host's raw samples into display values (None: they come with them, a NaoTH robot)
+    display: SampleDisplay | None = None
     connected: bool = False
     #: the host was reached once and is gone now (its robots stay, marked)
     gone: bool = False
@@ -419,7 +423,8 @@ class AttachedSession(Session):
                 log.warning("host %s: ticks %d..%d did not arrive", host.label, host.seq + 1, message.seq - 1)
             host.seq = message.seq
             host.received += 1
-            host.last = message
+            # Converted here, per host: the session's robots may come from hosts of both kinds.
+            host.last = host.display.convert(message) if host.display is not None else message
             self._tick(host)
         elif isinstance(message, HostGeneration):
             first = host.generation is None or not host.connected
@@ -427,6 +432,12 @@ class AttachedSession(Session):
             host.generation = message
             host.connected, host.gone = True, False
             host.last = None
+            gen = message.generation
+            host.display = (
+                SampleDisplay(orjson.loads(gen.structure), gen.enums, gen.input_ids, gen.output_ids)
+                if gen.raw_values
+                else None
+            )
             host.programs, host.explainers = _explainers(message)
             self._adopt_programs(host, message)
             reason: HelloReason = "reset" if first or message.generation.reason == "reset" else "reload"
@@ -540,9 +551,7 @@ class AttachedSession(Session):
             tuple(output_ids),
             0,
             errors,
-            enums=enums,
-            # hosts send raw values (attach protocol 2); a gone host's robots are None, unknown
-            raw_values=True,
+            enums=enums,  # the hosts' samples have display values already (see _from_host)
         )
         if self.live_recorder is not None:
             self.live_recorder.sources.update(sources)
