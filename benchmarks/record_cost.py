@@ -89,7 +89,7 @@ def sampling_costs(seconds: float, seed: int, programs: tuple[object, object]) -
 
     Each tick: the project's one sampler for all agents as the recorder calls it
     (``AgentSampler.sample``), as the studio's simulation process calls it (``FrameSampler``:
-    path as JSON bytes, extras, input and output display values, the decisions' reads as JSON, exactly what
+    path as JSON bytes, extras, raw input and output values, the decisions' reads as JSON, exactly what
     ``xabsl_studio.server.simulation.worker.Simulation.sample`` does per robot), and the world's ``dynamic_scene()``.
     """
     # the studio's side (imports the server: here, not at the top, for the headless parts' start-up)
@@ -281,7 +281,7 @@ def main() -> None:
 
     print(f"  per tick, 10 agents (the plain tick: {1e3 * tick:.3f} ms cpu):")
     part("sampling for a recording (AgentSampler.sample)", sampling["recorder"], "(goal <= 0.2 ms)")
-    part("sampling for the studio (FrameSampler, display values)", sampling["studio"], "(goal <= 0.2 ms)")
+    part("sampling for the studio (FrameSampler; the server converts)", sampling["studio"], "(goal <= 0.2 ms)")
     part("the world's dynamic_scene()", sampling["scene"])
     part("encoding (RecordingEncoder, cpu, best of 3)", encoding["encoder"])
     part("  of which the Foxglove scene", encoding["encoder"] - encoding["no foxglove"])
