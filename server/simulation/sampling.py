@@ -24,7 +24,7 @@ from xabsl_studio.engine.record.sampler import AgentSampler, ProgramTables, read
 from xabsl_studio.engine.runtime import Engine
 from xabsl_studio.engine.runtime.activation import BEHAVIOR_NODE, OPTION_NODE
 from xabsl_studio.engine.types import Kind, Value
-from xabsl_studio.server.protocol.display import round_decimal
+from xabsl_studio.server.protocol.display import converter
 
 _OPT = orjson.OPT_NON_STR_KEYS
 
@@ -71,17 +71,11 @@ class ProgramCodec:
         )
 
     def display(self, kind: Kind, enum: str | None, value: Any) -> Value | None:
-        """A value as frames carry it (see docs/protocol.md "Values")."""
-        if kind is Kind.DECIMAL:
-            try:
-                return round_decimal(float(value))
-            except (TypeError, ValueError, OverflowError):
-                return None
-        if kind is Kind.BOOLEAN:
-            return bool(value)
-        if enum is None:
-            return int(value)
-        return self.enum_index.get(enum, {}).get(int(value), -1)
+        """A value as frames carry it (docs/protocol.md "Values"; the server's rules, None: no display value)."""
+        try:
+            return converter(kind, self.enum_index.get(enum or "", {}))(value)
+        except (TypeError, ValueError, OverflowError):
+            return None
 
     def element(self, enum: str | None, index: int) -> str | None:
         """The qualified element name at ``index`` of ``enum`` (for commands that take indices)."""
